@@ -1,0 +1,1 @@
+//! LMS 2xx telegrams (PROTOCOL.md). Work in progress.
