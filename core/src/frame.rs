@@ -204,10 +204,9 @@ pub enum FrameError {
 impl fmt::Display for FrameError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            FrameError::BeamCount { got } => write!(
-                f,
-                "a frame has {MIN_BEAMS}..={MAX_BEAMS} beams, got {got}"
-            ),
+            FrameError::BeamCount { got } => {
+                write!(f, "a frame has {MIN_BEAMS}..={MAX_BEAMS} beams, got {got}")
+            }
             FrameError::BadGeometry => {
                 f.write_str("bearing step must be finite and positive, first bearing finite")
             }

@@ -25,7 +25,6 @@
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
-#![allow(rustdoc::broken_intra_doc_links)]
 
 pub mod corners;
 pub mod ekf;
@@ -39,6 +38,6 @@ pub mod segmentation;
 pub mod smoothing;
 pub mod telegram;
 
-
+pub use extractor::{Extractor, Features};
 pub use frame::{Beam, Frame, Geometry, Invalid, Variant};
-
+pub use params::{ParamError, Params};

@@ -1,1 +1,220 @@
-//! (in progress)
+//! Polar line fitting in the range direction (ALGORITHM.md §7, paper §V).
+//!
+//! A segment's valid **raw** ranges are fitted with the line
+//! `x·cos α + y·sin α = r` (`r ≥ 0`, `α ∈ (−π, π]`):
+//!
+//! 1. total least squares through the points as the start;
+//! 2. Gauss–Newton on the range model `d_j = r / cos(phi_j − α)` (at most
+//!    [`MAX_GN_STEPS`] steps, stopping early when a step is negligible);
+//! 3. covariance `Σ(α, r) = sigma²·(JᵀJ)⁻¹` at the solution (the Cramér–Rao
+//!    bound for Gaussian range noise);
+//! 4. quality `chi2 = Σ e² / (sigma²·(m − 2))`;
+//! 5. endpoints: the first and last points projected onto the line.
+//!
+//! Bearings enter through per-beam tables of `cos phi_j` and `sin phi_j`, so
+//! the only transcendentals per fit are one `atan2`, and one `cos`/`sin` of
+//! `α` per Gauss–Newton step.
+
+use crate::frame::Beam;
+use crate::maths::{wrap_angle, Sym2};
+
+/// Most Gauss–Newton steps per fit (§7.2).
+pub const MAX_GN_STEPS: usize = 5;
+/// A Gauss–Newton step below this in α (rad) and in r (m) ends the iteration.
+pub const GN_STEP_TOLERANCE: f32 = 1e-6;
+/// Lines whose every beam must satisfy `cos(phi_j − α) > MIN_INCIDENCE_COS`
+/// (the line must be seen from the front, not grazing); otherwise the fit fails.
+pub const MIN_INCIDENCE_COS: f32 = 1e-3;
+
+/// A fitted line with its uncertainty.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Line {
+    /// Normal direction α (rad), in (−π, π].
+    pub alpha: f32,
+    /// Distance from the sensor r (m), ≥ 0.
+    pub r: f32,
+    /// Covariance of (α, r): `[[αα, αr], [αr, rr]]` in rad², rad·m, m².
+    pub cov: Sym2,
+    /// First beam index of the fitted segment.
+    pub first: u16,
+    /// Last beam index of the fitted segment (inclusive).
+    pub last: u16,
+    /// Number of valid points used in the fit.
+    pub points: u16,
+    /// Fit quality `Σ e² / (sigma²·(m − 2))`; ≈ 1 for a true line.
+    pub chi2: f32,
+    /// First and last points projected onto the line, `[[x, y], [x, y]]` (m).
+    pub endpoints: [[f32; 2]; 2],
+}
+
+impl Line {
+    /// Distance between the endpoints (m).
+    pub fn length(&self) -> f32 {
+        let dx = self.endpoints[1][0] - self.endpoints[0][0];
+        let dy = self.endpoints[1][1] - self.endpoints[0][1];
+        libm::sqrtf(dx * dx + dy * dy)
+    }
+}
+
+/// Why a segment gave no line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FitError {
+    /// Fewer than three valid points.
+    TooFewPoints,
+    /// The line is seen edge-on from some beam or the normal equations are singular.
+    Degenerate,
+}
+
+/// The bearing tables of a frame: `cos phi_j`, `sin phi_j`.
+#[derive(Clone, Copy, Debug)]
+pub struct Bearings<'a> {
+    /// `cos phi_j` for every beam.
+    pub cos: &'a [f32],
+    /// `sin phi_j` for every beam.
+    pub sin: &'a [f32],
+}
+
+/// Fit a line to the valid beams of `first..=last` of `ranges` (m), with
+/// range noise `sigma` (m). Beams outside the slices are ignored.
+pub fn fit_line(
+    bearings: Bearings<'_>,
+    ranges: &[f32],
+    beams: &[Beam],
+    first: u16,
+    last: u16,
+    sigma: f32,
+) -> Result<Line, FitError> {
+    let n = ranges
+        .len()
+        .min(beams.len())
+        .min(bearings.cos.len())
+        .min(bearings.sin.len());
+    let lo = first as usize;
+    let hi = (last as usize + 1).min(n);
+    if lo >= hi {
+        return Err(FitError::TooFewPoints);
+    }
+    let valid = |j: &usize| beams[*j].is_valid();
+    let point = |j: usize| (ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]);
+
+    // 1. Total least squares start: centroid and central second moments.
+    let mut m = 0u32;
+    let (mut sx, mut sy) = (0.0f32, 0.0f32);
+    for j in (lo..hi).filter(valid) {
+        let (x, y) = point(j);
+        sx += x;
+        sy += y;
+        m += 1;
+    }
+    if m < 3 {
+        return Err(FitError::TooFewPoints);
+    }
+    let mf = m as f32;
+    let (xm, ym) = (sx / mf, sy / mf);
+    let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
+    for j in (lo..hi).filter(valid) {
+        let (x, y) = point(j);
+        let (dx, dy) = (x - xm, y - ym);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    let mut alpha = 0.5 * libm::atan2f(-2.0 * sxy, syy - sxx);
+    let mut r = xm * libm::cosf(alpha) + ym * libm::sinf(alpha);
+    if r < 0.0 {
+        r = -r;
+        alpha = wrap_angle(alpha + core::f32::consts::PI);
+    }
+
+    // 2. Gauss–Newton in the range direction.
+    for _ in 0..MAX_GN_STEPS {
+        let (ca, sa) = (libm::cosf(alpha), libm::sinf(alpha));
+        let mut jte = [0.0f32; 2];
+        let mut jtj = Sym2::default();
+        for j in (lo..hi).filter(valid) {
+            let (cd, sd) = incidence(bearings, j, ca, sa).ok_or(FitError::Degenerate)?;
+            let inv_c = 1.0 / cd;
+            let e = ranges[j] - r * inv_c;
+            let ja = -r * sd * inv_c * inv_c;
+            let jr = inv_c;
+            jtj.a += ja * ja;
+            jtj.b += ja * jr;
+            jtj.c += jr * jr;
+            jte[0] += ja * e;
+            jte[1] += jr * e;
+        }
+        let inv = jtj.inverse_spd().ok_or(FitError::Degenerate)?;
+        let d_alpha = inv.a * jte[0] + inv.b * jte[1];
+        let d_r = inv.b * jte[0] + inv.c * jte[1];
+        alpha = wrap_angle(alpha + d_alpha);
+        r += d_r;
+        if libm::fabsf(d_alpha) < GN_STEP_TOLERANCE && libm::fabsf(d_r) < GN_STEP_TOLERANCE {
+            break;
+        }
+    }
+    if r < 0.0 {
+        r = -r;
+        alpha = wrap_angle(alpha + core::f32::consts::PI);
+    }
+
+    // 3.–4. Covariance and chi2 at the solution.
+    let (ca, sa) = (libm::cosf(alpha), libm::sinf(alpha));
+    let mut jtj = Sym2::default();
+    let mut sum_e2 = 0.0f32;
+    for j in (lo..hi).filter(valid) {
+        let (cd, sd) = incidence(bearings, j, ca, sa).ok_or(FitError::Degenerate)?;
+        let inv_c = 1.0 / cd;
+        let e = ranges[j] - r * inv_c;
+        let ja = -r * sd * inv_c * inv_c;
+        jtj.a += ja * ja;
+        jtj.b += ja * inv_c;
+        jtj.c += inv_c * inv_c;
+        sum_e2 += e * e;
+    }
+    let var = sigma * sigma;
+    let cov = jtj.inverse_spd().ok_or(FitError::Degenerate)?.scale(var);
+    let chi2 = sum_e2 / (var * (mf - 2.0));
+
+    // 5. Endpoints: first and last valid points projected onto the line.
+    let first_valid = (lo..hi).find(valid).unwrap_or(lo);
+    let last_valid = (lo..hi).rev().find(valid).unwrap_or(lo);
+    let project = |(x, y): (f32, f32)| {
+        let dist = x * ca + y * sa - r;
+        [x - dist * ca, y - dist * sa]
+    };
+    Ok(Line {
+        alpha,
+        r,
+        cov,
+        first,
+        last: (hi - 1) as u16,
+        points: m.min(u16::MAX as u32) as u16,
+        chi2,
+        endpoints: [project(point(first_valid)), project(point(last_valid))],
+    })
+}
+
+/// `(cos(phi_j − α), sin(phi_j − α))` from the bearing tables, if the beam
+/// meets the line from the front (`cos > MIN_INCIDENCE_COS`).
+#[inline]
+fn incidence(b: Bearings<'_>, j: usize, ca: f32, sa: f32) -> Option<(f32, f32)> {
+    let cd = b.cos[j] * ca + b.sin[j] * sa;
+    let sd = b.sin[j] * ca - b.cos[j] * sa;
+    if cd > MIN_INCIDENCE_COS {
+        Some((cd, sd))
+    } else {
+        None
+    }
+}
+
+/// The Mahalanobis distance between two lines' parameters,
+/// `Δᵀ(Σ₁ + Σ₂)⁻¹Δ` with `Δ = (α₂ − α₁ wrapped, r₂ − r₁)` (§7.6).
+/// `None` if the summed covariance is not positive definite.
+pub fn parameter_distance(l1: &Line, l2: &Line) -> Option<f32> {
+    let inv = l1.cov.add(&l2.cov).inverse_spd()?;
+    let da = wrap_angle(l2.alpha - l1.alpha);
+    let dr = l2.r - l1.r;
+    Some(inv.quad(da, dr))
+}

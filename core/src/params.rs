@@ -1,1 +1,148 @@
-//! (in progress)
+//! Parameters of the pipeline with the defaults of ALGORITHM.md, and their
+//! validation.
+
+use core::fmt;
+
+/// All tunable parameters. Build with [`Params::default`] and adjust the
+/// fields; [`Params::validate`] (called by the extractor) refuses nonsense.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Params {
+    /// Range noise standard deviation `sigma` (m). Default 0.005 (LMS 2xx, mm mode).
+    pub sigma: f32,
+    /// Process noise `q` (m²), the second scale parameter. Default 0.
+    pub q: f32,
+    /// Number of smoothing passes, the first scale parameter. Default 30, at least 1.
+    pub iterations: u16,
+    /// χ² gate on `D` for segmentation (§6). Default 9.
+    pub tau: f32,
+    /// Smallest segment kept, in points (§6). Default 5, at least 3.
+    pub min_points: u16,
+    /// Largest accepted line quality `chi2` (§7). Default 4.
+    pub max_chi2: f32,
+    /// Shortest accepted line, endpoint to endpoint (m). Default 0.1.
+    pub min_length: f32,
+    /// Merge consecutive agreeing lines (§7.6). Default on.
+    pub merge: bool,
+    /// Most valid beams allowed between two lines that may merge. Default 3.
+    pub merge_gap_beams: u16,
+    /// χ² (2 dof) gate for merging. Default 9.21 (99 %).
+    pub merge_gate: f32,
+    /// Largest distance between facing endpoints of two lines that are
+    /// intersected into a corner (m). Default 0.2.
+    pub corner_gap: f32,
+    /// Smallest angle between lines for a well-conditioned corner (degrees,
+    /// 0..=90). Default 30.
+    pub min_corner_angle_deg: f32,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            sigma: 0.005,
+            q: 0.0,
+            iterations: 30,
+            tau: 9.0,
+            min_points: 5,
+            max_chi2: 4.0,
+            min_length: 0.1,
+            merge: true,
+            merge_gap_beams: 3,
+            merge_gate: 9.21,
+            corner_gap: 0.2,
+            min_corner_angle_deg: 30.0,
+        }
+    }
+}
+
+/// Largest accepted number of smoothing passes.
+pub const MAX_ITERATIONS: u16 = 1000;
+
+/// A parameter that makes no sense; names the field.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ParamError {
+    /// `sigma` must be finite and > 0.
+    Sigma,
+    /// `q` must be finite and ≥ 0.
+    ProcessNoise,
+    /// `iterations` must be in 1..=[`MAX_ITERATIONS`].
+    Iterations,
+    /// `tau` must be finite and > 0.
+    Tau,
+    /// `min_points` must be ≥ 3.
+    MinPoints,
+    /// `max_chi2` must be finite and > 0.
+    MaxChi2,
+    /// `min_length` must be finite and ≥ 0.
+    MinLength,
+    /// `merge_gate` must be finite and > 0.
+    MergeGate,
+    /// `corner_gap` must be finite and ≥ 0.
+    CornerGap,
+    /// `min_corner_angle_deg` must be in 0..=90.
+    MinCornerAngle,
+}
+
+impl fmt::Display for ParamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ParamError::Sigma => "sigma must be finite and > 0 (metres)",
+            ParamError::ProcessNoise => "q must be finite and >= 0 (m^2)",
+            ParamError::Iterations => "iterations must be between 1 and 1000",
+            ParamError::Tau => "tau must be finite and > 0",
+            ParamError::MinPoints => "min_points must be at least 3",
+            ParamError::MaxChi2 => "max_chi2 must be finite and > 0",
+            ParamError::MinLength => "min_length must be finite and >= 0 (metres)",
+            ParamError::MergeGate => "merge_gate must be finite and > 0",
+            ParamError::CornerGap => "corner_gap must be finite and >= 0 (metres)",
+            ParamError::MinCornerAngle => "min_corner_angle_deg must be between 0 and 90",
+        })
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for ParamError {}
+
+impl Params {
+    /// Check every field; the first nonsense found is returned.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        fn pos(x: f32) -> bool {
+            x.is_finite() && x > 0.0
+        }
+        fn non_neg(x: f32) -> bool {
+            x.is_finite() && x >= 0.0
+        }
+        if !pos(self.sigma) {
+            return Err(ParamError::Sigma);
+        }
+        if !non_neg(self.q) {
+            return Err(ParamError::ProcessNoise);
+        }
+        if self.iterations == 0 || self.iterations > MAX_ITERATIONS {
+            return Err(ParamError::Iterations);
+        }
+        if !pos(self.tau) {
+            return Err(ParamError::Tau);
+        }
+        if self.min_points < 3 {
+            return Err(ParamError::MinPoints);
+        }
+        if !pos(self.max_chi2) {
+            return Err(ParamError::MaxChi2);
+        }
+        if !non_neg(self.min_length) {
+            return Err(ParamError::MinLength);
+        }
+        if !pos(self.merge_gate) {
+            return Err(ParamError::MergeGate);
+        }
+        if !non_neg(self.corner_gap) {
+            return Err(ParamError::CornerGap);
+        }
+        if !(self.min_corner_angle_deg >= 0.0 && self.min_corner_angle_deg <= 90.0) {
+            return Err(ParamError::MinCornerAngle);
+        }
+        Ok(())
+    }
+}
