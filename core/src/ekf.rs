@@ -12,7 +12,7 @@
 //! `K·v` is evaluated as `P̂·(S⁻¹·v)`, which is the same product associated
 //! so that `S⁻¹·v` serves both `D` and the update.
 
-use crate::line_model::{predict, Prediction};
+use crate::line_model::{predict_unchecked, Prediction};
 use crate::maths::{Sym3, Vec3};
 
 /// Result of the filter on one valid window.
@@ -70,23 +70,106 @@ impl WindowFilter {
     /// sensor) or numerically degenerate; it then has `D = +inf`, weight 0.
     #[inline]
     pub fn update(&self, z: Vec3) -> Option<WindowEstimate> {
-        let pred = predict(z, self.k)?;
+        match self.update_unchecked(z) {
+            (est, true) => Some(est),
+            _ => None,
+        }
+    }
+
+    /// The filter without branches: always computes an estimate, and says
+    /// whether it is valid (denominators of §2 positive, `det S > 0`, all
+    /// results finite). Used by the smoothing pass so that a block of windows
+    /// can be computed in lock-step; [`WindowFilter::update`] wraps it.
+    #[inline(always)]
+    pub fn update_unchecked(&self, z: Vec3) -> (WindowEstimate, bool) {
+        let (pred, in_front) = predict_unchecked(z, self.k);
         let p_hat = self.predicted_covariance(&pred);
         let s = p_hat.add_diagonal(self.r);
-        let s_inv = s.inverse_spd()?;
         let v = z.sub(pred.f);
-        let u = s_inv.mul_vec(v); // S⁻¹·v
+        let (u, solvable) = s.solve_spd_unchecked(v); // S⁻¹·v
         let d = v.dot(u);
         let posterior = pred.f.add(p_hat.mul_vec(u)); // x̂ + P̂·S⁻¹·v
-        if !(d.is_finite() && posterior.0.iter().all(|x| x.is_finite())) {
-            return None;
-        }
+        let [x0, x1, x2] = posterior.0;
+        // Overflow or NaN anywhere upstream propagates into these.
+        let finite = d.is_finite() && x0.is_finite() && x1.is_finite() && x2.is_finite();
         // D is a quadratic form with S⁻¹ positive definite: clamp the
         // rounding of a near-zero result to 0.
         let mahalanobis = if d < 0.0 { 0.0 } else { d };
-        Some(WindowEstimate {
-            mahalanobis,
-            posterior,
-        })
+        (
+            WindowEstimate {
+                mahalanobis,
+                posterior,
+            },
+            in_front & solvable & finite,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::line_model::predict;
+
+    const GAMMA: f32 = 0.5 * core::f32::consts::PI / 180.0;
+
+    #[test]
+    fn collinear_window_has_tiny_distance_and_stays_put() {
+        let filter = WindowFilter::new(GAMMA, 0.005, 0.0);
+        let g = GAMMA as f64;
+        let d = |p: f64| (2.0 / (p - 0.2f64).cos()) as f32;
+        let z = Vec3([d(-g), d(0.0), d(g)]);
+        let e = filter.update(z).unwrap();
+        assert!(e.mahalanobis < 1e-3, "D = {}", e.mahalanobis);
+        for i in 0..3 {
+            assert!((e.posterior.0[i] - z.0[i]).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn corner_window_has_large_distance() {
+        let filter = WindowFilter::new(GAMMA, 0.005, 0.0);
+        // A 10 cm dent in the middle point.
+        let e = filter.update(Vec3([2.0, 1.9, 2.0])).unwrap();
+        assert!(e.mahalanobis > 100.0, "D = {}", e.mahalanobis);
+    }
+
+    #[test]
+    fn distance_matches_the_textbook_formula() {
+        // Independent check of D = vᵀ S⁻¹ v with S solved by Cramer's rule in f64.
+        let (sigma, q) = (0.01f32, 1e-4f32);
+        let filter = WindowFilter::new(GAMMA, sigma, q);
+        let z = Vec3([3.0, 3.02, 3.01]);
+        let p = predict(z, filter.k).unwrap();
+        let fm = [
+            [0.0, p.f12 as f64, p.f13 as f64],
+            [p.f21 as f64, 0.0, p.f23 as f64],
+            [p.f31 as f64, p.f32_ as f64, 0.0],
+        ];
+        let r = (sigma as f64).powi(2);
+        let mut s = [[0.0f64; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                s[i][j] = r * (0..3).map(|k| fm[i][k] * fm[j][k]).sum::<f64>();
+            }
+            s[i][i] += q as f64 + r;
+        }
+        let v: Vec<f64> = (0..3).map(|i| (z.0[i] - p.f.0[i]) as f64).collect();
+        let det3 = |m: [[f64; 3]; 3]| {
+            m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+        };
+        let det = det3(s);
+        let mut u = [0.0; 3];
+        for (col, ui) in u.iter_mut().enumerate() {
+            let mut m = s;
+            for row in 0..3 {
+                m[row][col] = v[row];
+            }
+            *ui = det3(m) / det;
+        }
+        let d_ref: f64 = (0..3).map(|i| v[i] * u[i]).sum();
+        let d = filter.update(z).unwrap().mahalanobis as f64;
+        assert!(((d - d_ref) / d_ref).abs() < 1e-3, "{d} vs {d_ref}");
     }
 }

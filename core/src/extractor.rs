@@ -15,7 +15,7 @@ use crate::frame::{Beam, Frame, Geometry, MAX_BEAMS};
 use crate::line_fit::{fit_line, parameter_distance, Bearings, Line};
 use crate::params::{ParamError, Params};
 use crate::segmentation::{segment, Segment};
-use crate::smoothing::smoothing_pass;
+use crate::smoothing::{smoothing_pass, valid_windows};
 
 /// Most windows in a frame (`MAX_BEAMS − 2`).
 pub const MAX_WINDOWS: usize = MAX_BEAMS - 2;
@@ -79,6 +79,7 @@ pub struct Extractor {
     cos_phi: [f32; MAX_BEAMS],
     sin_phi: [f32; MAX_BEAMS],
     smoothed: [f32; MAX_BEAMS],
+    window_ok: [bool; MAX_WINDOWS],
     mahalanobis: [f32; MAX_WINDOWS],
     features: Features,
 }
@@ -98,6 +99,7 @@ impl Extractor {
             cos_phi: [0.0; MAX_BEAMS],
             sin_phi: [0.0; MAX_BEAMS],
             smoothed: [0.0; MAX_BEAMS],
+            window_ok: [false; MAX_WINDOWS],
             mahalanobis: [0.0; MAX_WINDOWS],
             features: Features {
                 segments: Vec::new(),
@@ -149,11 +151,12 @@ impl Extractor {
 
         // §4–5: the scale space.
         self.smoothed[..n].copy_from_slice(frame.ranges());
+        valid_windows(beams, &mut self.window_ok[..windows]);
         let filter = WindowFilter::new(frame.geometry().step, params.sigma, params.q);
         for pass in 1..=params.iterations {
             smoothing_pass(
                 &filter,
-                beams,
+                &self.window_ok[..windows],
                 &mut self.smoothed[..n],
                 &mut self.mahalanobis[..windows],
             );

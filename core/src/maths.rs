@@ -69,6 +69,43 @@ impl Sym3 {
         ])
     }
 
+    /// Solve `self · u = v` for a positive definite `self` by the adjugate:
+    /// `u = adj(S)·v / det(S)` (cofactors of the symmetric matrix, eq. of §3).
+    ///
+    /// `None` unless `det > 0` and finite (for the innovation covariance of
+    /// §3 this holds for finite inputs with `sigma > 0`).
+    #[inline]
+    pub fn solve_spd(&self, v: Vec3) -> Option<Vec3> {
+        match self.solve_spd_unchecked(v) {
+            (u, true) => Some(u),
+            _ => None,
+        }
+    }
+
+    /// [`Sym3::solve_spd`] without the branch: always computes `u`, and
+    /// returns whether `det > 0` and finite.
+    #[inline(always)]
+    pub fn solve_spd_unchecked(&self, v: Vec3) -> (Vec3, bool) {
+        let c11 = self.s22 * self.s33 - self.s23 * self.s23;
+        let c12 = self.s13 * self.s23 - self.s12 * self.s33;
+        let c13 = self.s12 * self.s23 - self.s13 * self.s22;
+        let c22 = self.s11 * self.s33 - self.s13 * self.s13;
+        let c23 = self.s12 * self.s13 - self.s11 * self.s23;
+        let c33 = self.s11 * self.s22 - self.s12 * self.s12;
+        let det = self.s11 * c11 + self.s12 * c12 + self.s13 * c13;
+        let ok = (det > 0.0) & (det < f32::INFINITY);
+        let inv_det = 1.0 / det;
+        let [x, y, z] = v.0;
+        (
+            Vec3([
+                (c11 * x + c12 * y + c13 * z) * inv_det,
+                (c12 * x + c22 * y + c23 * z) * inv_det,
+                (c13 * x + c23 * y + c33 * z) * inv_det,
+            ]),
+            ok,
+        )
+    }
+
     /// Closed-form inverse by cofactors: `adj(S) / det(S)`.
     ///
     /// Returns `None` unless the matrix is positive definite by its leading
@@ -192,4 +229,69 @@ pub fn wrap_angle(a: f32) -> f32 {
         w -= 2.0 * PI;
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sym3_inverse_times_matrix_is_identity() {
+        let s = Sym3 {
+            s11: 4.0,
+            s12: 1.0,
+            s13: 0.5,
+            s22: 3.0,
+            s23: -0.25,
+            s33: 2.0,
+        };
+        let inv = s.inverse_spd().unwrap();
+        for (k, e) in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+            .iter()
+            .enumerate()
+        {
+            let col = inv.mul_vec(Vec3(*e));
+            let back = s.mul_vec(col);
+            for i in 0..3 {
+                let want = if i == k { 1.0 } else { 0.0 };
+                assert!((back.0[i] - want).abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn indefinite_matrices_have_no_inverse() {
+        let s = Sym3 {
+            s11: 1.0,
+            s12: 2.0,
+            s13: 0.0,
+            s22: 1.0,
+            s23: 0.0,
+            s33: 1.0,
+        };
+        assert!(s.inverse_spd().is_none());
+        assert!(Sym2 {
+            a: 1.0,
+            b: 1.0,
+            c: 1.0
+        }
+        .inverse_spd()
+        .is_none());
+        assert!(Sym2 {
+            a: 2.0,
+            b: 1.0,
+            c: 1.0
+        }
+        .inverse_spd()
+        .is_some());
+    }
+
+    #[test]
+    fn angles_wrap_into_half_open_interval() {
+        use core::f32::consts::PI;
+        assert!((wrap_angle(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-6);
+        assert_eq!(wrap_angle(PI), PI);
+        assert!((wrap_angle(-PI) - PI).abs() < 1e-6);
+        assert!((wrap_angle(0.25) - 0.25).abs() < 1e-7);
+    }
 }

@@ -84,3 +84,70 @@ pub fn segment<const S: usize, const E: usize>(
     }
     counts
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const INF: f32 = f32::INFINITY;
+
+    fn run(
+        d: &[f32],
+        min_points: u16,
+    ) -> (
+        std::vec::Vec<(u16, u16)>,
+        std::vec::Vec<u16>,
+        SegmentationCounts,
+    ) {
+        let mut segs: Vec<Segment, 8> = Vec::new();
+        let mut edges: Vec<u16, 16> = Vec::new();
+        let c = segment(d, 9.0, min_points, &mut segs, &mut edges);
+        (
+            segs.iter().map(|s| (s.first, s.last)).collect(),
+            edges.iter().copied().collect(),
+            c,
+        )
+    }
+
+    #[test]
+    fn a_corner_point_is_shared_and_a_jump_is_not() {
+        // windows 0..=9 (12 points); window 4 breaks (corner at point 5),
+        // window 7 is invalid (a no-echo beam at point 9... windows 7 only here).
+        let d = [1.0, 1.0, 1.0, 1.0, 50.0, 1.0, 1.0, INF, 1.0, 1.0];
+        let (segs, edges, c) = run(&d, 3);
+        assert_eq!(segs, vec![(0, 5), (5, 8), (8, 11)]);
+        assert_eq!(edges, vec![5]);
+        assert_eq!(c, SegmentationCounts::default());
+    }
+
+    #[test]
+    fn short_segments_are_dropped_and_counted() {
+        let d = [1.0, 20.0, 1.0, 1.0, 1.0, 1.0];
+        let (segs, edges, c) = run(&d, 5);
+        assert_eq!(segs, vec![(2, 7)]);
+        assert_eq!(edges, vec![2]);
+        assert_eq!(c.short_segments, 1);
+    }
+
+    #[test]
+    fn the_gate_is_inclusive_and_nan_breaks() {
+        let d = [9.0, 1.0, f32::NAN, 1.0];
+        let (segs, edges, _) = run(&d, 3);
+        assert_eq!(segs, vec![(1, 3), (3, 5)]);
+        assert_eq!(edges, vec![1]);
+    }
+
+    #[test]
+    fn overflow_is_counted() {
+        let mut d = [1.0f32; 40];
+        for i in (3..40).step_by(4) {
+            d[i] = 100.0;
+        }
+        let mut segs: Vec<Segment, 4> = Vec::new();
+        let mut edges: Vec<u16, 3> = Vec::new();
+        let c = segment(&d, 9.0, 3, &mut segs, &mut edges);
+        assert_eq!(segs.len(), 4);
+        assert_eq!(c.segment_overflow, 6);
+        assert_eq!(c.edge_overflow, 7); // 10 breaking windows, 3 slots
+    }
+}

@@ -34,106 +34,147 @@ pub fn weight(mahalanobis: f32) -> f32 {
     }
 }
 
-/// A window's contribution to its points: weight `w/3` and its estimates.
-#[derive(Clone, Copy, Debug, Default)]
-struct Contribution {
-    /// `w_i/3`, 0 for an invalid window.
-    third_weight: f32,
-    /// `x⁺_i`, meaningful only when `third_weight > 0` or the window is valid.
-    posterior: Vec3,
-    /// Whether the window is valid (has an estimate).
-    valid: bool,
+/// Whether each window `i` (beams `i, i+1, i+2`) has three valid beams
+/// (§1); writes `beams.len() − 2` flags into `window_ok` (as many as fit).
+pub fn valid_windows(beams: &[Beam], window_ok: &mut [bool]) {
+    for (ok, b) in window_ok.iter_mut().zip(beams.windows(3)) {
+        *ok = b[0].is_valid() && b[1].is_valid() && b[2].is_valid();
+    }
+}
+
+/// Windows processed together: the filter runs branch-free over a block
+/// (so a host CPU can vectorise it, with the same per-window IEEE
+/// operations), then the block's points are blended. Stack use is a few
+/// hundred bytes whatever the frame size.
+const BLOCK: usize = 32;
+
+/// Per-block working storage. Slots `0` and `1` of `third_weight` and
+/// `posterior` carry the last two windows of the previous block.
+struct Block {
+    third_weight: [f32; BLOCK + 2],
+    posterior: [[f32; BLOCK + 2]; 3],
 }
 
 /// Run one Jacobi smoothing pass in place.
 ///
-/// - `beams`: status of every beam (`len = n`); invalid beams are never
-///   modified and never take part in a window.
+/// - `window_ok`: for each of the `n − 2` windows, whether its three beams
+///   are valid ([`valid_windows`]); invalid beams never take part in a window.
 /// - `ranges`: the ranges of the previous pass (m), replaced by the new ones.
+///   A point all of whose windows are invalid (in particular an invalid
+///   beam) gets weight 0 from each and so keeps its value exactly.
 /// - `mahalanobis`: receives `D_i` for the `n − 2` windows (`+inf` for
-///   invalid windows); must hold at least `n − 2` values.
+///   invalid windows).
 ///
 /// Slices shorter than expected are handled by processing only the common
 /// length; nothing panics.
+///
+/// In place is Jacobi here: the windows of a block read points `≥` the
+/// block's first window, and only points of earlier windows have been written.
 pub fn smoothing_pass(
     filter: &WindowFilter,
-    beams: &[Beam],
+    window_ok: &[bool],
     ranges: &mut [f32],
     mahalanobis: &mut [f32],
 ) {
-    let n = beams
+    let windows = window_ok
         .len()
-        .min(ranges.len())
-        .min(mahalanobis.len().saturating_add(2));
-    if n < 3 {
+        .min(mahalanobis.len())
+        .min(ranges.len().saturating_sub(2));
+    if windows == 0 {
         return;
     }
-    let windows = n - 2;
-    // Contributions of windows i−2, i−1, i (index by i mod 3).
-    let mut ring = [Contribution::default(); 3];
-    for i in 0..windows {
-        let contribution = match (beams[i], beams[i + 1], beams[i + 2]) {
-            (Beam::Valid, Beam::Valid, Beam::Valid) => {
-                let z = Vec3([ranges[i], ranges[i + 1], ranges[i + 2]]);
-                match filter.update(z) {
-                    Some(est) => {
-                        mahalanobis[i] = est.mahalanobis;
-                        Contribution {
-                            third_weight: weight(est.mahalanobis) / 3.0,
-                            posterior: est.posterior,
-                            valid: true,
-                        }
-                    }
-                    None => {
-                        mahalanobis[i] = f32::INFINITY;
-                        Contribution::default()
-                    }
-                }
+    let n = windows + 2;
+    let mut block = Block {
+        third_weight: [0.0; BLOCK + 2],
+        posterior: [[0.0; BLOCK + 2]; 3],
+    };
+    let mut start = 0;
+    while start < windows {
+        let m = BLOCK.min(windows - start);
+        // The filter on every window of the block (§2–3).
+        filter_block(
+            filter,
+            &ranges[start..start + m + 2],
+            &window_ok[start..start + m],
+            &mut block,
+            &mut mahalanobis[start..start + m],
+        );
+        // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
+        for t in 0..m {
+            let d = mahalanobis[start + t];
+            block.third_weight[t + 2] = if d < f32::INFINITY {
+                weight(d) / 3.0
+            } else {
+                0.0
+            };
+        }
+        // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
+        for t in 0..m {
+            let j = start + t;
+            ranges[j] = blend(&block, ranges[j], t + 2);
+        }
+        // Carry the last two windows into slots 0 and 1.
+        for slot in 0..2 {
+            block.third_weight[slot] = block.third_weight[m + slot];
+            for k in 0..3 {
+                block.posterior[k][slot] = block.posterior[k][m + slot];
             }
-            _ => {
-                mahalanobis[i] = f32::INFINITY;
-                Contribution::default()
-            }
-        };
-        ring[i % 3] = contribution;
-        // Point i now has all its windows (i, i−1, i−2): finalise it.
-        blend_point(beams, ranges, &ring, i, windows);
+        }
+        start += m;
     }
-    // The last two points have no window starting at them.
-    for j in windows..n {
-        blend_point(beams, ranges, &ring, j, windows);
+    // Points n−2 and n−1 have no window starting at them. Slots 0 and 1
+    // hold windows n−4 and n−3; slots 2 and 3 stand for absent windows.
+    block.third_weight[2] = 0.0;
+    block.third_weight[3] = 0.0;
+    for (j, slot) in [(n - 2, 2), (n - 1, 3)] {
+        ranges[j] = blend(&block, ranges[j], slot);
     }
 }
 
-/// Write the new range of point `j` from the windows `j, j−1, j−2` held in
-/// the ring (eq. 12), in that order of addition.
+/// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2`):
+/// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − 1`, `j − 2`,
+/// added in that order. Absent or invalid windows have weight 0 and estimate 0.
 #[inline]
-fn blend_point(
-    beams: &[Beam],
-    ranges: &mut [f32],
-    ring: &[Contribution; 3],
-    j: usize,
-    windows: usize,
+fn blend(block: &Block, d: f32, slot: usize) -> f32 {
+    let w = &block.third_weight;
+    let x = &block.posterior;
+    let weight_sum = w[slot] + w[slot - 1] + w[slot - 2];
+    let estimate_sum =
+        w[slot] * x[0][slot] + w[slot - 1] * x[1][slot - 1] + w[slot - 2] * x[2][slot - 2];
+    (1.0 - weight_sum) * d + estimate_sum
+}
+
+/// The window filter on `m` consecutive windows, `ranges` holding their
+/// `m + 2` points. Writes `D` (or `+inf`) and the estimates (or 0) of
+/// window `t` into `d[t]` and slot `t + 2` of the block.
+///
+/// Branch-free over the windows: every window is computed, invalid ones are
+/// masked afterwards. The arithmetic per window is exactly that of
+/// [`WindowFilter::update`].
+#[inline]
+fn filter_block(
+    filter: &WindowFilter,
+    ranges: &[f32],
+    ok: &[bool],
+    block: &mut Block,
+    d: &mut [f32],
 ) {
-    if !beams[j].is_valid() {
-        return;
+    let m = d
+        .len()
+        .min(ok.len())
+        .min(ranges.len().saturating_sub(2))
+        .min(BLOCK);
+    // A fixed-size copy of the flags keeps the loop free of bounds checks.
+    let mut window_ok = [false; BLOCK];
+    window_ok[..m].copy_from_slice(&ok[..m]);
+    let post = &mut block.posterior;
+    for t in 0..m {
+        let z = Vec3([ranges[t], ranges[t + 1], ranges[t + 2]]);
+        let (est, valid) = filter.update_unchecked(z);
+        let keep = valid & window_ok[t];
+        d[t] = if keep { est.mahalanobis } else { f32::INFINITY };
+        post[0][t + 2] = if keep { est.posterior.0[0] } else { 0.0 };
+        post[1][t + 2] = if keep { est.posterior.0[1] } else { 0.0 };
+        post[2][t + 2] = if keep { est.posterior.0[2] } else { 0.0 };
     }
-    let mut weight_sum = 0.0f32;
-    let mut estimate_sum = 0.0f32;
-    for back in 0..3usize {
-        // Window i = j − back; its estimate of point j is component `back`.
-        if back > j {
-            break;
-        }
-        let i = j - back;
-        if i >= windows {
-            continue;
-        }
-        let c = &ring[i % 3];
-        if c.valid {
-            weight_sum += c.third_weight;
-            estimate_sum += c.third_weight * c.posterior.0[back];
-        }
-    }
-    ranges[j] = (1.0 - weight_sum) * ranges[j] + estimate_sum;
 }
