@@ -85,10 +85,10 @@ impl WindowFilter {
         let (pred, in_front) = predict_unchecked(z, self.k);
         let p_hat = self.predicted_covariance(&pred);
         let s = p_hat.add_diagonal(self.r);
-        let v = z.sub(pred.f);
+        let v = z - pred.f;
         let (u, solvable) = s.solve_spd_unchecked(v); // S⁻¹·v
         let d = v.dot(u);
-        let posterior = pred.f.add(p_hat.mul_vec(u)); // x̂ + P̂·S⁻¹·v
+        let posterior = pred.f + p_hat.mul_vec(u); // x̂ + P̂·S⁻¹·v
         let [x0, x1, x2] = posterior.0;
         // Overflow or NaN anywhere upstream propagates into these.
         let finite = d.is_finite() && x0.is_finite() && x1.is_finite() && x2.is_finite();

@@ -25,6 +25,8 @@
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+// `!(x < limit)` is deliberate throughout: it treats NaN as failing the test.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod corners;
 pub mod ekf;

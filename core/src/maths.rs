@@ -9,19 +9,25 @@
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Vec3(pub [f32; 3]);
 
-impl Vec3 {
-    /// Component-wise `self - other`.
+impl core::ops::Sub for Vec3 {
+    type Output = Vec3;
+    /// Component-wise difference.
     #[inline]
-    pub fn sub(self, o: Vec3) -> Vec3 {
+    fn sub(self, o: Vec3) -> Vec3 {
         Vec3([self.0[0] - o.0[0], self.0[1] - o.0[1], self.0[2] - o.0[2]])
     }
+}
 
-    /// Component-wise `self + other`.
+impl core::ops::Add for Vec3 {
+    type Output = Vec3;
+    /// Component-wise sum.
     #[inline]
-    pub fn add(self, o: Vec3) -> Vec3 {
+    fn add(self, o: Vec3) -> Vec3 {
         Vec3([self.0[0] + o.0[0], self.0[1] + o.0[1], self.0[2] + o.0[2]])
     }
+}
 
+impl Vec3 {
     /// Dot product `self·other`, summed in index order.
     #[inline]
     pub fn dot(self, o: Vec3) -> f32 {

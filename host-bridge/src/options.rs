@@ -1,0 +1,210 @@
+//! Command-line options shared by the subcommands: pipeline parameters and
+//! frame selections.
+
+use std::fmt;
+use std::str::FromStr;
+
+use anyhow::{anyhow, Result};
+use clap::Args;
+use lms_core::Params;
+
+/// Pipeline parameters on the command line; unset ones keep the
+/// [`Params::default`] of ALGORITHM.md.
+#[derive(Args, Clone, Debug, Default, PartialEq)]
+pub struct ParamArgs {
+    /// Smoothing passes, the first scale parameter [default: 30]
+    #[arg(long, value_name = "N")]
+    pub iterations: Option<u16>,
+    /// Process noise q (m²), the second scale parameter [default: 0]
+    #[arg(long, value_name = "Q", allow_negative_numbers = true)]
+    pub q: Option<f32>,
+    /// Range noise standard deviation sigma (m) [default: 0.005]
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub sigma: Option<f32>,
+    /// Segmentation gate tau on D [default: 9]
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub tau: Option<f32>,
+    /// Smallest segment kept, in points [default: 5]
+    #[arg(long, value_name = "N")]
+    pub min_points: Option<u16>,
+    /// Largest accepted line chi2 [default: 4]
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
+    pub max_chi2: Option<f32>,
+    /// Do not merge consecutive agreeing lines (ALGORITHM.md §7.6)
+    #[arg(long)]
+    pub no_merge: bool,
+}
+
+impl ParamArgs {
+    /// The parameters, checked with [`Params::validate`].
+    pub fn to_params(&self) -> Result<Params> {
+        let d = Params::default();
+        let p = Params {
+            iterations: self.iterations.unwrap_or(d.iterations),
+            q: self.q.unwrap_or(d.q),
+            sigma: self.sigma.unwrap_or(d.sigma),
+            tau: self.tau.unwrap_or(d.tau),
+            min_points: self.min_points.unwrap_or(d.min_points),
+            max_chi2: self.max_chi2.unwrap_or(d.max_chi2),
+            merge: !self.no_merge,
+            ..d
+        };
+        p.validate()
+            .map_err(|e| anyhow!("invalid parameters: {e}"))?;
+        Ok(p)
+    }
+}
+
+/// A selection of frame indices, `start..end` (end exclusive, open if `None`).
+///
+/// Syntax: `A..B` (A to B−1), `A..=B`, `A..`, `..B`, or a single index `A`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameRange {
+    /// First index selected.
+    pub start: usize,
+    /// One past the last index selected; `None` = to the end.
+    pub end: Option<usize>,
+}
+
+impl FrameRange {
+    /// Every frame.
+    pub const ALL: FrameRange = FrameRange {
+        start: 0,
+        end: None,
+    };
+
+    /// `true` if `index` is selected.
+    pub fn contains(&self, index: usize) -> bool {
+        index >= self.start && self.end.is_none_or(|e| index < e)
+    }
+
+    /// The end clamped to `len` frames.
+    pub fn end_within(&self, len: usize) -> usize {
+        self.end.map_or(len, |e| e.min(len))
+    }
+}
+
+impl Default for FrameRange {
+    fn default() -> Self {
+        FrameRange::ALL
+    }
+}
+
+impl fmt::Display for FrameRange {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.end {
+            Some(e) => write!(f, "{}..{}", self.start, e),
+            None => write!(f, "{}..", self.start),
+        }
+    }
+}
+
+impl FromStr for FrameRange {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let bad =
+            || format!("bad frame range {s:?}: expected A..B (B exclusive), A..=B, A.., ..B or A");
+        let index = |t: &str| t.trim().parse::<usize>().map_err(|_| bad());
+        let s_trim = s.trim();
+        let range = if let Some((a, b)) = s_trim.split_once("..=") {
+            let start = if a.is_empty() { 0 } else { index(a)? };
+            let last = index(b)?;
+            FrameRange {
+                start,
+                end: Some(last.checked_add(1).ok_or_else(bad)?),
+            }
+        } else if let Some((a, b)) = s_trim.split_once("..") {
+            FrameRange {
+                start: if a.is_empty() { 0 } else { index(a)? },
+                end: if b.is_empty() { None } else { Some(index(b)?) },
+            }
+        } else {
+            let a = index(s_trim)?;
+            FrameRange {
+                start: a,
+                end: Some(a + 1),
+            }
+        };
+        if let Some(e) = range.end {
+            if e <= range.start {
+                return Err(format!(
+                    "empty frame range {s:?}: the end must be after the start"
+                ));
+            }
+        }
+        Ok(range)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_ranges() {
+        let r = |s: &str| s.parse::<FrameRange>();
+        assert_eq!(
+            r("0..5"),
+            Ok(FrameRange {
+                start: 0,
+                end: Some(5)
+            })
+        );
+        assert_eq!(
+            r("2..=4"),
+            Ok(FrameRange {
+                start: 2,
+                end: Some(5)
+            })
+        );
+        assert_eq!(
+            r("7.."),
+            Ok(FrameRange {
+                start: 7,
+                end: None
+            })
+        );
+        assert_eq!(
+            r("..3"),
+            Ok(FrameRange {
+                start: 0,
+                end: Some(3)
+            })
+        );
+        assert_eq!(
+            r("9"),
+            Ok(FrameRange {
+                start: 9,
+                end: Some(10)
+            })
+        );
+        for bad in ["", "a..b", "5..2", "3..3", "1...4", "-1..3", "1..2..3"] {
+            assert!(r(bad).is_err(), "{bad:?} accepted");
+        }
+        let all = FrameRange::ALL;
+        assert!(all.contains(0) && all.contains(usize::MAX));
+    }
+
+    #[test]
+    fn params_validated() {
+        let ok = ParamArgs {
+            iterations: Some(1),
+            q: Some(1.0),
+            ..ParamArgs::default()
+        };
+        let p = ok.to_params().unwrap();
+        assert_eq!((p.iterations, p.q, p.sigma), (1, 1.0, 0.005));
+        let bad = ParamArgs {
+            sigma: Some(-1.0),
+            ..ParamArgs::default()
+        };
+        let e = bad.to_params().unwrap_err().to_string();
+        assert!(e.contains("sigma"), "{e}");
+        let bad = ParamArgs {
+            iterations: Some(0),
+            ..ParamArgs::default()
+        };
+        assert!(bad.to_params().is_err());
+    }
+}

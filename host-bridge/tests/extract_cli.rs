@@ -1,0 +1,366 @@
+//! `host-bridge extract` end to end: real CARMEN frames in, JSON Lines out,
+//! every float bit-exact to what `lms_core` computes; bad input fails with a
+//! message naming the file and line.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use lms_core::{Extractor, Frame, Invalid, Params, Variant};
+use serde_json::Value;
+
+const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/data/carmen")
+        .join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("cannot start host-bridge")
+}
+
+/// A fresh scratch directory for this test process and `name`.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("host-bridge-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The first `count` FLASER frames of a cm log, parsed here independently of
+/// the tool: 361 beams, codes ≥ 81.83 m invalid.
+fn first_frames(path: &Path, count: usize) -> Vec<Frame> {
+    let file = std::fs::File::open(path).unwrap();
+    let reader = BufReader::new(flate2::read::GzDecoder::new(file));
+    let mut frames = Vec::new();
+    for line in reader.lines() {
+        let line = line.unwrap();
+        let fields: Vec<&str> = line.split_ascii_whitespace().collect();
+        if fields.first() != Some(&"FLASER") {
+            continue;
+        }
+        let n: usize = fields[1].parse().unwrap();
+        assert_eq!(n, 361);
+        let ranges: Vec<f32> = fields[2..2 + n]
+            .iter()
+            .map(|s| s.parse().unwrap())
+            .collect();
+        let mut frame = Frame::from_metres(Variant::Fov180Res50.geometry(), &ranges).unwrap();
+        for (j, &r) in ranges.iter().enumerate() {
+            if r >= 81.83 {
+                let cm = (r * 100.0).round() as u16;
+                frame.set_invalid(j, Invalid::from_code_offset(8191 - cm));
+            }
+        }
+        frames.push(frame);
+        if frames.len() == count {
+            break;
+        }
+    }
+    frames
+}
+
+/// Bits of a JSON number read back as f32 (`None` for `null`).
+fn f32_of(v: &Value) -> Option<u32> {
+    if v.is_null() {
+        return None;
+    }
+    let x = v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"));
+    Some((x as f32).to_bits())
+}
+
+fn assert_f32(v: &Value, expected: f32, what: &str) {
+    assert_eq!(
+        f32_of(v),
+        Some(expected.to_bits()),
+        "{what}: JSON {v} vs library {expected:?}"
+    );
+}
+
+fn assert_mat(v: &Value, expected: [[f32; 2]; 2], what: &str) {
+    for (i, row) in expected.iter().enumerate() {
+        for (k, &e) in row.iter().enumerate() {
+            assert_f32(&v[i][k], e, &format!("{what}[{i}][{k}]"));
+        }
+    }
+}
+
+/// Every number token of a JSON line (keys are strings, so they are skipped).
+fn number_tokens(line: &str) -> impl Iterator<Item = &str> {
+    line.split(|c: char| "[]{},:".contains(c) || c.is_whitespace())
+        .filter(|t| t.starts_with(|c: char| c == '-' || c.is_ascii_digit()))
+}
+
+#[test]
+fn real_log_round_trips_bit_exactly() {
+    let log = data("csail-corrected.log.gz");
+    let out = run(&["extract", log.to_str().unwrap(), "--frames", "0..4"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("4 frames"), "summary: {stderr}");
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 4);
+
+    // Numbers are printed as the shortest f32 decimals, not widened to f64.
+    for line in &lines {
+        for t in number_tokens(line) {
+            let x: f32 = t.parse().unwrap_or_else(|_| panic!("bad number {t}"));
+            if t.contains(['.', 'e', 'E']) {
+                assert_eq!(serde_json::to_string(&x).unwrap(), t, "not f32-shortest");
+            }
+        }
+    }
+
+    let frames = first_frames(&log, 4);
+    let params = Params::default();
+    let mut ex = Extractor::new();
+    let mut total_lines = 0;
+    for (index, (line, frame)) in lines.iter().zip(&frames).enumerate() {
+        let rec: Value = serde_json::from_str(line).expect("valid JSON");
+        for key in [
+            "frame",
+            "n",
+            "ranges",
+            "smoothed",
+            "mahalanobis",
+            "edges",
+            "segments",
+            "lines",
+            "corners",
+            "stats",
+        ] {
+            assert!(rec.get(key).is_some(), "frame {index}: no {key:?}");
+        }
+        assert_eq!(rec["frame"], index);
+        assert_eq!(rec["n"], 361);
+
+        ex.run(frame, &params).unwrap();
+        let beams = frame.beams();
+        let ranges = rec["ranges"].as_array().unwrap();
+        let smoothed = rec["smoothed"].as_array().unwrap();
+        assert_eq!((ranges.len(), smoothed.len()), (361, 361));
+        for j in 0..361 {
+            if beams[j].is_valid() {
+                assert_f32(&ranges[j], frame.ranges()[j], &format!("ranges[{j}]"));
+                assert_f32(&smoothed[j], ex.smoothed()[j], &format!("smoothed[{j}]"));
+            } else {
+                assert!(ranges[j].is_null() && smoothed[j].is_null(), "beam {j}");
+            }
+        }
+        let d = rec["mahalanobis"].as_array().unwrap();
+        assert_eq!(d.len(), 359);
+        let mut nulls = 0;
+        for (i, &expected) in ex.mahalanobis().iter().enumerate() {
+            if expected.is_finite() {
+                assert_f32(&d[i], expected, &format!("mahalanobis[{i}]"));
+            } else {
+                assert!(d[i].is_null(), "mahalanobis[{i}]");
+                nulls += 1;
+            }
+        }
+        assert!(nulls > 0, "frame {index} has invalid windows");
+
+        let f = ex.features();
+        let edges: Vec<u64> = f.edges.iter().map(|&e| e as u64).collect();
+        let got: Vec<u64> = rec["edges"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .collect();
+        assert_eq!(got, edges);
+        let segs: Vec<Value> = f
+            .segments
+            .iter()
+            .map(|s| serde_json::json!([s.first, s.last]))
+            .collect();
+        assert_eq!(rec["segments"].as_array().unwrap(), &segs);
+
+        let lines_json = rec["lines"].as_array().unwrap();
+        assert_eq!(lines_json.len(), f.lines.len());
+        for (k, (l, lj)) in f.lines.iter().zip(lines_json).enumerate() {
+            let w = format!("frame {index} line {k}");
+            assert_f32(&lj["alpha"], l.alpha, &w);
+            assert_f32(&lj["r"], l.r, &w);
+            assert_mat(&lj["cov"], l.cov.to_array(), &w);
+            assert_f32(&lj["chi2"], l.chi2, &w);
+            assert_mat(&lj["endpoints"], l.endpoints, &w);
+            assert_eq!(lj["first"], l.first);
+            assert_eq!(lj["last"], l.last);
+            assert_eq!(lj["points"], l.points);
+        }
+        total_lines += f.lines.len();
+
+        let corners_json = rec["corners"].as_array().unwrap();
+        assert_eq!(corners_json.len(), f.corners.len());
+        for (k, (c, cj)) in f.corners.iter().zip(corners_json).enumerate() {
+            let w = format!("frame {index} corner {k}");
+            assert_f32(&cj["x"], c.x, &w);
+            assert_f32(&cj["y"], c.y, &w);
+            assert_mat(&cj["cov"], c.cov.to_array(), &w);
+            assert_f32(&cj["angle_deg"], c.angle_deg, &w);
+            assert_eq!(cj["well_conditioned"], c.well_conditioned);
+        }
+        assert_eq!(rec["stats"]["valid_beams"], f.stats.valid_beams);
+        assert_eq!(rec["stats"]["invalid_windows"], f.stats.invalid_windows);
+        assert_eq!(rec["stats"]["merges"], f.stats.merges);
+    }
+    assert!(total_lines > 0);
+
+    // The typed reader of the same records agrees.
+    for line in &lines {
+        let _: host_bridge::extract::FrameRecord = serde_json::from_str(line).unwrap();
+    }
+}
+
+#[test]
+fn output_file_matches_stdout_and_params_apply() {
+    let log = data("csail-corrected.log.gz");
+    let dir = scratch("output");
+    let file = dir.join("out.jsonl");
+    let args = ["extract", log.to_str().unwrap(), "--frames", "2..=3"];
+    let a = run(&[
+        &args[..],
+        &["--iterations", "1", "-o", file.to_str().unwrap()],
+    ]
+    .concat());
+    assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
+    assert!(a.stdout.is_empty());
+    let b = run(&[&args[..], &["--iterations", "1"]].concat());
+    assert_eq!(std::fs::read(&file).unwrap(), b.stdout);
+    let first: Value =
+        serde_json::from_slice(b.stdout.split(|&c| c == b'\n').next().unwrap()).unwrap();
+    assert_eq!(first["frame"], 2);
+
+    // One pass gives other D than the default 30.
+    let c = run(&args);
+    assert_ne!(b.stdout, c.stdout);
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+fn flaser(n: usize, value: &str) -> String {
+    let ranges = vec![value; n].join(" ");
+    format!("FLASER {n} {ranges} 0 0 0 0 0 0 1.5 host 1.5\n")
+}
+
+/// Run extract on a log with the given text; return (success, stderr).
+fn extract_text(name: &str, text: &str) -> (bool, String, PathBuf) {
+    let dir = scratch(name);
+    let path = dir.join(format!("{name}.log"));
+    std::fs::write(&path, text).unwrap();
+    let out = run(&["extract", path.to_str().unwrap(), "--iterations", "1"]);
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        path,
+    )
+}
+
+#[test]
+fn plain_mm_log_is_read() {
+    let mut text = String::from("# a comment\nODOM 0 0 0 0 0 0 1 host 1\n");
+    text += &flaser(181, "2.125");
+    text += &flaser(181, "32.767");
+    let (ok, err, path) = extract_text("mm", &text);
+    assert!(ok, "{err}");
+    assert!(err.contains("2 frames") && err.contains("mm"), "{err}");
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
+}
+
+#[test]
+fn bad_logs_fail_naming_the_line() {
+    let good = flaser(361, "2.00");
+    let cases = [
+        (
+            "malformed",
+            format!("PARAM a b\n{good}{}", flaser(361, "2.0x")),
+            "line 3",
+            "malformed number",
+        ),
+        (
+            "count",
+            flaser(361, "2.00").replacen("FLASER 361", "FLASER 360", 1),
+            "line 1",
+            "n = 360",
+        ),
+        (
+            "unsupported",
+            format!("{good}{good}\n{}", flaser(270, "2.00")),
+            "line 4",
+            "unsupported beam count n = 270",
+        ),
+        (
+            "bad_n",
+            "FLASER many 1 2 3\n".to_string(),
+            "line 1",
+            "malformed beam count",
+        ),
+    ];
+    for (name, text, line, what) in cases {
+        let (ok, err, path) = extract_text(name, &text);
+        assert!(!ok, "{name}: accepted");
+        assert!(err.contains(line), "{name}: {err}");
+        assert!(err.contains(what), "{name}: {err}");
+        assert!(err.contains(&*path.to_string_lossy()), "{name}: {err}");
+        let _ = std::fs::remove_dir_all(path.parent().unwrap());
+    }
+}
+
+#[test]
+fn bad_arguments_fail() {
+    let log = data("csail-corrected.log.gz");
+    let log = log.to_str().unwrap();
+    let missing = run(&["extract", "/nonexistent/dir/scan.log"]);
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("/nonexistent/dir/scan.log"));
+
+    for (args, what) in [
+        (vec!["--frames", "5..2"], "frame range"),
+        (vec!["--frames", "x"], "frame range"),
+        (vec!["--frames", "1000.."], "selects no frame"),
+        (vec!["--sigma", "-1"], "sigma"),
+        (vec!["--iterations", "0"], "iterations"),
+        (vec!["--tau", "0"], "tau"),
+        (vec!["--q", "-0.5"], "q must be"),
+    ] {
+        let out = run(&[&["extract", log][..], &args[..]].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} accepted");
+        assert!(err.contains(what), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn synthetic_scene_is_the_default() {
+    let out = run(&["extract", "--count", "3", "--seed", "5"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("scene room") && stderr.contains("3 frames"),
+        "{stderr}"
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let records: Vec<host_bridge::extract::FrameRecord> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(records.len(), 3);
+    for (k, r) in records.iter().enumerate() {
+        assert_eq!((r.frame, r.n), (k, 361));
+        // The room with a box: several walls and at least one corner.
+        assert!(r.lines.len() >= 3, "frame {k}: {} lines", r.lines.len());
+        assert!(!r.corners.is_empty(), "frame {k}: no corner");
+    }
+    // Same seed, same output; the scene and seed options conflict with a log.
+    let again = run(&["extract", "--count", "3", "--seed", "5"]);
+    assert_eq!(again.stdout, text.as_bytes());
+    let log = data("csail-corrected.log.gz");
+    let both = run(&["extract", log.to_str().unwrap(), "--seed", "5"]);
+    assert!(!both.status.success());
+}
