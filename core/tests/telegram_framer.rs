@@ -406,3 +406,35 @@ fn telegram_framer_abandon_on_idle_line() {
         }
     );
 }
+
+#[test]
+fn telegram_framer_sensor_side_nak_pattern() {
+    // A simulator reading requests: a status request with a bad CRC, then
+    // the host's resend. It answers NAK once, then ACK + reply.
+    let mut stream = vec![0x02, 0x00, 0x01, 0x00, 0x31, 0x15, 0x13];
+    stream.extend_from_slice(&[0x02, 0x00, 0x01, 0x00, 0x31, 0x15, 0x12]);
+    for chunk_len in 1..=stream.len() {
+        let mut framer = Framer::new(Direction::HostToSensor, false);
+        let mut answers = Vec::new();
+        for chunk in stream.chunks(chunk_len) {
+            let mut input = chunk;
+            loop {
+                let fed = framer.feed(input);
+                input = fed.remaining;
+                if fed.crc_errors > 0 {
+                    answers.push(NAK);
+                }
+                match fed.event {
+                    Some(Event::Telegram(t)) => {
+                        assert_eq!(Request::parse(&t), Ok(Request::Status));
+                        answers.push(ACK);
+                    }
+                    Some(_) => unreachable!("no handshake events host → sensor"),
+                    None => break,
+                }
+            }
+        }
+        assert_eq!(answers, vec![NAK, ACK], "chunks of {chunk_len}");
+        assert_eq!(framer.stats().bytes_skipped, 7);
+    }
+}

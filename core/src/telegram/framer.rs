@@ -42,6 +42,9 @@
 //!   hidden behind a false start (a truncated telegram, a `02` inside data)
 //!   is still found.
 //!
+//! A sensor-side user (a simulator) answers a bad checksum with `NAK`: each
+//! [`Feed`] says how many candidates failed their CRC during that call.
+//!
 //! Every byte fed ends up in exactly one place, so at any time
 //! `bytes fed = Σ telegram lengths + acks + naks + bytes_skipped +
 //! buffered()` (until the counters wrap at 2³²).
@@ -74,6 +77,7 @@ pub enum Event<'a> {
 }
 
 /// The result of one [`Framer::feed`] call.
+#[must_use = "feed `remaining` again until `event` is None"]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Feed<'f, 'i> {
@@ -82,6 +86,10 @@ pub struct Feed<'f, 'i> {
     pub event: Option<Event<'f>>,
     /// The input not consumed yet: feed it next.
     pub remaining: &'i [u8],
+    /// Candidates rejected for a bad checksum during this call (also
+    /// counted in [`FramerStats::crc_errors`]). A sensor-side user answers
+    /// with `NAK` when this is not 0, before handling `event`.
+    pub crc_errors: u32,
 }
 
 /// Counters of everything the framer saw (all wrap at 2³²).
@@ -110,6 +118,15 @@ pub struct FramerStats {
     /// Bytes thrown away: garbage between telegrams, false `STX` bytes, and
     /// bytes dropped by [`Framer::discard`].
     pub bytes_skipped: u32,
+}
+
+/// What one step of the scan found (before borrowing the buffer).
+enum Found {
+    Nothing,
+    Ack,
+    Nak,
+    /// A telegram of this many bytes at the front of the buffer.
+    Telegram(usize),
 }
 
 /// What the buffered candidate (starting with `STX`) needs next.
@@ -238,16 +255,38 @@ impl Framer {
     /// Feed received bytes; see the [module docs](self) for the loop.
     pub fn feed<'f, 'i>(&'f mut self, input: &'i [u8]) -> Feed<'f, 'i> {
         self.release_delivered();
+        let crc_start = self.stats.crc_errors;
+        let (found, remaining) = self.step(input);
+        let crc_errors = self.stats.crc_errors.wrapping_sub(crc_start);
+        let event = match found {
+            Found::Nothing => None,
+            Found::Ack => Some(Event::Ack),
+            Found::Nak => Some(Event::Nak),
+            Found::Telegram(total) => {
+                self.delivered = total;
+                let bytes: &'f [u8] = self.buf.get(..total).unwrap_or_default();
+                Some(Event::Telegram(Telegram::new_unchecked(
+                    bytes,
+                    self.direction,
+                )))
+            }
+        };
+        Feed {
+            event,
+            remaining,
+            crc_errors,
+        }
+    }
+
+    /// Consume input until something is found or the input runs out.
+    fn step<'i>(&mut self, input: &'i [u8]) -> (Found, &'i [u8]) {
         let mut input = input;
         loop {
             // Buffer holds unsynchronised bytes (left over from a re-scan):
             // bring an STX to the front, or report a handshake byte.
             if self.len > 0 && self.front() != Some(STX) {
-                if let Some(event) = self.sync_buffer() {
-                    return Feed {
-                        event: Some(event),
-                        remaining: input,
-                    };
+                if let Some(found) = self.sync_buffer() {
+                    return (found, input);
                 }
                 continue;
             }
@@ -255,21 +294,13 @@ impl Framer {
                 // Nothing buffered: scan the input directly.
                 let Some(at) = input.iter().position(|&b| self.is_marker(b)) else {
                     self.count_skipped(input.len());
-                    return Feed {
-                        event: None,
-                        remaining: input.get(input.len()..).unwrap_or_default(),
-                    };
+                    return (Found::Nothing, input.get(input.len()..).unwrap_or_default());
                 };
                 self.count_skipped(at);
                 let marker = input.get(at).copied().unwrap_or(STX);
                 input = input.get(at + 1..).unwrap_or_default();
-                match self.handshake_event(marker) {
-                    Some(event) => {
-                        return Feed {
-                            event: Some(event),
-                            remaining: input,
-                        }
-                    }
+                match self.handshake_byte(marker) {
+                    Some(found) => return (found, input),
                     None => self.push(&[STX]),
                 }
                 continue;
@@ -278,15 +309,7 @@ impl Framer {
             match self.candidate() {
                 Candidate::Complete(total) => {
                     self.stats.telegrams = self.stats.telegrams.wrapping_add(1);
-                    self.delivered = total;
-                    let bytes: &'f [u8] = self.buf.get(..total).unwrap_or_default();
-                    return Feed {
-                        event: Some(Event::Telegram(Telegram::new_unchecked(
-                            bytes,
-                            self.direction,
-                        ))),
-                        remaining: input,
-                    };
+                    return (Found::Telegram(total), input);
                 }
                 Candidate::False(why) => {
                     let counter = match why {
@@ -301,10 +324,7 @@ impl Framer {
                 }
                 Candidate::Need(total) => {
                     if input.is_empty() {
-                        return Feed {
-                            event: None,
-                            remaining: input,
-                        };
+                        return (Found::Nothing, input);
                     }
                     let want = total.saturating_sub(self.len).min(input.len());
                     let (take, rest) = input.split_at_checked(want).unwrap_or((input, &[]));
@@ -339,19 +359,19 @@ impl Framer {
         b == STX || (self.handshake && (b == ACK || b == NAK))
     }
 
-    /// The event for a handshake byte (counted), `None` for `STX`.
-    fn handshake_event(&mut self, b: u8) -> Option<Event<'static>> {
+    /// A handshake byte (counted), `None` for `STX`.
+    fn handshake_byte(&mut self, b: u8) -> Option<Found> {
         if !self.handshake {
             return None;
         }
         match b {
             ACK => {
                 self.stats.acks = self.stats.acks.wrapping_add(1);
-                Some(Event::Ack)
+                Some(Found::Ack)
             }
             NAK => {
                 self.stats.naks = self.stats.naks.wrapping_add(1);
-                Some(Event::Nak)
+                Some(Found::Nak)
             }
             _ => None,
         }
@@ -359,7 +379,7 @@ impl Framer {
 
     /// Skip buffered bytes up to the next marker; report (and drop) a
     /// handshake byte found at the front.
-    fn sync_buffer(&mut self) -> Option<Event<'static>> {
+    fn sync_buffer(&mut self) -> Option<Found> {
         let held = self.buf.get(..self.len).unwrap_or_default();
         match held.iter().position(|&b| self.is_marker(b)) {
             None => {
@@ -368,7 +388,7 @@ impl Framer {
             }
             Some(0) => {
                 let b = self.front().unwrap_or(STX);
-                let event = self.handshake_event(b);
+                let event = self.handshake_byte(b);
                 if event.is_some() {
                     self.drop_front(1);
                 } else {
@@ -415,8 +435,8 @@ impl Framer {
     fn push(&mut self, bytes: &[u8]) {
         let start = self.len.min(MAX_TELEGRAM_LEN);
         let n = bytes.len().min(MAX_TELEGRAM_LEN - start);
-        if let (Some(dst), Some(src)) = (self.buf.get_mut(start..start + n), bytes.get(..n)) {
-            dst.copy_from_slice(src);
+        if let Some(dst) = self.buf.get_mut(start..start + n) {
+            super::copy_into(dst, bytes);
             self.len = start + n;
         }
     }
@@ -432,7 +452,17 @@ impl Framer {
     fn drop_front(&mut self, n: usize) {
         let len = self.len.min(MAX_TELEGRAM_LEN);
         let n = n.min(len);
-        self.buf.copy_within(n..len, 0);
+        if n == 0 {
+            return;
+        }
+        // A byte loop rather than `copy_within`, whose range check would
+        // leave a panic path in the binary.
+        for i in 0..len - n {
+            let b = self.buf.get(i + n).copied().unwrap_or(0);
+            if let Some(d) = self.buf.get_mut(i) {
+                *d = b;
+            }
+        }
         self.len = len - n;
     }
 
