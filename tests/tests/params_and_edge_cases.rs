@@ -1,0 +1,246 @@
+//! Parameter validation and degenerate frames (no panic, sensible output).
+
+use lms_core::frame::{Frame, FrameError, Geometry, Invalid, Variant, MAX_BEAMS};
+use lms_core::{Extractor, ParamError, Params};
+
+fn frame_with(n: usize, range: impl Fn(usize) -> f32) -> Frame {
+    let g = Geometry {
+        first_bearing: -50f32.to_radians(),
+        step: (100.0 / (n.max(2) - 1) as f32).to_radians(),
+    };
+    let ranges: Vec<f32> = (0..n).map(range).collect();
+    Frame::from_metres(g, &ranges).expect("a valid frame")
+}
+
+#[test]
+fn nonsense_parameters_are_refused_with_the_right_error() {
+    let frame = Frame::from_metres(Variant::Fov180Res50.geometry(), &[2.0; 361]).unwrap();
+    let mut ex = Extractor::new();
+    let d = Params::default();
+    let cases: Vec<(Params, ParamError)> = vec![
+        (Params { sigma: 0.0, ..d }, ParamError::Sigma),
+        (Params { sigma: -0.005, ..d }, ParamError::Sigma),
+        (
+            Params {
+                sigma: f32::NAN,
+                ..d
+            },
+            ParamError::Sigma,
+        ),
+        (
+            Params {
+                sigma: f32::INFINITY,
+                ..d
+            },
+            ParamError::Sigma,
+        ),
+        (Params { q: -1e-6, ..d }, ParamError::ProcessNoise),
+        (Params { q: f32::NAN, ..d }, ParamError::ProcessNoise),
+        (Params { iterations: 0, ..d }, ParamError::Iterations),
+        (Params { tau: 0.0, ..d }, ParamError::Tau),
+        (Params { tau: -9.0, ..d }, ParamError::Tau),
+        (Params { tau: f32::NAN, ..d }, ParamError::Tau),
+        (Params { min_points: 2, ..d }, ParamError::MinPoints),
+        (Params { max_chi2: 0.0, ..d }, ParamError::MaxChi2),
+        (
+            Params {
+                max_chi2: f32::NAN,
+                ..d
+            },
+            ParamError::MaxChi2,
+        ),
+        (
+            Params {
+                min_length: -0.1,
+                ..d
+            },
+            ParamError::MinLength,
+        ),
+        (
+            Params {
+                merge_gate: 0.0,
+                ..d
+            },
+            ParamError::MergeGate,
+        ),
+        (
+            Params {
+                corner_gap: f32::NAN,
+                ..d
+            },
+            ParamError::CornerGap,
+        ),
+        (
+            Params {
+                min_corner_angle_deg: 91.0,
+                ..d
+            },
+            ParamError::MinCornerAngle,
+        ),
+        (
+            Params {
+                min_corner_angle_deg: f32::NAN,
+                ..d
+            },
+            ParamError::MinCornerAngle,
+        ),
+    ];
+    for (params, want) in cases {
+        assert_eq!(params.validate(), Err(want), "{params:?}");
+        match ex.run(&frame, &params) {
+            Err(e) => assert_eq!(e, want, "{params:?}"),
+            Ok(_) => panic!("accepted {params:?}"),
+        }
+    }
+    // Several faults: one error, and the run refuses.
+    let bad = Params {
+        sigma: f32::NAN,
+        tau: 0.0,
+        iterations: 0,
+        ..d
+    };
+    assert!(ex.run(&frame, &bad).is_err());
+    // The defaults and the edges of the valid ranges pass.
+    for ok in [
+        d,
+        Params { iterations: 1, ..d },
+        Params {
+            q: 0.0,
+            min_points: 3,
+            ..d
+        },
+    ] {
+        assert_eq!(ok.validate(), Ok(()));
+        assert!(ex.run(&frame, &ok).is_ok());
+    }
+}
+
+#[test]
+fn frames_of_the_wrong_size_are_refused_at_construction() {
+    let g = Variant::Fov180Res50.geometry();
+    assert_eq!(
+        Frame::from_metres(g, &[1.0; 2]).unwrap_err(),
+        FrameError::BeamCount { got: 2 }
+    );
+    assert_eq!(
+        Frame::from_metres(g, &[1.0; MAX_BEAMS + 1]).unwrap_err(),
+        FrameError::BeamCount { got: MAX_BEAMS + 1 }
+    );
+    let bad = Geometry {
+        first_bearing: 0.0,
+        step: f32::NAN,
+    };
+    assert_eq!(
+        Frame::from_metres(bad, &[1.0; 10]).unwrap_err(),
+        FrameError::BadGeometry
+    );
+}
+
+#[test]
+fn a_frame_with_every_beam_invalid_gives_no_features() {
+    let params = Params::default();
+    let mut ex = Extractor::new();
+    // Zeros, NaN and infinities: invalid on construction.
+    let zeros = Frame::from_metres(Variant::Fov180Res50.geometry(), &[0.0; 361]).unwrap();
+    let mut odd: Vec<f32> = vec![f32::NAN; 361];
+    odd[10] = f32::INFINITY;
+    odd[11] = -3.0;
+    let odd = Frame::from_metres(Variant::Fov180Res50.geometry(), &odd).unwrap();
+    // Valid-looking ranges overwritten with every error code.
+    let mut codes = Frame::from_metres(Variant::Fov180Res100.geometry(), &[3.0; 181]).unwrap();
+    let kinds = [
+        Invalid::NoEcho,
+        Invalid::Dazzle,
+        Invalid::Overflow,
+        Invalid::LowSignal,
+        Invalid::ChannelError,
+        Invalid::AboveMax,
+        Invalid::OtherCode(3),
+    ];
+    for j in 0..codes.len() {
+        codes.set_invalid(j, kinds[j % kinds.len()]);
+    }
+    for frame in [&zeros, &odd, &codes] {
+        assert_eq!(frame.valid_count(), 0);
+        ex.run(frame, &params).unwrap();
+        let f = ex.features();
+        assert!(
+            f.segments.is_empty()
+                && f.edges.is_empty()
+                && f.lines.is_empty()
+                && f.corners.is_empty()
+        );
+        assert_eq!(f.stats.valid_beams, 0);
+        assert_eq!(f.stats.invalid_windows as usize, frame.len() - 2);
+        assert!(ex.mahalanobis().iter().all(|d| *d == f32::INFINITY));
+        // Invalid beams are never modified.
+        assert_eq!(ex.smoothed(), frame.ranges());
+    }
+}
+
+#[test]
+fn three_beams_and_the_largest_frame_run() {
+    let params = Params::default();
+    let mut ex = Extractor::new();
+
+    // 3 beams: one window; a collinear one does not break, but a segment of
+    // 3 points is below min_points (5), so it is dropped and counted.
+    let wall = |j: usize| 2.0 / ((-50f32 + 50.0 * j as f32).to_radians()).cos();
+    let three = frame_with(3, wall);
+    ex.run(&three, &params).unwrap();
+    let f = ex.features();
+    assert_eq!(ex.mahalanobis().len(), 1);
+    assert!(ex.mahalanobis()[0] < 1.0, "D = {}", ex.mahalanobis()[0]);
+    assert!(f.segments.is_empty() && f.lines.is_empty());
+    assert_eq!(f.stats.short_segments, 1);
+    ex.run(
+        &three,
+        &Params {
+            min_points: 3,
+            ..params
+        },
+    )
+    .unwrap();
+    let f = ex.features();
+    assert_eq!(f.segments.len(), 1);
+
+    // 401 beams (100°/0.25°): a wall at 3 m, one line, no corner.
+    let g = Variant::Fov100Res25.geometry();
+    let ranges: Vec<f32> = (0..401).map(|j| 3.0 / g.bearing(j).cos()).collect();
+    let big = Frame::from_metres(g, &ranges).unwrap();
+    ex.run(&big, &params).unwrap();
+    let f = ex.features();
+    assert_eq!(ex.smoothed().len(), 401);
+    assert_eq!(ex.mahalanobis().len(), 399);
+    assert_eq!(f.lines.len(), 1, "{:?}", f.lines);
+    assert!((f.lines[0].r - 3.0).abs() < 1e-3 && f.lines[0].alpha.abs() < 1e-3);
+    assert!(f.corners.is_empty());
+
+    // 401 beams of alternating near/far ranges: every window breaks, no
+    // segment, and nothing panics.
+    let zigzag: Vec<f32> = (0..401)
+        .map(|j| if j % 2 == 0 { 1.0 } else { 80.0 })
+        .collect();
+    let zz = Frame::from_metres(g, &zigzag).unwrap();
+    ex.run(&zz, &params).unwrap();
+    let f = ex.features();
+    assert!(f.segments.is_empty() && f.lines.is_empty());
+
+    // Mixed: a single valid beam between invalid ones, and the maximum
+    // number of passes.
+    let mut sparse = Frame::from_metres(g, &ranges).unwrap();
+    for j in (0..401).filter(|j| j % 3 != 0) {
+        sparse.set_invalid(j, Invalid::NoEcho);
+    }
+    ex.run(
+        &sparse,
+        &Params {
+            iterations: lms_core::params::MAX_ITERATIONS,
+            ..params
+        },
+    )
+    .unwrap();
+    let f = ex.features();
+    assert!(f.segments.is_empty());
+    assert_eq!(ex.smoothed(), sparse.ranges());
+}
