@@ -192,8 +192,9 @@ impl Extractor {
             sin: &self.sin_phi[..n],
         };
         let raw = frame.ranges();
-        for seg in f.segments.iter() {
-            let line = match fit_line(bearings, raw, beams, seg.first, seg.last, params.sigma) {
+        for k in 0..f.segments.len() {
+            let (first, last) = fit_span(&f.segments, k, params.fit_shared_points);
+            let line = match fit_line(bearings, raw, beams, first, last, params.sigma) {
                 Ok(line) => line,
                 Err(_) => {
                     stats.degenerate_fits = stats.degenerate_fits.saturating_add(1);
@@ -275,6 +276,24 @@ impl Extractor {
         let _ = n;
         self.geometry = Some(geometry);
     }
+}
+
+/// The beams fitted for segment `k`: the whole segment (§7), or, with
+/// `fit_shared_points == false`, without a first/last point it shares with
+/// the neighbouring segment (a corner point lies on neither line exactly).
+fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16, u16) {
+    let Some(seg) = segments.get(k) else {
+        return (0, 0);
+    };
+    if fit_shared_points {
+        return (seg.first, seg.last);
+    }
+    let shares_first = k > 0 && segments.get(k - 1).is_some_and(|p| p.last == seg.first);
+    let shares_last = segments.get(k + 1).is_some_and(|n| n.first == seg.last);
+    (
+        seg.first.saturating_add(u16::from(shares_first)),
+        seg.last.saturating_sub(u16::from(shares_last)),
+    )
 }
 
 /// §7.6: merge `prev` and `next` if only invalid beams (or at most

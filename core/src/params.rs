@@ -22,6 +22,13 @@ pub struct Params {
     pub max_chi2: f32,
     /// Shortest accepted line, endpoint to endpoint (m). Default 0.1.
     pub min_length: f32,
+    /// Fit each line to all points of its segment, including a corner point
+    /// shared with the neighbouring segment (§6–7, default `true`). With
+    /// `false` the shared point is left out of both fits: it lies on neither
+    /// line exactly, and including it makes the corner covariance
+    /// over-confident (measured corner NEES 2.73 with it, 1.92 without, on
+    /// 400 draws of a 90° corner at σ = 5 mm; ideal 2).
+    pub fit_shared_points: bool,
     /// Merge consecutive agreeing lines (§7.6). Default on.
     pub merge: bool,
     /// Most valid beams allowed between two lines that may merge. Default 3.
@@ -46,6 +53,7 @@ impl Default for Params {
             min_points: 5,
             max_chi2: 4.0,
             min_length: 0.1,
+            fit_shared_points: true,
             merge: true,
             merge_gap_beams: 3,
             merge_gate: 9.21,
