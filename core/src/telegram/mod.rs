@@ -70,6 +70,7 @@
 
 pub mod config;
 pub mod crc;
+pub mod features;
 pub mod framer;
 pub mod measured;
 pub mod packet;

@@ -1,0 +1,883 @@
+//! The co-processor's own telegrams (PROTOCOL.md §6; byte tables in the
+//! project's `docs/PROTOCOL.md`).
+//!
+//! After every scan it has processed, the co-processor sends the scan's
+//! features to the host as a group of telegrams in the LMS framing
+//! (`02 80 LEN CMD DATA STATUS CRC`), in this order:
+//!
+//! | code | name | content |
+//! |---|---|---|
+//! | `D4` | segments | `[first, last]` beam pairs |
+//! | `D3` | edge points | beam indices |
+//! | `D1` | lines | up to [`LINES_PER_TELEGRAM`] lines per telegram |
+//! | `D2` | corners | up to [`CORNERS_PER_TELEGRAM`] corners per telegram |
+//! | `D0` | summary | counts, [`Stats`], the parameters used — sent last |
+//!
+//! Every telegram starts with the 32-bit scan counter, so a receiver can tell
+//! the groups apart; the summary closes a group and carries the counts that
+//! let the receiver check that nothing is missing. Every float is sent as its
+//! IEEE-754 bits, little-endian, so the host sees exactly the bits the
+//! co-processor computed.
+//!
+//! The host may ask for the co-processor's counters with the request `55`
+//! (no data); the reply is `D5` ([`Counters`]). No LMS 2xx client uses the
+//! codes `55`, `D0`–`D5`; a client that does not know them skips them like
+//! any unexpected reply.
+//!
+//! Nothing here panics or allocates; encoders measure their buffer first.
+
+use crate::corners::Corner;
+use crate::extractor::{Features, Stats, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
+use crate::frame::MAX_BEAMS;
+use crate::line_fit::Line;
+use crate::maths::Sym2;
+use crate::params::Params;
+use crate::segmentation::Segment;
+
+use super::packet::{emit_telegram_with, EmitError, Telegram};
+use super::{DEFAULT_STATUS, MAX_TELEGRAM_LEN, REPLY_ADDRESS_BIT};
+
+/// Summary of one scan's features; closes the group.
+pub const CMD_SUMMARY: u8 = 0xD0;
+/// Lines of one scan (one or more telegrams).
+pub const CMD_LINES: u8 = 0xD1;
+/// Corners of one scan (zero or more telegrams).
+pub const CMD_CORNERS: u8 = 0xD2;
+/// Edge points of one scan.
+pub const CMD_EDGES: u8 = 0xD3;
+/// Segments of one scan.
+pub const CMD_SEGMENTS: u8 = 0xD4;
+/// Host → co-processor: read the counters (no data).
+pub const REQ_COUNTERS: u8 = 0x55;
+/// Co-processor → host: the counters.
+pub const CMD_COUNTERS: u8 = 0xD5;
+
+/// Lines per `D1` telegram (16 × 46 bytes + 7 = 743 data bytes).
+pub const LINES_PER_TELEGRAM: usize = 16;
+/// Corners per `D2` telegram (16 × 27 bytes + 7 = 439 data bytes).
+pub const CORNERS_PER_TELEGRAM: usize = 16;
+/// Bytes of one line record.
+pub const LINE_RECORD_LEN: usize = 46;
+/// Bytes of one corner record.
+pub const CORNER_RECORD_LEN: usize = 27;
+/// Bytes of the summary's data.
+pub const SUMMARY_LEN: usize = 49;
+/// Bytes of the counters' data.
+pub const COUNTERS_LEN: usize = 36;
+
+/// Counters the co-processor reports (`D5`); all wrap at `u32::MAX`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Counters {
+    /// `B0` scans received intact from the sensor.
+    pub scans_in: u32,
+    /// Scans whose features were sent to the host.
+    pub feature_scans_out: u32,
+    /// Feature telegrams sent (`D0`–`D4`).
+    pub feature_telegrams_out: u32,
+    /// Telegrams from the sensor with a bad checksum.
+    pub sensor_crc_errors: u32,
+    /// Times the sensor-side framer resynchronised.
+    pub sensor_resyncs: u32,
+    /// Bytes from the sensor skipped while resynchronising.
+    pub sensor_bytes_skipped: u32,
+    /// Telegrams from the host with a bad checksum (answered with NAK).
+    pub host_crc_errors: u32,
+    /// Scans lost because processing fell behind (receive queue overflow
+    /// or a scan that completed while the previous one was still waiting).
+    pub scans_dropped: u32,
+    /// Scans that could not be processed (unsupported value count, …).
+    pub scans_rejected: u32,
+}
+
+impl Counters {
+    fn fields(&self) -> [u32; 9] {
+        [
+            self.scans_in,
+            self.feature_scans_out,
+            self.feature_telegrams_out,
+            self.sensor_crc_errors,
+            self.sensor_resyncs,
+            self.sensor_bytes_skipped,
+            self.host_crc_errors,
+            self.scans_dropped,
+            self.scans_rejected,
+        ]
+    }
+
+    /// Write the `D5` data (9 × u32 LE, in field order) into `out`.
+    pub fn encode(&self, out: &mut [u8]) {
+        let mut w = Writer::new(out);
+        for v in self.fields() {
+            w.u32(v);
+        }
+    }
+
+    /// Read the `D5` data; `None` if it is not [`COUNTERS_LEN`] bytes.
+    pub fn decode(data: &[u8]) -> Option<Counters> {
+        if data.len() != COUNTERS_LEN {
+            return None;
+        }
+        let mut r = Reader::new(data);
+        Some(Counters {
+            scans_in: r.u32()?,
+            feature_scans_out: r.u32()?,
+            feature_telegrams_out: r.u32()?,
+            sensor_crc_errors: r.u32()?,
+            sensor_resyncs: r.u32()?,
+            sensor_bytes_skipped: r.u32()?,
+            host_crc_errors: r.u32()?,
+            scans_dropped: r.u32()?,
+            scans_rejected: r.u32()?,
+        })
+    }
+
+    /// Emit the complete `D5` telegram into `buf`; returns its length.
+    pub fn emit(&self, address: u8, buf: &mut [u8]) -> Result<usize, EmitError> {
+        emit_telegram_with(
+            buf,
+            REPLY_ADDRESS_BIT | address,
+            CMD_COUNTERS,
+            COUNTERS_LEN,
+            Some(DEFAULT_STATUS),
+            |d| self.encode(d),
+        )
+    }
+}
+
+/// The parameters echoed in the summary, so a checker can recompute with the
+/// same ones.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct EchoedParams {
+    /// Smoothing passes.
+    pub iterations: u16,
+    /// Range noise `sigma` (m).
+    pub sigma: f32,
+    /// Process noise `q` (m²).
+    pub q: f32,
+    /// Segmentation gate `tau`.
+    pub tau: f32,
+}
+
+impl From<&Params> for EchoedParams {
+    fn from(p: &Params) -> Self {
+        EchoedParams {
+            iterations: p.iterations,
+            sigma: p.sigma,
+            q: p.q,
+            tau: p.tau,
+        }
+    }
+}
+
+/// Emit every feature telegram of one scan, handing each complete telegram
+/// to `send` in order (segments, edges, lines, corners, summary). Returns
+/// the number of telegrams sent, or the first error of `send`.
+///
+/// `beams` is the scan's beam count; `address` the sensor address (the
+/// telegrams carry `0x80 | address`).
+pub fn emit_features<E, F>(
+    scan_counter: u32,
+    beams: u16,
+    params: &EchoedParams,
+    features: &Features,
+    address: u8,
+    mut send: F,
+) -> Result<u32, E>
+where
+    F: FnMut(&[u8]) -> Result<(), E>,
+{
+    let mut buf = [0u8; MAX_TELEGRAM_LEN];
+    let addr = REPLY_ADDRESS_BIT | address;
+    let mut sent = 0u32;
+    let mut out = |n: Result<usize, EmitError>, buf: &[u8]| -> Result<(), E> {
+        // Every length below is within MAX_LEN by construction; an emit
+        // error would be a bug in this module and sends nothing.
+        if let Ok(n) = n {
+            if let Some(t) = buf.get(..n) {
+                send(t)?;
+                sent = sent.wrapping_add(1);
+            }
+        }
+        Ok(())
+    };
+
+    // D4: counter, count (u8), count × (first u16, last u16).
+    let segs = &features.segments;
+    let n = emit_telegram_with(
+        &mut buf,
+        addr,
+        CMD_SEGMENTS,
+        5 + 4 * segs.len(),
+        Some(DEFAULT_STATUS),
+        |d| {
+            let mut w = Writer::new(d);
+            w.u32(scan_counter);
+            w.u8(segs.len() as u8);
+            for s in segs {
+                w.u16(s.first);
+                w.u16(s.last);
+            }
+        },
+    );
+    out(n, &buf)?;
+
+    // D3: counter, count (u16), count × beam (u16).
+    let edges = &features.edges;
+    let n = emit_telegram_with(
+        &mut buf,
+        addr,
+        CMD_EDGES,
+        6 + 2 * edges.len(),
+        Some(DEFAULT_STATUS),
+        |d| {
+            let mut w = Writer::new(d);
+            w.u32(scan_counter);
+            w.u16(edges.len() as u16);
+            for &e in edges {
+                w.u16(e);
+            }
+        },
+    );
+    out(n, &buf)?;
+
+    // D1: counter, part, parts, count, count × line record. At least one
+    // telegram, so an empty list is explicit.
+    let lines = &features.lines;
+    let parts = lines.len().div_ceil(LINES_PER_TELEGRAM).max(1);
+    for part in 0..parts {
+        let chunk = lines
+            .get(part * LINES_PER_TELEGRAM..)
+            .map_or(&[][..], |rest| &rest[..rest.len().min(LINES_PER_TELEGRAM)]);
+        let len = 7 + LINE_RECORD_LEN * chunk.len();
+        let n = emit_telegram_with(&mut buf, addr, CMD_LINES, len, Some(DEFAULT_STATUS), |d| {
+            let mut w = Writer::new(d);
+            w.u32(scan_counter);
+            w.u8(part as u8);
+            w.u8(parts as u8);
+            w.u8(chunk.len() as u8);
+            for l in chunk {
+                encode_line(&mut w, l);
+            }
+        });
+        out(n, &buf)?;
+    }
+
+    // D2: counter, part, parts, count, count × corner record; none if no corners.
+    let corners = &features.corners;
+    let parts = corners.len().div_ceil(CORNERS_PER_TELEGRAM);
+    for part in 0..parts {
+        let chunk = corners
+            .get(part * CORNERS_PER_TELEGRAM..)
+            .map_or(&[][..], |rest| {
+                &rest[..rest.len().min(CORNERS_PER_TELEGRAM)]
+            });
+        let len = 7 + CORNER_RECORD_LEN * chunk.len();
+        let n = emit_telegram_with(
+            &mut buf,
+            addr,
+            CMD_CORNERS,
+            len,
+            Some(DEFAULT_STATUS),
+            |d| {
+                let mut w = Writer::new(d);
+                w.u32(scan_counter);
+                w.u8(part as u8);
+                w.u8(parts as u8);
+                w.u8(chunk.len() as u8);
+                for c in chunk {
+                    encode_corner(&mut w, c);
+                }
+            },
+        );
+        out(n, &buf)?;
+    }
+
+    // D0: the summary, last.
+    let n = emit_telegram_with(
+        &mut buf,
+        addr,
+        CMD_SUMMARY,
+        SUMMARY_LEN,
+        Some(DEFAULT_STATUS),
+        |d| {
+            let mut w = Writer::new(d);
+            w.u32(scan_counter);
+            w.u16(beams);
+            w.u8(segs.len() as u8);
+            w.u8(lines.len() as u8);
+            w.u8(corners.len() as u8);
+            w.u16(edges.len() as u16);
+            for v in stats_fields(&features.stats) {
+                w.u16(v);
+            }
+            w.u16(params.iterations);
+            w.f32(params.sigma);
+            w.f32(params.q);
+            w.f32(params.tau);
+        },
+    );
+    out(n, &buf)?;
+    Ok(sent)
+}
+
+fn stats_fields(s: &Stats) -> [u16; 12] {
+    [
+        s.valid_beams,
+        s.invalid_windows,
+        s.short_segments,
+        s.segment_overflow,
+        s.edge_overflow,
+        s.degenerate_fits,
+        s.rejected_chi2,
+        s.rejected_short,
+        s.merges,
+        s.line_overflow,
+        s.degenerate_corners,
+        s.corner_overflow,
+    ]
+}
+
+fn stats_from(v: [u16; 12]) -> Stats {
+    Stats {
+        valid_beams: v[0],
+        invalid_windows: v[1],
+        short_segments: v[2],
+        segment_overflow: v[3],
+        edge_overflow: v[4],
+        degenerate_fits: v[5],
+        rejected_chi2: v[6],
+        rejected_short: v[7],
+        merges: v[8],
+        line_overflow: v[9],
+        degenerate_corners: v[10],
+        corner_overflow: v[11],
+    }
+}
+
+/// Line record, 46 bytes: α, r, cov αα, αr, rr, chi2, x₀, y₀, x₁, y₁
+/// (10 × f32), first, last, points (3 × u16).
+fn encode_line(w: &mut Writer<'_>, l: &Line) {
+    for v in [
+        l.alpha,
+        l.r,
+        l.cov.a,
+        l.cov.b,
+        l.cov.c,
+        l.chi2,
+        l.endpoints[0][0],
+        l.endpoints[0][1],
+        l.endpoints[1][0],
+        l.endpoints[1][1],
+    ] {
+        w.f32(v);
+    }
+    w.u16(l.first);
+    w.u16(l.last);
+    w.u16(l.points);
+}
+
+fn decode_line(r: &mut Reader<'_>) -> Option<Line> {
+    let mut f = [0.0f32; 10];
+    for v in f.iter_mut() {
+        *v = r.f32()?;
+    }
+    Some(Line {
+        alpha: f[0],
+        r: f[1],
+        cov: Sym2 {
+            a: f[2],
+            b: f[3],
+            c: f[4],
+        },
+        chi2: f[5],
+        endpoints: [[f[6], f[7]], [f[8], f[9]]],
+        first: r.u16()?,
+        last: r.u16()?,
+        points: r.u16()?,
+    })
+}
+
+/// Corner record, 27 bytes: x, y, cov xx, xy, yy, angle (6 × f32), flags
+/// (bit 0 = well conditioned), line a, line b (u8 each).
+fn encode_corner(w: &mut Writer<'_>, c: &Corner) {
+    for v in [c.x, c.y, c.cov.a, c.cov.b, c.cov.c, c.angle_deg] {
+        w.f32(v);
+    }
+    w.u8(u8::from(c.well_conditioned));
+    w.u8(c.line_a);
+    w.u8(c.line_b);
+}
+
+fn decode_corner(r: &mut Reader<'_>) -> Option<Corner> {
+    let mut f = [0.0f32; 6];
+    for v in f.iter_mut() {
+        *v = r.f32()?;
+    }
+    let flags = r.u8()?;
+    Some(Corner {
+        x: f[0],
+        y: f[1],
+        cov: Sym2 {
+            a: f[2],
+            b: f[3],
+            c: f[4],
+        },
+        angle_deg: f[5],
+        well_conditioned: flags & 1 != 0,
+        line_a: r.u8()?,
+        line_b: r.u8()?,
+    })
+}
+
+/// The summary of a scan as received.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Summary {
+    /// Scan counter.
+    pub scan_counter: u32,
+    /// Beams in the scan.
+    pub beams: u16,
+    /// Segments, lines, corners, edge points announced.
+    pub counts: [u16; 4],
+    /// The extractor's counters.
+    pub stats: Stats,
+    /// The parameters used.
+    pub params: EchoedParams,
+}
+
+/// Why a feature telegram could not be taken.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FeatureError {
+    /// The data is shorter or longer than its counts say.
+    Malformed {
+        /// The telegram's command code.
+        command: u8,
+    },
+    /// The summary's counts do not match what was received.
+    Incomplete {
+        /// Counter of the scan.
+        scan_counter: u32,
+    },
+    /// More items than the fixed capacity.
+    Overflow,
+}
+
+impl core::fmt::Display for FeatureError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            FeatureError::Malformed { command } => {
+                write!(f, "malformed feature telegram {command:02X}")
+            }
+            FeatureError::Incomplete { scan_counter } => {
+                write!(
+                    f,
+                    "features of scan {scan_counter} incomplete at its summary"
+                )
+            }
+            FeatureError::Overflow => f.write_str("more features than the fixed capacity"),
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for FeatureError {}
+
+/// Reassembles the feature telegrams of one scan at a time.
+#[derive(Clone, Debug, Default)]
+pub struct FeatureAssembler {
+    current: Option<u32>,
+    features: Features,
+    discarded: u32,
+}
+
+/// What [`FeatureAssembler::push`] made of a telegram.
+#[derive(Debug)]
+pub enum Assembled<'a> {
+    /// Not a feature telegram (e.g. a `B0`): ignored.
+    NotFeatures,
+    /// Taken; the scan is not complete yet.
+    Partial,
+    /// The summary arrived and the counts match: the scan's features.
+    Complete(Summary, &'a Features),
+}
+
+impl FeatureAssembler {
+    /// An empty assembler.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Take one sensor → host telegram.
+    pub fn push<T: AsRef<[u8]>>(&mut self, t: &Telegram<T>) -> Result<Assembled<'_>, FeatureError> {
+        let command = t.command();
+        if !matches!(
+            command,
+            CMD_SUMMARY | CMD_LINES | CMD_CORNERS | CMD_EDGES | CMD_SEGMENTS
+        ) {
+            return Ok(Assembled::NotFeatures);
+        }
+        let malformed = FeatureError::Malformed { command };
+        let mut r = Reader::new(t.data());
+        let counter = r.u32().ok_or(malformed)?;
+        if self.current != Some(counter) {
+            if self.current.is_some() {
+                // The previous scan's summary never came: count it, start anew.
+                self.discarded = self.discarded.wrapping_add(1);
+            }
+            self.start(counter);
+        }
+        let f = &mut self.features;
+        match command {
+            CMD_SEGMENTS => {
+                let n = r.u8().ok_or(malformed)?;
+                for _ in 0..n {
+                    let s = Segment {
+                        first: r.u16().ok_or(malformed)?,
+                        last: r.u16().ok_or(malformed)?,
+                    };
+                    f.segments.push(s).map_err(|_| FeatureError::Overflow)?;
+                }
+            }
+            CMD_EDGES => {
+                let n = r.u16().ok_or(malformed)?;
+                for _ in 0..n {
+                    f.edges
+                        .push(r.u16().ok_or(malformed)?)
+                        .map_err(|_| FeatureError::Overflow)?;
+                }
+            }
+            CMD_LINES => {
+                let (_part, _parts, n) = (r.u8(), r.u8(), r.u8().ok_or(malformed)?);
+                for _ in 0..n {
+                    let l = decode_line(&mut r).ok_or(malformed)?;
+                    f.lines.push(l).map_err(|_| FeatureError::Overflow)?;
+                }
+            }
+            CMD_CORNERS => {
+                let (_part, _parts, n) = (r.u8(), r.u8(), r.u8().ok_or(malformed)?);
+                for _ in 0..n {
+                    let c = decode_corner(&mut r).ok_or(malformed)?;
+                    f.corners.push(c).map_err(|_| FeatureError::Overflow)?;
+                }
+            }
+            _ => {
+                // CMD_SUMMARY
+                let beams = r.u16().ok_or(malformed)?;
+                let counts = [
+                    u16::from(r.u8().ok_or(malformed)?),
+                    u16::from(r.u8().ok_or(malformed)?),
+                    u16::from(r.u8().ok_or(malformed)?),
+                    r.u16().ok_or(malformed)?,
+                ];
+                let mut st = [0u16; 12];
+                for v in st.iter_mut() {
+                    *v = r.u16().ok_or(malformed)?;
+                }
+                let params = EchoedParams {
+                    iterations: r.u16().ok_or(malformed)?,
+                    sigma: r.f32().ok_or(malformed)?,
+                    q: r.f32().ok_or(malformed)?,
+                    tau: r.f32().ok_or(malformed)?,
+                };
+                f.stats = stats_from(st);
+                self.current = None;
+                let got = [
+                    f.segments.len() as u16,
+                    f.lines.len() as u16,
+                    f.corners.len() as u16,
+                    f.edges.len() as u16,
+                ];
+                if got != counts || !r.is_empty() {
+                    return Err(FeatureError::Incomplete {
+                        scan_counter: counter,
+                    });
+                }
+                let summary = Summary {
+                    scan_counter: counter,
+                    beams,
+                    counts,
+                    stats: f.stats,
+                    params,
+                };
+                return Ok(Assembled::Complete(summary, &self.features));
+            }
+        }
+        if !r.is_empty() {
+            return Err(malformed);
+        }
+        Ok(Assembled::Partial)
+    }
+
+    /// Scans whose telegrams were cut short by another scan's (their
+    /// summary never arrived) and were therefore discarded.
+    pub fn discarded(&self) -> u32 {
+        self.discarded
+    }
+
+    fn start(&mut self, counter: u32) {
+        self.current = Some(counter);
+        let f = &mut self.features;
+        f.segments.clear();
+        f.edges.clear();
+        f.lines.clear();
+        f.corners.clear();
+        f.stats = Stats::default();
+    }
+}
+
+// Compile-time checks that the largest telegrams fit the LMS framing.
+const _: () = {
+    assert!(5 + 4 * MAX_SEGMENTS + 2 <= super::MAX_LEN);
+    assert!(6 + 2 * MAX_BEAMS + 2 <= super::MAX_LEN);
+    assert!(7 + LINE_RECORD_LEN * LINES_PER_TELEGRAM + 2 <= super::MAX_LEN);
+    assert!(7 + CORNER_RECORD_LEN * CORNERS_PER_TELEGRAM + 2 <= super::MAX_LEN);
+    assert!(MAX_LINES.div_ceil(LINES_PER_TELEGRAM) <= u8::MAX as usize);
+    assert!(MAX_CORNERS <= u8::MAX as usize);
+};
+
+/// Little-endian writer over a slice; writes past the end are dropped (the
+/// callers size the slice exactly).
+struct Writer<'a> {
+    buf: &'a mut [u8],
+    pos: usize,
+}
+
+impl<'a> Writer<'a> {
+    fn new(buf: &'a mut [u8]) -> Self {
+        Writer { buf, pos: 0 }
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        if let Some(slot) = self.buf.get_mut(self.pos..self.pos + b.len()) {
+            slot.copy_from_slice(b);
+        }
+        self.pos += b.len();
+    }
+    fn u8(&mut self, v: u8) {
+        self.bytes(&[v]);
+    }
+    fn u16(&mut self, v: u16) {
+        self.bytes(&v.to_le_bytes());
+    }
+    fn u32(&mut self, v: u32) {
+        self.bytes(&v.to_le_bytes());
+    }
+    fn f32(&mut self, v: f32) {
+        self.u32(v.to_bits());
+    }
+}
+
+/// Little-endian reader; `None` past the end.
+struct Reader<'a> {
+    buf: &'a [u8],
+}
+
+impl<'a> Reader<'a> {
+    fn new(buf: &'a [u8]) -> Self {
+        Reader { buf }
+    }
+    fn take<const N: usize>(&mut self) -> Option<[u8; N]> {
+        let (head, rest) = self.buf.split_first_chunk::<N>()?;
+        self.buf = rest;
+        Some(*head)
+    }
+    fn is_empty(&self) -> bool {
+        self.buf.is_empty()
+    }
+    fn u8(&mut self) -> Option<u8> {
+        self.take::<1>().map(|[b]| b)
+    }
+    fn u16(&mut self) -> Option<u16> {
+        self.take::<2>().map(u16::from_le_bytes)
+    }
+    fn u32(&mut self) -> Option<u32> {
+        self.take::<4>().map(u32::from_le_bytes)
+    }
+    fn f32(&mut self) -> Option<f32> {
+        self.u32().map(f32::from_bits)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::telegram::Direction;
+
+    fn sample() -> Features {
+        let mut f = Features::default();
+        f.segments.push(Segment { first: 3, last: 40 }).unwrap();
+        f.segments
+            .push(Segment {
+                first: 40,
+                last: 90,
+            })
+            .unwrap();
+        f.edges.push(40).unwrap();
+        for i in 0..20u16 {
+            f.lines
+                .push(Line {
+                    alpha: 0.1 * f32::from(i),
+                    r: 2.0,
+                    cov: Sym2 {
+                        a: 1e-5,
+                        b: -2e-6,
+                        c: 4e-6,
+                    },
+                    first: i,
+                    last: i + 10,
+                    points: 11,
+                    chi2: 0.9,
+                    endpoints: [[1.0, -1.0], [2.0, f32::NAN]],
+                })
+                .unwrap();
+        }
+        f.corners
+            .push(Corner {
+                x: 1.5,
+                y: -0.25,
+                cov: Sym2 {
+                    a: 1e-5,
+                    b: 0.0,
+                    c: 2e-5,
+                },
+                angle_deg: 89.5,
+                well_conditioned: true,
+                line_a: 0,
+                line_b: 1,
+            })
+            .unwrap();
+        f.stats.valid_beams = 361;
+        f.stats.merges = 2;
+        f
+    }
+
+    #[test]
+    fn a_scan_round_trips_bit_for_bit() {
+        let f = sample();
+        let params = EchoedParams::from(&Params::default());
+        let mut wire: std::vec::Vec<std::vec::Vec<u8>> = std::vec::Vec::new();
+        let sent = emit_features(7, 361, &params, &f, 0, |t| {
+            wire.push(t.to_vec());
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+        // segments, edges, 2 × lines (20 = 16 + 4), 1 × corners, summary
+        assert_eq!(sent, 6);
+        let codes: std::vec::Vec<u8> = wire.iter().map(|t| t[4]).collect();
+        assert_eq!(
+            codes,
+            [
+                CMD_SEGMENTS,
+                CMD_EDGES,
+                CMD_LINES,
+                CMD_LINES,
+                CMD_CORNERS,
+                CMD_SUMMARY
+            ]
+        );
+        let mut asm = FeatureAssembler::new();
+        let mut done = None;
+        for t in &wire {
+            let t = Telegram::new_checked(&t[..], Direction::SensorToHost).unwrap();
+            if let Assembled::Complete(s, got) = asm.push(&t).unwrap() {
+                done = Some((s, got.clone()));
+            }
+        }
+        let (summary, got) = done.expect("complete");
+        assert_eq!(summary.scan_counter, 7);
+        assert_eq!(summary.beams, 361);
+        assert_eq!(summary.params, params);
+        assert_eq!(got.segments, f.segments);
+        assert_eq!(got.edges, f.edges);
+        assert_eq!(got.stats, f.stats);
+        for (a, b) in got.lines.iter().zip(f.lines.iter()) {
+            assert_eq!(a.endpoints[1][1].to_bits(), b.endpoints[1][1].to_bits());
+            assert_eq!(a.alpha.to_bits(), b.alpha.to_bits());
+            assert_eq!((a.first, a.last, a.points), (b.first, b.last, b.points));
+        }
+        assert_eq!(got.lines.len(), 20);
+        assert_eq!(got.corners.as_slice(), f.corners.as_slice());
+    }
+
+    #[test]
+    fn the_summary_telegram_of_an_empty_scan_is_byte_exact() {
+        let f = Features::default();
+        let params = EchoedParams {
+            iterations: 30,
+            sigma: 0.005,
+            q: 0.0,
+            tau: 9.0,
+        };
+        let mut last = std::vec::Vec::new();
+        emit_features(1, 361, &params, &f, 0, |t| {
+            last = t.to_vec();
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+        // 02 80 | LEN 51 = 1 + 49 + 1 | D0 | counter 1 | beams 361 | 0,0,0 | 0 edges
+        // | 12 × u16 stats | 30 | 0.005 | 0.0 | 9.0 | 10 | CRC
+        assert_eq!(&last[..4], &[0x02, 0x80, 51, 0]);
+        assert_eq!(last[4], CMD_SUMMARY);
+        assert_eq!(&last[5..9], &[1, 0, 0, 0]);
+        assert_eq!(&last[9..11], &[0x69, 0x01]);
+        assert_eq!(&last[40..42], &[30, 0]);
+        assert_eq!(&last[42..46], &0.005f32.to_bits().to_le_bytes());
+        assert_eq!(&last[50..54], &[0x00, 0x00, 0x10, 0x41]);
+        assert_eq!(last[54], 0x10);
+        assert_eq!(last.len(), 57);
+        let crc = crate::telegram::crc16(&last[..55]).to_le_bytes();
+        assert_eq!(&last[55..], &crc);
+    }
+
+    #[test]
+    fn a_scan_cut_short_is_reported_not_merged() {
+        let f = sample();
+        let params = EchoedParams::from(&Params::default());
+        let mut wire = std::vec::Vec::new();
+        for counter in [1u32, 2] {
+            emit_features(counter, 361, &params, &f, 0, |t| {
+                wire.push(t.to_vec());
+                Ok::<(), ()>(())
+            })
+            .unwrap();
+        }
+        // Drop the summary of scan 1.
+        wire.remove(5);
+        let mut asm = FeatureAssembler::new();
+        let mut results = std::vec::Vec::new();
+        for t in &wire {
+            let t = Telegram::new_checked(&t[..], Direction::SensorToHost).unwrap();
+            results.push(match asm.push(&t) {
+                Ok(Assembled::Complete(s, _)) => Ok(s.scan_counter),
+                Ok(_) => Ok(0),
+                Err(e) => Err(e),
+            });
+        }
+        assert_eq!(asm.discarded(), 1);
+        assert_eq!(results.last(), Some(&Ok(2)));
+        assert!(results.iter().all(|r| *r == Ok(0) || *r == Ok(2)));
+    }
+
+    #[test]
+    fn counters_round_trip() {
+        let c = Counters {
+            scans_in: 1,
+            feature_scans_out: 2,
+            feature_telegrams_out: 3,
+            sensor_crc_errors: 4,
+            sensor_resyncs: 5,
+            sensor_bytes_skipped: 6,
+            host_crc_errors: 7,
+            scans_dropped: 8,
+            scans_rejected: 9,
+        };
+        let mut buf = [0u8; 64];
+        let n = c.emit(0, &mut buf).unwrap();
+        assert_eq!(n, 4 + 1 + COUNTERS_LEN + 1 + 2);
+        let t = Telegram::new_checked(&buf[..n], Direction::SensorToHost).unwrap();
+        assert_eq!(t.command(), CMD_COUNTERS);
+        assert_eq!(Counters::decode(t.data()), Some(c));
+    }
+}
