@@ -28,6 +28,7 @@
 // `!(x < limit)` is deliberate throughout: it treats NaN as failing the test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod coprocessor;
 pub mod corners;
 pub mod ekf;
 pub mod extractor;

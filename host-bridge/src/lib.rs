@@ -7,6 +7,7 @@
 //!    [`synthetic`] (seeded scenes from `lms-scene`, the no-hardware demo).
 //! 3. [`extract`] — run `lms_core::Extractor` per frame and build the JSON
 //!    Lines record ([`extract::FrameRecord`]).
+//! 4. [`plot`] — figures of one frame (scan with features, `D` per window).
 //!
 //! The binary `host-bridge` (src/main.rs) wires these into subcommands.
 #![forbid(unsafe_code)]
@@ -15,4 +16,5 @@
 pub mod carmen;
 pub mod extract;
 pub mod options;
+pub mod plot;
 pub mod synthetic;

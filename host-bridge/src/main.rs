@@ -1,8 +1,9 @@
 //! `host-bridge`: the host tool of the LMS 2xx feature co-processor.
 //!
-//! Subcommands (more to come: `simulate`, `scan`, `verify`, `plot`):
+//! Subcommands (more to come: `simulate`, `scan`, `verify`):
 //!
 //! * `extract` — features of a CARMEN log or of a synthetic scene, as JSON Lines.
+//! * `plot` — figures of one frame (see `host_bridge::plot`).
 
 use std::fs::File;
 use std::io::{self, Write};
@@ -34,6 +35,9 @@ enum Command {
     /// Extract features (segments, lines, corners) from a CARMEN log or a
     /// synthetic scene and write them as JSON Lines, one object per frame
     Extract(ExtractArgs),
+    /// Plot one frame: the scan with its features, and D per window after
+    /// selected passes (SVG or PNG)
+    Plot(host_bridge::plot::PlotArgs),
 }
 
 #[derive(Args, Debug)]
@@ -66,6 +70,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Extract(args) => run_extract(args),
+        Command::Plot(args) => host_bridge::plot::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
