@@ -14,8 +14,8 @@
 //! 7. `20 24` — continuous output; from then on every `B0` is a scan.
 
 use crate::telegram::{
-    Baud, Config, Direction, Event, Framer, FramerStats, ModeResult, Reply, Request,
-    Units, DEFAULT_ADDRESS, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
+    Baud, Config, Direction, Event, Framer, FramerStats, ModeResult, Reply, Request, Units,
+    DEFAULT_ADDRESS, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
 };
 use crate::Variant;
 
@@ -201,7 +201,9 @@ impl SensorLink {
             Ok(Reply::ModeChanged(r)) => match step {
                 Step::StopStream | Step::StartStream => (r == ModeResult::Ok, None),
                 Step::InstallationMode => (r == ModeResult::Ok, None),
-                Step::SetBaud if r == ModeResult::Ok => (true, Some(LinkEvent::SwitchBaud(self.setup.baud))),
+                Step::SetBaud if r == ModeResult::Ok => {
+                    (true, Some(LinkEvent::SwitchBaud(self.setup.baud)))
+                }
                 _ => (false, None),
             },
             Ok(Reply::Variant(v)) if step == Step::SetVariant => {
