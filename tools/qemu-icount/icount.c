@@ -1,0 +1,136 @@
+/*
+ * Count guest instructions executed between two marker functions, for the
+ * co-processor firmware's per-scan instruction budget (issue: firmware under
+ * QEMU). A TCG plugin for qemu-system-arm 7.2, written against QEMU's
+ * documented plugin API (docs/devel/tcg-plugins); Debian ships neither
+ * plugins nor the header, so the few declarations used are below.
+ *
+ * Usage:
+ *   qemu-system-arm ... -plugin ./icount.so,begin=0xADDR,end=0xADDR[,skip=N]
+ * where begin/end are the addresses of the firmware's `scan_begin` and
+ * `scan_end` functions (nm lms-firmware | grep scan_). Every executed guest
+ * instruction increments one counter (inline, exact); the instruction at
+ * `begin` records the counter, the one at `end` takes the difference. At
+ * exit it prints one line per measured interval and a summary:
+ *   icount: scans=N min=.. max=.. mean=.. (after skipping the first `skip`)
+ */
+#include <inttypes.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- the subset of qemu-plugin.h (API version 1, QEMU 7.2) used here ---- */
+typedef uint64_t qemu_plugin_id_t;
+typedef struct qemu_info_t qemu_info_t;
+struct qemu_plugin_tb;
+struct qemu_plugin_insn;
+enum qemu_plugin_cb_flags { QEMU_PLUGIN_CB_NO_REGS, QEMU_PLUGIN_CB_R_REGS, QEMU_PLUGIN_CB_RW_REGS };
+enum qemu_plugin_op { QEMU_PLUGIN_INLINE_ADD_U64 };
+typedef void (*qemu_plugin_vcpu_udata_cb_t)(unsigned int vcpu_index, void *userdata);
+typedef void (*qemu_plugin_vcpu_tb_trans_cb_t)(qemu_plugin_id_t id, struct qemu_plugin_tb *tb);
+typedef void (*qemu_plugin_udata_cb_t)(qemu_plugin_id_t id, void *userdata);
+void qemu_plugin_register_vcpu_tb_trans_cb(qemu_plugin_id_t id, qemu_plugin_vcpu_tb_trans_cb_t cb);
+size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb *tb);
+struct qemu_plugin_insn *qemu_plugin_tb_get_insn(const struct qemu_plugin_tb *tb, size_t idx);
+uint64_t qemu_plugin_insn_vaddr(const struct qemu_plugin_insn *insn);
+void qemu_plugin_register_vcpu_insn_exec_cb(struct qemu_plugin_insn *insn, qemu_plugin_vcpu_udata_cb_t cb,
+                                            enum qemu_plugin_cb_flags flags, void *userdata);
+void qemu_plugin_register_vcpu_insn_exec_inline(struct qemu_plugin_insn *insn, enum qemu_plugin_op op,
+                                                void *ptr, uint64_t imm);
+void qemu_plugin_register_atexit_cb(qemu_plugin_id_t id, qemu_plugin_udata_cb_t cb, void *userdata);
+void qemu_plugin_outs(const char *string);
+#define QEMU_PLUGIN_EXPORT __attribute__((visibility("default")))
+/* -------------------------------------------------------------------------- */
+
+QEMU_PLUGIN_EXPORT int qemu_plugin_version = 1;
+
+#define MAX_INTERVALS 100000
+static uint64_t executed;            /* guest instructions so far (one vCPU) */
+static uint64_t begin_addr, end_addr;
+static uint64_t started_at;
+static int open_interval;
+static uint64_t intervals[MAX_INTERVALS];
+static size_t n_intervals, skip;
+
+static void on_begin(unsigned int vcpu, void *udata)
+{
+    (void)vcpu; (void)udata;
+    started_at = executed;
+    open_interval = 1;
+}
+
+static void on_end(unsigned int vcpu, void *udata)
+{
+    (void)vcpu; (void)udata;
+    if (open_interval && n_intervals < MAX_INTERVALS) {
+        intervals[n_intervals++] = executed - started_at;
+    }
+    open_interval = 0;
+}
+
+static void on_translate(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
+{
+    (void)id;
+    size_t n = qemu_plugin_tb_n_insns(tb);
+    for (size_t i = 0; i < n; i++) {
+        struct qemu_plugin_insn *insn = qemu_plugin_tb_get_insn(tb, i);
+        uint64_t pc = qemu_plugin_insn_vaddr(insn);
+        /* Thumb: compare without the interworking bit. */
+        if (pc == (begin_addr & ~1ull)) {
+            qemu_plugin_register_vcpu_insn_exec_cb(insn, on_begin, QEMU_PLUGIN_CB_NO_REGS, NULL);
+        }
+        if (pc == (end_addr & ~1ull)) {
+            qemu_plugin_register_vcpu_insn_exec_cb(insn, on_end, QEMU_PLUGIN_CB_NO_REGS, NULL);
+        }
+        qemu_plugin_register_vcpu_insn_exec_inline(insn, QEMU_PLUGIN_INLINE_ADD_U64, &executed, 1);
+    }
+}
+
+static void at_exit(qemu_plugin_id_t id, void *udata)
+{
+    (void)id; (void)udata;
+    char line[160];
+    uint64_t min = UINT64_MAX, max = 0, sum = 0;
+    size_t used = 0;
+    for (size_t i = skip; i < n_intervals; i++) {
+        uint64_t v = intervals[i];
+        snprintf(line, sizeof line, "icount: interval %zu = %" PRIu64 "\n", i, v);
+        qemu_plugin_outs(line);
+        min = v < min ? v : min;
+        max = v > max ? v : max;
+        sum += v;
+        used++;
+    }
+    if (used == 0) {
+        min = 0;
+    }
+    snprintf(line, sizeof line,
+             "icount: scans=%zu min=%" PRIu64 " max=%" PRIu64 " mean=%" PRIu64 " total=%" PRIu64 "\n",
+             used, min, max, used ? sum / used : 0, executed);
+    qemu_plugin_outs(line);
+}
+
+QEMU_PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_t *info, int argc, char **argv)
+{
+    (void)info;
+    for (int i = 0; i < argc; i++) {
+        if (strncmp(argv[i], "begin=", 6) == 0) {
+            begin_addr = strtoull(argv[i] + 6, NULL, 0);
+        } else if (strncmp(argv[i], "end=", 4) == 0) {
+            end_addr = strtoull(argv[i] + 4, NULL, 0);
+        } else if (strncmp(argv[i], "skip=", 5) == 0) {
+            skip = (size_t)strtoull(argv[i] + 5, NULL, 0);
+        } else {
+            fprintf(stderr, "icount: unknown argument %s (begin=, end=, skip=)\n", argv[i]);
+            return -1;
+        }
+    }
+    if (begin_addr == 0 || end_addr == 0) {
+        fprintf(stderr, "icount: begin= and end= addresses are required\n");
+        return -1;
+    }
+    qemu_plugin_register_vcpu_tb_trans_cb(id, on_translate);
+    qemu_plugin_register_atexit_cb(id, at_exit, NULL);
+    return 0;
+}
