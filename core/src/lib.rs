@@ -31,6 +31,7 @@
 pub mod coprocessor;
 pub mod corners;
 pub mod ekf;
+pub mod emulator;
 pub mod extractor;
 pub mod frame;
 pub mod line_fit;

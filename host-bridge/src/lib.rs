@@ -8,13 +8,22 @@
 //! 3. [`extract`] — run `lms_core::Extractor` per frame and build the JSON
 //!    Lines record ([`extract::FrameRecord`]).
 //! 4. [`plot`] — figures of one frame (scan with features, `D` per window).
+//! 5. The sensor side: [`client`] (an LMS 2xx client over a serial link),
+//!    [`fake_sensor`] (its in-memory test double), [`scan`] (the `scan`
+//!    session) and [`capture`] (the file format of recorded scans).
 //!
 //! The binary `host-bridge` (src/main.rs) wires these into subcommands.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod capture;
 pub mod carmen;
+pub mod client;
 pub mod extract;
+pub mod fake_sensor;
 pub mod options;
 pub mod plot;
+pub mod pty;
+pub mod scan;
+pub mod simulate;
 pub mod synthetic;

@@ -1,9 +1,10 @@
 //! `host-bridge`: the host tool of the LMS 2xx feature co-processor.
 //!
-//! Subcommands (more to come: `simulate`, `scan`, `verify`):
+//! Subcommands (more to come: `simulate`, `verify`):
 //!
-//! * `extract` — features of a CARMEN log or of a synthetic scene, as JSON Lines.
+//! * `extract` — features of a CARMEN log, a capture or a synthetic scene, as JSON Lines.
 //! * `plot` — figures of one frame (see `host_bridge::plot`).
+//! * `scan` — record scans from a sensor into a capture file (see `host_bridge::scan`).
 
 use std::fs::File;
 use std::io::{self, Write};
@@ -38,11 +39,18 @@ enum Command {
     /// Plot one frame: the scan with its features, and D per window after
     /// selected passes (SVG or PNG)
     Plot(host_bridge::plot::PlotArgs),
+    /// Record scans from an LMS 2xx on a serial port (or `simulate`'s pty)
+    /// into a capture file: finds the baud rate, sets variant, units and
+    /// rate, streams N scans
+    Scan(host_bridge::scan::ScanArgs),
+    /// Simulate an LMS 2xx on a pseudo-terminal: prints the device path,
+    /// answers a real client, streams synthetic or replayed scans
+    Simulate(host_bridge::simulate::SimulateArgs),
 }
 
 #[derive(Args, Debug)]
 struct ExtractArgs {
-    /// CARMEN log (gzip or plain); without it, a synthetic scene is used
+    /// CARMEN log (gzip or plain) or capture file from `scan`; without it, a synthetic scene is used
     log: Option<PathBuf>,
     #[command(flatten)]
     scene: SceneArgs,
@@ -71,6 +79,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Extract(args) => run_extract(args),
         Command::Plot(args) => host_bridge::plot::run(&args),
+        Command::Scan(args) => host_bridge::scan::run(&args),
+        Command::Simulate(args) => host_bridge::simulate::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -87,6 +97,10 @@ fn run_extract(args: ExtractArgs) -> Result<()> {
     let range = args.frames.unwrap_or_default();
 
     let (source, inputs): (String, Vec<InputFrame>) = match &args.log {
+        // A capture recorded by `host-bridge scan` (told by its magic).
+        Some(path) if host_bridge::capture::is_capture(path).unwrap_or(false) => {
+            host_bridge::capture::input_frames(path, &range)?
+        }
         Some(path) => {
             let unit = match args.unit {
                 UnitArg::Auto => UnitMode::Auto,

@@ -1,0 +1,1153 @@
+//! An LMS 2xx client: the host side of the serial protocol (PROTOCOL.md §1–§5).
+//!
+//! Two layers, kept apart:
+//!
+//! * **The link** ([`Link`]): moves bytes and keeps time — send, receive
+//!   with a timeout, change the baud rate, drop unread input, and a
+//!   monotonic clock. [`SerialLink`] is a real serial port (the
+//!   `serialport` crate); tests use an in-memory sensor with a virtual
+//!   clock ([`crate::fake_sensor::FakeSensor`]).
+//! * **The protocol** ([`Client`]): every byte received goes through one
+//!   [`Framer`] of `lms_core::telegram`; requests are emitted with
+//!   [`Request::emit`] and replies parsed with [`Reply::parse`]. All waiting
+//!   is bounded by the [`Timeouts`] given to the client, measured on the
+//!   link's clock, so the same code runs against a real sensor, the
+//!   simulator on a pseudo-terminal, or the in-memory fake.
+//!
+//! # The handshake
+//!
+//! A request is sent, then the client waits for `ACK` (`06`) and the reply
+//! whose command is the request's `| 0x80`:
+//!
+//! * `NAK` (`15`): the sensor saw a bad checksum; the request is sent again,
+//!   at most [`Client::retries`] times.
+//! * A reply without an `ACK` before it is accepted (some sensors skip it)
+//!   and counted in [`ClientStats::missing_acks`].
+//! * Telegrams whose address byte is not `0x80 | address` are ignored and
+//!   counted ([`ClientStats::wrong_address`]), as real clients do; so are
+//!   other telegrams that are not the awaited reply (e.g. `B0` scans still
+//!   streaming while `20 25` stops the stream: [`ClientStats::ignored`]).
+//! * `92` (unknown command) ends the request with
+//!   [`ClientError::UnknownCommand`].
+//! * Nothing in time: [`ClientError::Timeout`], naming the bytes sent last,
+//!   what was awaited and how long the client waited.
+//!
+//! Corrupted, truncated or stray bytes on the line never stop the client:
+//! the framer skips them and counts them ([`FramerStats`]: CRC errors,
+//! resyncs, bytes skipped), and the next good telegram is used.
+//!
+//! # Times
+//!
+//! Every wait is a fixed allowance from [`Timeouts`] plus the time the
+//! longest telegram ([`MAX_TELEGRAM_LEN`] = 818 bytes) takes on the line at
+//! the current rate (10 bits per byte: 8 data bits, start and stop bit):
+//! 852 ms at 9600 Bd, 16.4 ms at 500000 Bd ([`line_time`]).
+
+use std::fmt;
+use std::io::{self, Read, Write};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use lms_core::telegram::{
+    Baud, Config, Direction, Event, Framer, FramerStats, MeasuredError, MeasuredValues, ModeResult,
+    Reply, Request, Telegram, Units, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
+};
+use lms_core::Variant;
+
+/// Bits on the line per byte: start bit, 8 data bits, stop bit (8N1).
+pub const BITS_PER_BYTE: u64 = 10;
+
+/// Time `bytes` take on the line at `baud` (8N1: 10 bits per byte).
+pub fn line_time(bytes: usize, baud: Baud) -> Duration {
+    let bits = bytes as u64 * BITS_PER_BYTE;
+    Duration::from_nanos(bits * 1_000_000_000 / u64::from(baud.bits_per_second()))
+}
+
+/// Bytes and time: what the protocol layer needs from a serial line.
+pub trait Link {
+    /// Send all of `bytes`.
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()>;
+    /// Wait up to `timeout` for bytes and put what arrived into `buf`;
+    /// `Ok(0)` means nothing arrived in that time.
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize>;
+    /// Set the line's rate.
+    fn set_baud(&mut self, baud: Baud) -> io::Result<()>;
+    /// Drop bytes received but not read yet.
+    fn discard_input(&mut self) -> io::Result<()>;
+    /// Monotonic time since an origin of the link's choosing.
+    fn now(&self) -> Duration;
+    /// Name of the line for messages (e.g. the device path).
+    fn name(&self) -> String;
+}
+
+/// A real serial port (8N1, no flow control) through the `serialport`
+/// crate, opened in exclusive mode.
+///
+/// Line speed: on Linux `serialport` sets every rate as an arbitrary
+/// `termios2` speed (`BOTHER`). The four LMS 2xx rates are standard termios
+/// speeds, so the link sets them by their standard codes (`B9600` …
+/// `B500000`) instead, through a second descriptor on the device opened
+/// before the port is made exclusive: right after opening, and for every
+/// change. The line runs at the same rate either way; but the other end of
+/// a pseudo-terminal (`host-bridge simulate`) and tools reading the speed
+/// with `cfgetospeed` see the rate instead of `BOTHER`.
+pub struct SerialLink {
+    port: Box<dyn serialport::SerialPort>,
+    /// The second descriptor, for the standard speed code.
+    control: std::fs::File,
+    name: String,
+    origin: Instant,
+}
+
+/// The termios speed code of an LMS 2xx rate.
+fn termios_rate(baud: Baud) -> nix::sys::termios::BaudRate {
+    use nix::sys::termios::BaudRate;
+    match baud {
+        Baud::B9600 => BaudRate::B9600,
+        Baud::B19200 => BaudRate::B19200,
+        Baud::B38400 => BaudRate::B38400,
+        Baud::B500000 => BaudRate::B500000,
+    }
+}
+
+/// Set the standard termios speed code for `baud` on `file` (a terminal).
+fn set_standard_speed(file: &std::fs::File, baud: Baud) -> io::Result<()> {
+    use nix::sys::termios::{cfsetspeed, tcgetattr, tcsetattr, SetArg};
+    let mut t = tcgetattr(file)?;
+    cfsetspeed(&mut t, termios_rate(baud))?;
+    tcsetattr(file, SetArg::TCSANOW, &t)?;
+    Ok(())
+}
+
+impl fmt::Debug for SerialLink {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SerialLink")
+            .field("name", &self.name)
+            .finish_non_exhaustive()
+    }
+}
+
+impl SerialLink {
+    /// Open the port at `path` at `baud`. A path that does not exist, a port
+    /// in use or one that refuses the settings gives an error naming the path.
+    pub fn open(path: &Path, baud: Baud) -> Result<Self, ClientError> {
+        let name = path.display().to_string();
+        let open_error = |detail: String| ClientError::Open {
+            port: name.clone(),
+            detail,
+        };
+        if !path.exists() {
+            return Err(open_error("no such file or device".into()));
+        }
+        let path_str = path
+            .to_str()
+            .ok_or_else(|| open_error("the path is not valid UTF-8".into()))?;
+        let control = {
+            use std::os::unix::fs::OpenOptionsExt;
+            let flags = nix::fcntl::OFlag::O_NOCTTY | nix::fcntl::OFlag::O_NONBLOCK;
+            std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .custom_flags(flags.bits())
+                .open(path)
+                .map_err(|e| {
+                    open_error(match e.kind() {
+                        io::ErrorKind::PermissionDenied => {
+                            format!("{e} (is the user allowed to use serial ports, e.g. in group dialout?)")
+                        }
+                        _ if e.raw_os_error() == Some(nix::libc::EBUSY) => {
+                            format!("{e} (is another program using it?)")
+                        }
+                        _ => e.to_string(),
+                    })
+                })?
+        };
+        let port = serialport::new(path_str, baud.bits_per_second())
+            .data_bits(serialport::DataBits::Eight)
+            .parity(serialport::Parity::None)
+            .stop_bits(serialport::StopBits::One)
+            .flow_control(serialport::FlowControl::None)
+            .timeout(Duration::from_millis(100))
+            .open()
+            .map_err(|e| {
+                open_error(match e.kind {
+                    serialport::ErrorKind::NoDevice => {
+                        format!("{} (is another program using it?)", e.description)
+                    }
+                    // ENOTTY
+                    _ if e.description == "Not a typewriter" => {
+                        "not a serial port (not a terminal device)".into()
+                    }
+                    _ => e.description,
+                })
+            })?;
+        set_standard_speed(&control, baud)
+            .map_err(|e| open_error(format!("cannot set {} Bd: {e}", baud.bits_per_second())))?;
+        Ok(SerialLink {
+            port,
+            control,
+            name,
+            origin: Instant::now(),
+        })
+    }
+}
+
+fn to_io(e: serialport::Error) -> io::Error {
+    match e.kind {
+        serialport::ErrorKind::Io(kind) => io::Error::new(kind, e.description),
+        _ => io::Error::other(e.description),
+    }
+}
+
+impl Link for SerialLink {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.port.write_all(bytes)
+    }
+
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
+        self.port.set_timeout(timeout).map_err(to_io)?;
+        match self.port.read(buf) {
+            Ok(n) => Ok(n),
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
+                ) =>
+            {
+                Ok(0)
+            }
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => Ok(0),
+            Err(e) => Err(e),
+        }
+    }
+
+    fn set_baud(&mut self, baud: Baud) -> io::Result<()> {
+        // The standard code only (see the type's docs): the same line rate
+        // as `serialport`'s `set_baud_rate`, without a moment at `BOTHER`.
+        set_standard_speed(&self.control, baud)
+    }
+
+    fn discard_input(&mut self) -> io::Result<()> {
+        self.port
+            .clear(serialport::ClearBuffer::Input)
+            .map_err(to_io)
+    }
+
+    fn now(&self) -> Duration {
+        self.origin.elapsed()
+    }
+
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+}
+
+/// How long the client waits. Each wait also allows the time the longest
+/// telegram takes on the line at the current rate ([`line_time`]), since a
+/// streamed scan may be on the line first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Timeouts {
+    /// For the `ACK` after a request (real sensors answer within ~60 ms).
+    pub ack: Duration,
+    /// For the reply after the `ACK`, and between streamed scans (a real
+    /// sensor takes up to a few seconds for a variant or configuration
+    /// change).
+    pub reply: Duration,
+    /// For the `ACK` while probing a rate in [`Client::find_baud`]: short,
+    /// since most rates tried are wrong.
+    pub probe: Duration,
+}
+
+impl Default for Timeouts {
+    /// `ack` 300 ms, `reply` 5 s, `probe` 300 ms.
+    fn default() -> Self {
+        Timeouts {
+            ack: Duration::from_millis(300),
+            reply: Duration::from_secs(5),
+            probe: Duration::from_millis(300),
+        }
+    }
+}
+
+/// What the client waited for when time ran out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Awaited {
+    /// The `ACK` after a request.
+    Ack,
+    /// The reply with this command code.
+    Reply(u8),
+    /// The next `B0` of the continuous stream.
+    StreamScan,
+}
+
+impl fmt::Display for Awaited {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Awaited::Ack => f.write_str("ACK (06)"),
+            Awaited::Reply(code) => write!(f, "reply {code:02X}"),
+            Awaited::StreamScan => f.write_str("the next streamed scan (B0)"),
+        }
+    }
+}
+
+/// A request as it went on the line, for messages.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Sent {
+    /// The telegram's bytes.
+    pub bytes: Vec<u8>,
+    /// What it asks, e.g. `20 25 (values on request)`.
+    pub what: String,
+}
+
+impl fmt::Display for Sent {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} [{}]", self.what, hex(&self.bytes))
+    }
+}
+
+/// Bytes as `02 00 01 00 31 15 12`, shortened after 24 bytes.
+pub fn hex(bytes: &[u8]) -> String {
+    let shown: Vec<String> = bytes.iter().take(24).map(|b| format!("{b:02X}")).collect();
+    let mut s = shown.join(" ");
+    if bytes.len() > 24 {
+        s.push_str(&format!(" … ({} bytes)", bytes.len()));
+    }
+    s
+}
+
+/// A request's payload in words, e.g. `20 25 (values on request)`.
+pub fn describe(request: &Request<'_>) -> String {
+    match request {
+        Request::InstallationMode { .. } => "20 00 (installation mode)".into(),
+        Request::Continuous => "20 24 (continuous output)".into(),
+        Request::OnRequest => "20 25 (values on request)".into(),
+        Request::SetBaud(b) => format!("20 {:02X} (baud {})", b.mode_byte(), b.bits_per_second()),
+        Request::OneScan => "30 01 (one scan)".into(),
+        Request::Status => "31 (status)".into(),
+        Request::SensorType => "3A (sensor type)".into(),
+        Request::SetVariant {
+            angle_deg,
+            resolution_centideg,
+        } => format!(
+            "3B (variant {angle_deg}°/{}°)",
+            f64::from(*resolution_centideg) / 100.0
+        ),
+        Request::ReadConfig => "74 (read configuration)".into(),
+        Request::WriteConfig(_) => "77 (write configuration)".into(),
+        Request::Reset => "10 (reset)".into(),
+        Request::Unknown { command, .. } => format!("{command:02X}"),
+    }
+}
+
+/// Why a client operation failed.
+#[derive(Debug)]
+pub enum ClientError {
+    /// The port could not be opened.
+    Open {
+        /// The port's path.
+        port: String,
+        /// Why.
+        detail: String,
+    },
+    /// Reading, writing or configuring the port failed.
+    Io {
+        /// The port.
+        port: String,
+        /// What was being done.
+        action: &'static str,
+        /// The error.
+        source: io::Error,
+    },
+    /// Nothing (valid) arrived in time.
+    Timeout {
+        /// The port.
+        port: String,
+        /// The rate the port was at.
+        baud: Baud,
+        /// The request sent last.
+        sent: Option<Sent>,
+        /// What was awaited.
+        awaited: Awaited,
+        /// How long the client waited.
+        waited: Duration,
+    },
+    /// The sensor answered every try with `NAK`.
+    Nak {
+        /// The port.
+        port: String,
+        /// The request.
+        sent: Sent,
+        /// How many times it was sent.
+        attempts: u32,
+    },
+    /// The sensor answered `92`: unknown or malformed command.
+    UnknownCommand {
+        /// The request.
+        sent: Sent,
+    },
+    /// The sensor answered but refused or did not do what was asked.
+    Refused {
+        /// The request.
+        sent: Sent,
+        /// What the reply said.
+        detail: String,
+    },
+    /// The awaited reply arrived but could not be parsed.
+    BadReply {
+        /// The request.
+        sent: Sent,
+        /// The reply's bytes.
+        reply: Vec<u8>,
+        /// Why it could not be parsed.
+        detail: String,
+    },
+    /// No rate got an answer in [`Client::find_baud`].
+    NoSensor {
+        /// The port.
+        port: String,
+        /// The rates tried.
+        tried: Vec<Baud>,
+        /// The probe sent at each.
+        sent: Sent,
+        /// The longest wait at one rate.
+        waited: Duration,
+    },
+    /// A unit the sensor cannot be configured to (10 cm has no code).
+    Unsupported {
+        /// What.
+        detail: String,
+    },
+}
+
+impl fmt::Display for ClientError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ClientError::Open { port, detail } => {
+                write!(f, "cannot open serial port {port}: {detail}")
+            }
+            ClientError::Io {
+                port,
+                action,
+                source,
+            } => write!(f, "serial port {port}: {action} failed: {source}"),
+            ClientError::Timeout {
+                port,
+                baud,
+                sent,
+                awaited,
+                waited,
+            } => {
+                write!(
+                    f,
+                    "no answer on {port} at {} Bd: waited {} ms for {awaited}",
+                    baud.bits_per_second(),
+                    waited.as_millis()
+                )?;
+                match sent {
+                    Some(s) => write!(f, " after sending {s}"),
+                    None => Ok(()),
+                }
+            }
+            ClientError::Nak {
+                port,
+                sent,
+                attempts,
+            } => write!(
+                f,
+                "the sensor on {port} rejected {sent} with NAK {attempts} times (line noise or wrong rate?)"
+            ),
+            ClientError::UnknownCommand { sent } => {
+                write!(f, "the sensor answered 92 (unknown command) to {sent}")
+            }
+            ClientError::Refused { sent, detail } => {
+                write!(f, "the sensor refused {sent}: {detail}")
+            }
+            ClientError::BadReply {
+                sent,
+                reply,
+                detail,
+            } => write!(f, "bad reply to {sent}: {detail} [{}]", hex(reply)),
+            ClientError::NoSensor {
+                port,
+                tried,
+                sent,
+                waited,
+            } => {
+                let rates: Vec<String> = tried
+                    .iter()
+                    .map(|b| b.bits_per_second().to_string())
+                    .collect();
+                write!(
+                    f,
+                    "no LMS 2xx answers on {port}: sent {sent} at {} Bd and waited up to {} ms at each for ACK and the A0 reply \
+                     (is the sensor powered and connected?)",
+                    rates.join(", "),
+                    waited.as_millis()
+                )
+            }
+            ClientError::Unsupported { detail } => f.write_str(detail),
+        }
+    }
+}
+
+impl std::error::Error for ClientError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ClientError::Io { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
+
+impl ClientError {
+    /// `true` for the errors that mean "no (understandable) answer at this
+    /// rate": a timeout or repeated `NAK`s.
+    pub fn is_no_answer(&self) -> bool {
+        matches!(self, ClientError::Timeout { .. } | ClientError::Nak { .. })
+    }
+}
+
+/// Counters of the handshake (the byte-level ones are in [`FramerStats`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ClientStats {
+    /// Request telegrams sent, resends included.
+    pub sent: u32,
+    /// Requests sent again after a `NAK`.
+    pub resends: u32,
+    /// Replies accepted without an `ACK` before them.
+    pub missing_acks: u32,
+    /// `ACK` bytes that came when none was awaited.
+    pub stray_acks: u32,
+    /// Telegrams ignored for an address other than `0x80 | address`.
+    pub wrong_address: u32,
+    /// Telegrams ignored because they were not the awaited reply (e.g.
+    /// streamed scans before the reply to `20 25`).
+    pub ignored: u32,
+    /// `B0` telegrams with a good CRC whose data is not a scan.
+    pub bad_scans: u32,
+    /// Baud changes whose reply never came, found done at the new rate
+    /// ([`Client::set_baud`]).
+    pub lost_baud_replies: u32,
+}
+
+/// One scan as received.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Scan {
+    /// When the telegram was complete, on the link's clock.
+    pub time: Duration,
+    /// The complete `B0` telegram, `STX` … `CRC`.
+    pub telegram: Vec<u8>,
+    /// Its values.
+    pub values: MeasuredValues,
+}
+
+impl Scan {
+    /// The scan in a `B0` telegram received at `time`.
+    pub fn from_telegram(time: Duration, telegram: Vec<u8>) -> Result<Self, MeasuredError> {
+        let values = MeasuredValues::parse(&Telegram::new_unchecked(
+            &telegram[..],
+            Direction::SensorToHost,
+        ))?;
+        Ok(Scan {
+            time,
+            telegram,
+            values,
+        })
+    }
+}
+
+/// What the framer handed over, owned.
+enum Incoming {
+    Ack,
+    Nak,
+    /// A telegram with the expected address (complete, correct CRC).
+    Telegram(Vec<u8>),
+}
+
+/// Bytes read from the link per call.
+const CHUNK: usize = 4096;
+
+/// The protocol side of an LMS 2xx client over a [`Link`] (see the
+/// [module docs](self)).
+pub struct Client<L: Link> {
+    link: L,
+    framer: Framer,
+    /// Bytes received and not yet fed to the framer: `pending[pending_at..]`.
+    pending: Vec<u8>,
+    pending_at: usize,
+    chunk: Vec<u8>,
+    /// The sensor's address (0..=0x7F); replies carry `0x80 | address`.
+    address: u8,
+    /// The rate the link is at.
+    baud: Baud,
+    timeouts: Timeouts,
+    /// Resends after a `NAK` before giving up.
+    pub retries: u32,
+    streaming: bool,
+    last_sent: Option<Sent>,
+    stats: ClientStats,
+}
+
+impl<L: Link> fmt::Debug for Client<L> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Client")
+            .field("port", &self.link.name())
+            .field("baud", &self.baud)
+            .field("address", &self.address)
+            .field("streaming", &self.streaming)
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<L: Link> Client<L> {
+    /// A client for the sensor at address 0 on `link`, which is at `baud`;
+    /// 3 resends on `NAK`.
+    pub fn new(link: L, baud: Baud, timeouts: Timeouts) -> Self {
+        Client {
+            link,
+            framer: Framer::new(Direction::SensorToHost, true),
+            pending: Vec::with_capacity(CHUNK),
+            pending_at: 0,
+            chunk: vec![0; CHUNK],
+            address: 0,
+            baud,
+            timeouts,
+            retries: 3,
+            streaming: false,
+            last_sent: None,
+            stats: ClientStats::default(),
+        }
+    }
+
+    /// Talk to the sensor at `address` (0..=0x7F) instead of 0.
+    pub fn with_address(mut self, address: u8) -> Self {
+        self.address = address & 0x7F;
+        self
+    }
+
+    /// The link.
+    pub fn link(&self) -> &L {
+        &self.link
+    }
+
+    /// The link, e.g. to inject faults into a test double.
+    pub fn link_mut(&mut self) -> &mut L {
+        &mut self.link
+    }
+
+    /// Give back the link.
+    pub fn into_link(self) -> L {
+        self.link
+    }
+
+    /// The rate the link is at.
+    pub fn baud(&self) -> Baud {
+        self.baud
+    }
+
+    /// The timeouts in use.
+    pub fn timeouts(&self) -> Timeouts {
+        self.timeouts
+    }
+
+    /// Change the timeouts.
+    pub fn set_timeouts(&mut self, timeouts: Timeouts) {
+        self.timeouts = timeouts;
+    }
+
+    /// `true` between [`start_stream`](Self::start_stream) and
+    /// [`stop_stream`](Self::stop_stream).
+    pub fn is_streaming(&self) -> bool {
+        self.streaming
+    }
+
+    /// Handshake counters.
+    pub fn stats(&self) -> ClientStats {
+        self.stats
+    }
+
+    /// Byte-level counters of the framer (CRC errors, resyncs, bytes
+    /// skipped, …) since the client was made.
+    pub fn framer_stats(&self) -> FramerStats {
+        *self.framer.stats()
+    }
+
+    /// The request sent last.
+    pub fn last_sent(&self) -> Option<&Sent> {
+        self.last_sent.as_ref()
+    }
+
+    /// The link's clock.
+    pub fn now(&self) -> Duration {
+        self.link.now()
+    }
+
+    fn io_error(&self, action: &'static str, source: io::Error) -> ClientError {
+        ClientError::Io {
+            port: self.link.name(),
+            action,
+            source,
+        }
+    }
+
+    /// Put the link at `baud` and forget everything received so far.
+    fn switch_link(&mut self, baud: Baud) -> Result<(), ClientError> {
+        self.link
+            .set_baud(baud)
+            .map_err(|e| self.io_error("setting the baud rate", e))?;
+        self.baud = baud;
+        self.flush_input()
+    }
+
+    /// Drop unread input: the link's, the pending bytes and the framer's.
+    fn flush_input(&mut self) -> Result<(), ClientError> {
+        self.link
+            .discard_input()
+            .map_err(|e| self.io_error("discarding input", e))?;
+        self.pending.clear();
+        self.pending_at = 0;
+        self.framer.discard();
+        Ok(())
+    }
+
+    /// The next handshake byte or telegram from the sensor, or `None` at
+    /// `deadline` (link time). Telegrams with another address are dropped
+    /// here.
+    fn next_incoming(&mut self, deadline: Duration) -> Result<Option<Incoming>, ClientError> {
+        let expected_address = Direction::SensorToHost.address_byte(self.address);
+        loop {
+            let input = self.pending.get(self.pending_at..).unwrap_or_default();
+            let fed = self.framer.feed(input);
+            let consumed = input.len() - fed.remaining.len();
+            let incoming = match fed.event {
+                None => None,
+                Some(Event::Ack) => Some(Some(Incoming::Ack)),
+                Some(Event::Nak) => Some(Some(Incoming::Nak)),
+                Some(Event::Telegram(t)) if t.address() == expected_address => {
+                    Some(Some(Incoming::Telegram(t.as_bytes().to_vec())))
+                }
+                Some(Event::Telegram(_)) => Some(None),
+            };
+            self.pending_at += consumed;
+            match incoming {
+                Some(Some(event)) => return Ok(Some(event)),
+                Some(None) => {
+                    self.stats.wrong_address += 1;
+                    continue;
+                }
+                None => {}
+            }
+            // Everything held has been framed: wait for more bytes.
+            let now = self.link.now();
+            if now >= deadline {
+                // Before giving up, re-scan what a false STX may be holding
+                // back (the line has been quiet since).
+                if self.framer.abandon() {
+                    continue;
+                }
+                return Ok(None);
+            }
+            let n = self
+                .link
+                .receive(&mut self.chunk, deadline - now)
+                .map_err(|e| ClientError::Io {
+                    port: self.link.name(),
+                    action: "reading",
+                    source: e,
+                })?;
+            self.pending.clear();
+            self.pending
+                .extend_from_slice(self.chunk.get(..n).unwrap_or_default());
+            self.pending_at = 0;
+        }
+    }
+
+    fn timeout(&self, awaited: Awaited, waited: Duration) -> ClientError {
+        ClientError::Timeout {
+            port: self.link.name(),
+            baud: self.baud,
+            sent: self.last_sent.clone(),
+            awaited,
+            waited,
+        }
+    }
+
+    /// Send `request` and return the awaited reply telegram (`STX` …
+    /// `CRC`), handling `ACK`/`NAK` as in the [module docs](self). `ack`
+    /// is the allowance for the `ACK`.
+    fn exchange(&mut self, request: &Request<'_>, ack: Duration) -> Result<Vec<u8>, ClientError> {
+        let mut bytes = vec![0u8; request.buffer_len()];
+        let n = request
+            .emit(self.address, &mut bytes)
+            .map_err(|e| ClientError::Unsupported {
+                detail: format!("cannot build {}: {e}", describe(request)),
+            })?;
+        bytes.truncate(n);
+        let sent = Sent {
+            bytes,
+            what: describe(request),
+        };
+        let expected = request.reply_command();
+        let mut attempts = 0u32;
+        'send: loop {
+            attempts += 1;
+            self.link
+                .send(&sent.bytes)
+                .map_err(|e| self.io_error("writing", e))?;
+            self.stats.sent += 1;
+            self.last_sent = Some(sent.clone());
+            let on_line = line_time(sent.bytes.len(), self.baud);
+            let longest = line_time(MAX_TELEGRAM_LEN, self.baud);
+            // Wait for ACK (or NAK, or the reply itself).
+            let started = self.link.now();
+            let ack_wait = on_line + ack + longest;
+            let mut acked = false;
+            while !acked {
+                match self.next_incoming(started + ack_wait)? {
+                    None => return Err(self.timeout(Awaited::Ack, ack_wait)),
+                    Some(Incoming::Ack) => acked = true,
+                    Some(Incoming::Nak) => {
+                        if attempts > self.retries {
+                            return Err(ClientError::Nak {
+                                port: self.link.name(),
+                                sent,
+                                attempts,
+                            });
+                        }
+                        self.stats.resends += 1;
+                        continue 'send;
+                    }
+                    Some(Incoming::Telegram(t)) => {
+                        if let Some(reply) = self.judge(&sent, expected, t)? {
+                            self.stats.missing_acks += 1;
+                            return Ok(reply);
+                        }
+                    }
+                }
+            }
+            // Wait for the reply; at most one more streamed scan may come first.
+            let started = self.link.now();
+            let reply_wait = self.timeouts.reply + 2 * longest;
+            loop {
+                match self.next_incoming(started + reply_wait)? {
+                    None => return Err(self.timeout(Awaited::Reply(expected), reply_wait)),
+                    Some(Incoming::Ack) => self.stats.stray_acks += 1,
+                    Some(Incoming::Nak) => {
+                        // A NAK after the ACK: treat it like the first.
+                        if attempts > self.retries {
+                            return Err(ClientError::Nak {
+                                port: self.link.name(),
+                                sent,
+                                attempts,
+                            });
+                        }
+                        self.stats.resends += 1;
+                        continue 'send;
+                    }
+                    Some(Incoming::Telegram(t)) => {
+                        if let Some(reply) = self.judge(&sent, expected, t)? {
+                            return Ok(reply);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// A telegram that arrived while awaiting `expected`: the reply, an
+    /// error (`92`), or `None` (ignored and counted).
+    fn judge(
+        &mut self,
+        sent: &Sent,
+        expected: u8,
+        telegram: Vec<u8>,
+    ) -> Result<Option<Vec<u8>>, ClientError> {
+        let command = Telegram::new_unchecked(&telegram[..], Direction::SensorToHost).command();
+        if command == expected {
+            Ok(Some(telegram))
+        } else if command == lms_core::telegram::reply::code::UNKNOWN_COMMAND {
+            Err(ClientError::UnknownCommand { sent: sent.clone() })
+        } else {
+            self.stats.ignored += 1;
+            Ok(None)
+        }
+    }
+
+    /// Send `request` and parse the awaited reply with `f`.
+    fn transact<T>(
+        &mut self,
+        request: &Request<'_>,
+        f: impl FnOnce(Reply<'_>) -> Result<T, String>,
+    ) -> Result<T, ClientError> {
+        let ack = self.timeouts.ack;
+        self.transact_with(request, ack, f)
+    }
+
+    fn transact_with<T>(
+        &mut self,
+        request: &Request<'_>,
+        ack: Duration,
+        f: impl FnOnce(Reply<'_>) -> Result<T, String>,
+    ) -> Result<T, ClientError> {
+        let bytes = self.exchange(request, ack)?;
+        let sent = self.last_sent.clone().unwrap_or_else(|| Sent {
+            bytes: Vec::new(),
+            what: describe(request),
+        });
+        let telegram = Telegram::new_unchecked(&bytes[..], Direction::SensorToHost);
+        let reply = Reply::parse(&telegram).map_err(|e| ClientError::BadReply {
+            sent: sent.clone(),
+            reply: bytes.clone(),
+            detail: e.to_string(),
+        })?;
+        f(reply).map_err(|detail| ClientError::Refused { sent, detail })
+    }
+
+    /// A `20 xx` mode change that must be answered `A0 00`.
+    fn mode_change(&mut self, request: &Request<'_>, ack: Duration) -> Result<(), ClientError> {
+        self.transact_with(request, ack, |reply| match reply {
+            Reply::ModeChanged(ModeResult::Ok) => Ok(()),
+            Reply::ModeChanged(ModeResult::BadPassword) => Err("A0 01: wrong password".into()),
+            Reply::ModeChanged(ModeResult::Fault) => Err("A0 02: mode not changed".into()),
+            Reply::ModeChanged(ModeResult::Unknown(b)) => Err(format!("A0 {b:02X}")),
+            other => Err(format!("unexpected reply {:02X}", other.command())),
+        })
+    }
+
+    /// Find the rate the sensor is at: at each rate of `rates` in turn, set
+    /// the link, send `20 25` (which also stops a stream left running) and
+    /// wait for `ACK` and `A0 00` ([`Timeouts::probe`] for the `ACK`).
+    /// The first rate answered is kept and returned. Sensors power up at
+    /// 9600 Bd, so put it first.
+    pub fn find_baud(&mut self, rates: &[Baud]) -> Result<Baud, ClientError> {
+        self.framer.set_handshake(true);
+        let retries = self.retries;
+        // A wrong rate can look like NAKs: don't insist.
+        self.retries = retries.min(1);
+        let mut longest = Duration::ZERO;
+        let mut result = None;
+        for &rate in rates {
+            if let Err(e) = self.switch_link(rate) {
+                result = Some(Err(e));
+                break;
+            }
+            match self.mode_change(&Request::OnRequest, self.timeouts.probe) {
+                Ok(()) => {
+                    self.streaming = false;
+                    self.framer.set_handshake(true);
+                    result = Some(Ok(rate));
+                    break;
+                }
+                Err(e) if e.is_no_answer() => {
+                    if let ClientError::Timeout { waited, .. } = e {
+                        longest = longest.max(waited);
+                    }
+                }
+                Err(e) => {
+                    result = Some(Err(e));
+                    break;
+                }
+            }
+        }
+        self.retries = retries;
+        result.unwrap_or_else(|| {
+            Err(ClientError::NoSensor {
+                port: self.link.name(),
+                tried: rates.to_vec(),
+                sent: self.last_sent.clone().unwrap_or_else(|| Sent {
+                    bytes: Vec::new(),
+                    what: describe(&Request::OnRequest),
+                }),
+                waited: longest,
+            })
+        })
+    }
+
+    /// `20 25`: values on request only (the power-on mode). Stops a stream:
+    /// scans still arriving before the `A0` are dropped (counted in
+    /// [`ClientStats::ignored`]).
+    pub fn stop_stream(&mut self) -> Result<(), ClientError> {
+        self.framer.set_handshake(true);
+        let ack = self.timeouts.ack;
+        self.mode_change(&Request::OnRequest, ack)?;
+        self.streaming = false;
+        Ok(())
+    }
+
+    /// `20 24`: continuous output; read the scans with
+    /// [`next_scan`](Self::next_scan).
+    pub fn start_stream(&mut self) -> Result<(), ClientError> {
+        let ack = self.timeouts.ack;
+        self.mode_change(&Request::Continuous, ack)?;
+        self.streaming = true;
+        // Streamed telegrams come without ACK: a 06 or 15 between them is noise.
+        self.framer.set_handshake(false);
+        Ok(())
+    }
+
+    /// The next scan of the stream. Corrupted or truncated telegrams and
+    /// noise are skipped (see [`framer_stats`](Self::framer_stats)), as are
+    /// telegrams that are not scans; times out after [`Timeouts::reply`]
+    /// plus two telegram times without a scan.
+    pub fn next_scan(&mut self) -> Result<Scan, ClientError> {
+        let started = self.link.now();
+        let wait = self.timeouts.reply + 2 * line_time(MAX_TELEGRAM_LEN, self.baud);
+        loop {
+            match self.next_incoming(started + wait)? {
+                None => return Err(self.timeout(Awaited::StreamScan, wait)),
+                Some(Incoming::Ack) => self.stats.stray_acks += 1,
+                Some(Incoming::Nak) => {}
+                Some(Incoming::Telegram(t)) => {
+                    let time = self.link.now();
+                    let command =
+                        Telegram::new_unchecked(&t[..], Direction::SensorToHost).command();
+                    if command != lms_core::telegram::measured::MEASURED_COMMAND {
+                        self.stats.ignored += 1;
+                        continue;
+                    }
+                    match Scan::from_telegram(time, t) {
+                        Ok(scan) => return Ok(scan),
+                        Err(_) => self.stats.bad_scans += 1,
+                    }
+                }
+            }
+        }
+    }
+
+    /// `30 01`: one scan on request.
+    pub fn single_scan(&mut self) -> Result<Scan, ClientError> {
+        let ack = self.timeouts.ack;
+        let bytes = self.exchange(&Request::OneScan, ack)?;
+        let time = self.link.now();
+        Scan::from_telegram(time, bytes.clone()).map_err(|e| {
+            self.stats.bad_scans += 1;
+            ClientError::BadReply {
+                sent: self.last_sent.clone().unwrap_or_else(|| Sent {
+                    bytes: Vec::new(),
+                    what: describe(&Request::OneScan),
+                }),
+                reply: bytes,
+                detail: e.to_string(),
+            }
+        })
+    }
+
+    /// `3B`: set the scan variant; the sensor must accept it (`BB 01`) and
+    /// report the variant asked for.
+    pub fn set_variant(&mut self, variant: Variant) -> Result<(), ClientError> {
+        let ack = self.timeouts.ack;
+        self.transact_with(&Request::set_variant(variant), ack, |reply| match reply {
+            Reply::Variant(v) if v.accepted && v.variant() == Some(variant) => Ok(()),
+            Reply::Variant(v) => Err(format!(
+                "BB {:02X}: {} (now {}°/{}°)",
+                u8::from(v.accepted),
+                if v.accepted { "accepted" } else { "refused" },
+                v.angle_deg,
+                f64::from(v.resolution_centideg) / 100.0
+            )),
+            other => Err(format!("unexpected reply {:02X}", other.command())),
+        })
+    }
+
+    /// `74`: read the configuration block.
+    pub fn read_config(&mut self) -> Result<Config, ClientError> {
+        self.transact(&Request::ReadConfig, |reply| match reply {
+            Reply::Config(c) => Ok(c),
+            other => Err(format!("unexpected reply {:02X}", other.command())),
+        })
+    }
+
+    /// Set the range units: read the configuration (`74`); if its units
+    /// byte differs, enter installation mode (`20 00 SICK_LMS`), write the
+    /// configuration with the units byte changed (`77`, answered `F7 01`),
+    /// and go back to values on request (`20 25`).
+    pub fn set_units(&mut self, units: Units) -> Result<(), ClientError> {
+        let code = units.code().ok_or_else(|| ClientError::Unsupported {
+            detail: format!("{units:?} cannot be configured (only cm and mm)"),
+        })?;
+        let mut config = self.read_config()?;
+        if config.units_code() == code {
+            return Ok(());
+        }
+        let ack = self.timeouts.ack;
+        self.mode_change(
+            &Request::InstallationMode {
+                password: DEFAULT_PASSWORD,
+            },
+            ack,
+        )?;
+        config.set_units_code(code);
+        self.transact(&Request::WriteConfig(config), |reply| match reply {
+            Reply::ConfigWritten {
+                accepted: true,
+                config: c,
+            } if c.units_code() == code => Ok(()),
+            Reply::ConfigWritten { accepted, config } => Err(format!(
+                "F7 {:02X}, units byte now {}",
+                u8::from(accepted),
+                config.units_code()
+            )),
+            other => Err(format!("unexpected reply {:02X}", other.command())),
+        })?;
+        self.mode_change(&Request::OnRequest, ack)
+    }
+
+    /// `20 4x`: switch the sensor to `baud`. The reply comes at the old
+    /// rate; then the link is switched, and `20 25` at the new rate checks
+    /// that the sensor is there.
+    ///
+    /// If no answer to `20 4x` arrives (a reply lost on the line, while the
+    /// sensor may have switched all the same), the client tries `20 25` at
+    /// the new rate; if the sensor answers there, the switch counts as done
+    /// ([`ClientStats::lost_baud_replies`]), else the link goes back to the
+    /// old rate and the time-out is returned.
+    pub fn set_baud(&mut self, baud: Baud) -> Result<(), ClientError> {
+        if baud == self.baud {
+            return Ok(());
+        }
+        let ack = self.timeouts.ack;
+        match self.mode_change(&Request::SetBaud(baud), ack) {
+            Ok(()) => {}
+            Err(e @ ClientError::Timeout { .. }) => {
+                let old = self.baud;
+                self.switch_link(baud)?;
+                if self.mode_change(&Request::OnRequest, ack).is_ok() {
+                    self.stats.lost_baud_replies += 1;
+                    return Ok(());
+                }
+                self.switch_link(old)?;
+                return Err(e);
+            }
+            Err(e) => return Err(e),
+        }
+        self.switch_link(baud)?;
+        self.mode_change(&Request::OnRequest, ack)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_times() {
+        assert_eq!(line_time(732, Baud::B500000), Duration::from_micros(14_640));
+        assert_eq!(line_time(1, Baud::B9600).as_micros(), 1041);
+        assert_eq!(line_time(818, Baud::B9600).as_millis(), 852);
+    }
+
+    #[test]
+    fn descriptions() {
+        assert_eq!(hex(&[0x02, 0x00, 0x01]), "02 00 01");
+        assert!(hex(&[0u8; 30]).ends_with("… (30 bytes)"));
+        assert_eq!(
+            describe(&Request::SetBaud(Baud::B500000)),
+            "20 48 (baud 500000)"
+        );
+        assert_eq!(
+            describe(&Request::set_variant(Variant::Fov100Res25)),
+            "3B (variant 100°/0.25°)"
+        );
+    }
+}

@@ -1,0 +1,493 @@
+//! `host-bridge scan`: record scans from an LMS 2xx (or `host-bridge
+//! simulate`) into a [capture file](crate::capture).
+//!
+//! The session ([`run_session`]), on any [`Link`]:
+//!
+//! 1. find the sensor's rate ([`Client::find_baud`]: 9600 first, where a
+//!    sensor powers up, then 19200, 38400, 500000);
+//! 2. set the variant (`3B`) and the units (`74`, and if they differ
+//!    `20 00 SICK_LMS`, `77`, `20 25`);
+//! 3. switch to the target rate (`20 4x`, reply at the old rate);
+//! 4. stream (`20 24`) and read N scans, or request each with `30 01`
+//!    (`--single`);
+//! 5. stop the stream (`20 25`) and, unless told otherwise, put the sensor
+//!    back at 9600 Bd as the usual driver does on exit.
+//!
+//! [`run`] wraps it for the command line: a real serial port, a progress
+//! bar on a terminal, the capture written to `NAME.partial` and renamed when
+//! all scans are in, and a summary on stderr.
+
+use std::fmt;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::str::FromStr;
+use std::time::Duration;
+
+use anyhow::{ensure, Context, Result};
+use clap::{Args, ValueEnum};
+use lms_core::telegram::{Baud, FramerStats, Units};
+use lms_core::Variant;
+
+use crate::capture::CaptureFile;
+use crate::client::{Client, ClientStats, Link, Scan, SerialLink, Timeouts};
+
+/// `--baud`: the rate to stream at, or `auto` to keep the one found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BaudChoice {
+    /// Keep the rate the sensor was found at.
+    Auto,
+    /// Switch to this rate.
+    Rate(Baud),
+}
+
+impl FromStr for BaudChoice {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.eq_ignore_ascii_case("auto") {
+            return Ok(BaudChoice::Auto);
+        }
+        s.parse::<u32>()
+            .ok()
+            .and_then(Baud::from_bits_per_second)
+            .map(BaudChoice::Rate)
+            .ok_or_else(|| {
+                format!(
+                    "`{s}` is not a rate of the LMS 2xx: use auto, 9600, 19200, 38400 or 500000"
+                )
+            })
+    }
+}
+
+impl fmt::Display for BaudChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            BaudChoice::Auto => f.write_str("auto"),
+            BaudChoice::Rate(b) => write!(f, "{}", b.bits_per_second()),
+        }
+    }
+}
+
+/// `--variant`: field of view / resolution in degrees, e.g. `180/0.5`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VariantChoice(pub Variant);
+
+impl FromStr for VariantChoice {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let v = match s.trim_end_matches('°') {
+            "180/1" => Variant::Fov180Res100,
+            "180/0.5" => Variant::Fov180Res50,
+            "100/1" => Variant::Fov100Res100,
+            "100/0.5" => Variant::Fov100Res50,
+            "100/0.25" => Variant::Fov100Res25,
+            _ => {
+                return Err(format!(
+                    "`{s}` is not a variant of the LMS 2xx: use 180/1, 180/0.5, 100/1, 100/0.5 or 100/0.25 \
+                     (field of view / resolution, degrees)"
+                ))
+            }
+        };
+        Ok(VariantChoice(v))
+    }
+}
+
+/// A variant as `180°/0.5°`.
+pub fn variant_name(v: Variant) -> String {
+    format!(
+        "{}°/{}°",
+        v.fov_deg(),
+        f64::from(v.resolution_centideg()) / 100.0
+    )
+}
+
+impl fmt::Display for VariantChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = self.0;
+        write!(
+            f,
+            "{}/{}",
+            v.fov_deg(),
+            f64::from(v.resolution_centideg()) / 100.0
+        )
+    }
+}
+
+/// `--units`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum UnitsChoice {
+    /// Millimetres (ranges up to 8.182 m).
+    Mm,
+    /// Centimetres (ranges up to 81.82 m).
+    Cm,
+}
+
+impl UnitsChoice {
+    /// The sensor's units.
+    pub fn units(self) -> Units {
+        match self {
+            UnitsChoice::Mm => Units::Millimetre,
+            UnitsChoice::Cm => Units::Centimetre,
+        }
+    }
+}
+
+/// Options of `host-bridge scan`.
+#[derive(Args, Clone, Debug)]
+pub struct ScanArgs {
+    /// Serial port of the sensor, e.g. /dev/ttyUSB0 (or the pty printed by `host-bridge simulate`)
+    #[arg(long, value_name = "PATH")]
+    pub port: PathBuf,
+    /// Rate to stream at (auto: stay at the rate the sensor is found at)
+    #[arg(
+        long,
+        default_value = "500000",
+        value_name = "auto|9600|19200|38400|500000"
+    )]
+    pub baud: BaudChoice,
+    /// Scan variant, field of view / resolution in degrees: 180/1, 180/0.5, 100/1, 100/0.5, 100/0.25
+    #[arg(long, default_value = "180/0.5", value_name = "FOV/RES")]
+    pub variant: VariantChoice,
+    /// Range units of the scans
+    #[arg(long, value_enum, default_value_t = UnitsChoice::Mm)]
+    pub units: UnitsChoice,
+    /// Number of scans to record
+    #[arg(long, default_value_t = 100, value_name = "N")]
+    pub scans: usize,
+    /// Capture file to record the scans into (see the README's capture section)
+    #[arg(long, short, value_name = "CAPTURE")]
+    pub output: Option<PathBuf>,
+    /// Request each scan with `30 01` instead of streaming (`20 24`)
+    #[arg(long)]
+    pub single: bool,
+    /// Resends of a request the sensor answers with NAK
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub retries: u32,
+    /// Leave the sensor at the streaming rate (default: back to 9600 Bd, its power-on rate)
+    #[arg(long)]
+    pub keep_baud: bool,
+}
+
+/// What a session does.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Plan {
+    /// Rates to probe, in order.
+    pub probe: Vec<Baud>,
+    /// Rate to stream at; `None` keeps the rate found.
+    pub target: Option<Baud>,
+    /// Scan variant.
+    pub variant: Variant,
+    /// Range units.
+    pub units: Units,
+    /// Scans to read (at least 1).
+    pub scans: usize,
+    /// `30 01` per scan instead of streaming.
+    pub single: bool,
+    /// Put the sensor back at 9600 Bd at the end.
+    pub restore_9600: bool,
+}
+
+impl Default for Plan {
+    fn default() -> Self {
+        Plan {
+            probe: Baud::ALL.to_vec(),
+            target: Some(Baud::B500000),
+            variant: Variant::Fov180Res50,
+            units: Units::Millimetre,
+            scans: 10,
+            single: false,
+            restore_9600: true,
+        }
+    }
+}
+
+/// What a session did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Summary {
+    /// Scans read.
+    pub scans: usize,
+    /// The rate the sensor was found at.
+    pub found_baud: Baud,
+    /// The rate the scans came at.
+    pub baud: Baud,
+    /// From the start of the stream (or the first `30 01`) to the first scan.
+    pub first: Duration,
+    /// From the start of the stream (or the first `30 01`) to the last scan.
+    pub elapsed: Duration,
+    /// Line counters while the scans came (CRC errors, resyncs, bytes skipped).
+    pub line: FramerStats,
+    /// Handshake counters of the whole session.
+    pub handshake: ClientStats,
+    /// Why putting the sensor back at 9600 Bd failed, if it did (the scans
+    /// are complete all the same).
+    pub restore_error: Option<String>,
+}
+
+impl Summary {
+    /// Scans per second: between the first and the last scan when there
+    /// are two or more, else over [`elapsed`](Self::elapsed).
+    pub fn rate(&self) -> f64 {
+        let (n, s) = if self.scans >= 2 {
+            (
+                self.scans - 1,
+                (self.elapsed - self.first.min(self.elapsed)).as_secs_f64(),
+            )
+        } else {
+            (self.scans, self.elapsed.as_secs_f64())
+        };
+        if s > 0.0 {
+            n as f64 / s
+        } else {
+            0.0
+        }
+    }
+}
+
+/// `after − before`, field by field (the counters wrap).
+pub fn framer_delta(after: &FramerStats, before: &FramerStats) -> FramerStats {
+    FramerStats {
+        telegrams: after.telegrams.wrapping_sub(before.telegrams),
+        acks: after.acks.wrapping_sub(before.acks),
+        naks: after.naks.wrapping_sub(before.naks),
+        crc_errors: after.crc_errors.wrapping_sub(before.crc_errors),
+        oversize: after.oversize.wrapping_sub(before.oversize),
+        bad_headers: after.bad_headers.wrapping_sub(before.bad_headers),
+        abandoned: after.abandoned.wrapping_sub(before.abandoned),
+        resyncs: after.resyncs.wrapping_sub(before.resyncs),
+        bytes_skipped: after.bytes_skipped.wrapping_sub(before.bytes_skipped),
+    }
+}
+
+/// Run a session (see the [module docs](self)). `on_scan` gets each scan
+/// with its index and its time since the stream started; an error from it
+/// ends the session (after stopping the stream).
+pub fn run_session<L: Link>(
+    client: &mut Client<L>,
+    plan: &Plan,
+    mut on_scan: impl FnMut(usize, Duration, &Scan) -> Result<()>,
+) -> Result<Summary> {
+    ensure!(plan.scans > 0, "the number of scans must be at least 1");
+    let found_baud = client
+        .find_baud(&plan.probe)
+        .context("looking for the sensor")?;
+    client
+        .set_variant(plan.variant)
+        .with_context(|| format!("setting the variant {}", variant_name(plan.variant)))?;
+    client
+        .set_units(plan.units)
+        .with_context(|| format!("setting the units to {:?}", plan.units))?;
+    if let Some(target) = plan.target {
+        client
+            .set_baud(target)
+            .with_context(|| format!("switching to {} Bd", target.bits_per_second()))?;
+    }
+    let baud = client.baud();
+
+    let line_before = client.framer_stats();
+    let result = read_scans(client, plan, &mut on_scan);
+    let line = framer_delta(&client.framer_stats(), &line_before);
+    let (first, elapsed) = match result {
+        Ok(times) => times,
+        Err(e) => {
+            // Best effort: leave the sensor quiet.
+            if client.is_streaming() {
+                let _ = client.stop_stream();
+            }
+            return Err(e);
+        }
+    };
+
+    let mut restore_error = None;
+    if plan.restore_9600 && client.baud() != Baud::B9600 {
+        if let Err(e) = client.set_baud(Baud::B9600) {
+            restore_error = Some(e.to_string());
+        }
+    }
+    Ok(Summary {
+        scans: plan.scans,
+        found_baud,
+        baud,
+        first,
+        elapsed,
+        line,
+        handshake: client.stats(),
+        restore_error,
+    })
+}
+
+/// Read the scans of a plan; returns the times from the start to the first
+/// and to the last scan.
+fn read_scans<L: Link>(
+    client: &mut Client<L>,
+    plan: &Plan,
+    on_scan: &mut impl FnMut(usize, Duration, &Scan) -> Result<()>,
+) -> Result<(Duration, Duration)> {
+    let mut first = Duration::ZERO;
+    let mut last = Duration::ZERO;
+    if plan.single {
+        let start = client.now();
+        for i in 0..plan.scans {
+            let scan = client
+                .single_scan()
+                .with_context(|| format!("requesting scan {} of {}", i + 1, plan.scans))?;
+            last = scan.time.saturating_sub(start);
+            if i == 0 {
+                first = last;
+            }
+            on_scan(i, last, &scan)?;
+        }
+        return Ok((first, last));
+    }
+    client.start_stream().context("starting the stream")?;
+    let start = client.now();
+    for i in 0..plan.scans {
+        let scan = client
+            .next_scan()
+            .with_context(|| format!("reading scan {} of {}", i + 1, plan.scans))?;
+        last = scan.time.saturating_sub(start);
+        if i == 0 {
+            first = last;
+        }
+        on_scan(i, last, &scan)?;
+    }
+    client.stop_stream().context("stopping the stream")?;
+    Ok((first, last))
+}
+
+impl ScanArgs {
+    /// The session these options ask for.
+    pub fn plan(&self) -> Result<Plan> {
+        ensure!(self.scans > 0, "--scans must be at least 1");
+        Ok(Plan {
+            probe: Baud::ALL.to_vec(),
+            target: match self.baud {
+                BaudChoice::Auto => None,
+                BaudChoice::Rate(b) => Some(b),
+            },
+            variant: self.variant.0,
+            units: self.units.units(),
+            scans: self.scans,
+            single: self.single,
+            restore_9600: !self.keep_baud,
+        })
+    }
+}
+
+/// `host-bridge scan`.
+pub fn run(args: &ScanArgs) -> Result<()> {
+    let plan = args.plan()?;
+    let link = SerialLink::open(&args.port, Baud::B9600)?;
+    let mut client = Client::new(link, Baud::B9600, Timeouts::default());
+    client.retries = args.retries;
+
+    let mut capture = match &args.output {
+        Some(path) => Some(CaptureFile::create(path)?),
+        None => None,
+    };
+    let progress = if std::io::stderr().is_terminal() {
+        let bar = indicatif::ProgressBar::new(plan.scans as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{spinner} scanning {bar:30} {pos}/{len} scans, {per_sec}, {eta} left",
+        ) {
+            bar.set_style(style);
+        }
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+
+    let result = run_session(&mut client, &plan, |_, since_start, scan| {
+        if let Some(c) = capture.as_mut() {
+            let us = u64::try_from(since_start.as_micros()).unwrap_or(u64::MAX);
+            c.write(us, &scan.telegram)?;
+        }
+        progress.inc(1);
+        Ok(())
+    });
+    progress.finish_and_clear();
+
+    let summary = match result {
+        Ok(s) => s,
+        Err(e) => {
+            if let Some(c) = capture {
+                let (records, partial) = (c.records(), c.partial().to_owned());
+                drop(c);
+                return Err(e.context(format!(
+                    "the capture is incomplete: {records} scans recorded so far are in {} \
+                     (not renamed to {})",
+                    partial.display(),
+                    args.output
+                        .as_deref()
+                        .unwrap_or(partial.as_path())
+                        .display()
+                )));
+            }
+            return Err(e);
+        }
+    };
+    let capture_line = match capture {
+        Some(c) => {
+            let (records, bytes) = (c.records(), c.bytes());
+            let path = c.commit()?;
+            format!(
+                "\n  capture: {} ({records} scans, {bytes} bytes)",
+                path.display()
+            )
+        }
+        None => String::new(),
+    };
+    let h = &summary.handshake;
+    eprintln!(
+        "host-bridge scan: {} scans from {} ({}, {} values, {}) at {} Bd (sensor found at {} Bd) in {:.2} s: {:.1} scans/s\n  \
+         line: {} CRC errors, {} resyncs, {} bytes skipped; handshake: {} NAK resends, {} wrong-address telegrams ignored{}",
+        summary.scans,
+        args.port.display(),
+        variant_name(plan.variant),
+        plan.variant.beams(),
+        match plan.units {
+            Units::Millimetre => "mm",
+            Units::Centimetre => "cm",
+            Units::Decimetre => "10 cm",
+        },
+        summary.baud.bits_per_second(),
+        summary.found_baud.bits_per_second(),
+        summary.elapsed.as_secs_f64(),
+        summary.rate(),
+        summary.line.crc_errors,
+        summary.line.resyncs,
+        summary.line.bytes_skipped,
+        h.resends,
+        h.wrong_address,
+        capture_line,
+    );
+    if let Some(e) = &summary.restore_error {
+        eprintln!("host-bridge scan: warning: could not put the sensor back at 9600 Bd: {e}");
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn choices_parse() {
+        assert_eq!("auto".parse::<BaudChoice>(), Ok(BaudChoice::Auto));
+        assert_eq!(
+            "38400".parse::<BaudChoice>(),
+            Ok(BaudChoice::Rate(Baud::B38400))
+        );
+        assert!("115200"
+            .parse::<BaudChoice>()
+            .unwrap_err()
+            .contains("115200"));
+        assert_eq!(
+            "100/0.25".parse::<VariantChoice>(),
+            Ok(VariantChoice(Variant::Fov100Res25))
+        );
+        assert!("180/0.25".parse::<VariantChoice>().is_err());
+        assert_eq!(VariantChoice(Variant::Fov180Res50).to_string(), "180/0.5");
+        assert_eq!(variant_name(Variant::Fov100Res25), "100°/0.25°");
+    }
+}

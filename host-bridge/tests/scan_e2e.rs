@@ -1,0 +1,924 @@
+//! The client side end to end.
+//!
+//! * Library level, against the in-memory [`FakeSensor`] (virtual clock, so
+//!   9600 Bd costs no real time): every target rate × variant × units gives
+//!   exactly the scans the sensor sent; faults on the line (a corrupted CRC,
+//!   a truncated telegram, noise, a wrong address, NAKs, a missing ACK) are
+//!   skipped or answered and counted, and the stream goes on; timeouts and a
+//!   silent sensor give errors naming what was sent and how long the client
+//!   waited.
+//! * Over a real pseudo-terminal against `host-bridge simulate` (see
+//!   `pty_*` below).
+//! * The command line: a port that does not exist, bad arguments.
+
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use host_bridge::capture::{self, CaptureWriter};
+use host_bridge::client::SerialLink;
+use host_bridge::client::{Client, ClientError, Link, Scan, Timeouts};
+use host_bridge::fake_sensor::{FakeSensor, StreamFault};
+use host_bridge::scan::{run_session, Plan};
+use host_bridge::simulate::SceneSource;
+use host_bridge::synthetic::SceneArgs;
+use lms_core::emulator::{Emulator, Event as EmuEvent, FnSource, ScanSource, Settings};
+use lms_core::telegram::{Baud, MeasuredValues, Units};
+use lms_core::Variant;
+
+const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("cannot start host-bridge")
+}
+
+/// A fresh scratch directory for this test process and `name`.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("host-bridge-scan-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn fake_client(sensor: FakeSensor) -> Client<FakeSensor> {
+    Client::new(sensor, Baud::B9600, Timeouts::default())
+}
+
+/// Run a plan against `client`, collecting the scans.
+fn session(
+    client: &mut Client<FakeSensor>,
+    plan: &Plan,
+) -> (host_bridge::scan::Summary, Vec<Scan>) {
+    let mut scans = Vec::new();
+    let summary = run_session(client, plan, |i, _, scan| {
+        assert_eq!(i, scans.len());
+        scans.push(scan.clone());
+        Ok(())
+    })
+    .unwrap_or_else(|e| panic!("{e:#}"));
+    (summary, scans)
+}
+
+fn values(scans: &[Scan]) -> Vec<MeasuredValues> {
+    scans.iter().map(|s| s.values.clone()).collect()
+}
+
+#[test]
+fn fake_every_rate_variant_and_units() {
+    for target in [Baud::B9600, Baud::B38400, Baud::B500000] {
+        for variant in [Variant::Fov180Res50, Variant::Fov100Res25] {
+            for units in [Units::Millimetre, Units::Centimetre] {
+                for single in [false, true] {
+                    let what = format!("{target:?} {variant:?} {units:?} single={single}");
+                    let mut client = fake_client(FakeSensor::new(Baud::B9600));
+                    let plan = Plan {
+                        target: Some(target),
+                        variant,
+                        units,
+                        scans: 5,
+                        single,
+                        ..Plan::default()
+                    };
+                    let (summary, scans) = session(&mut client, &plan);
+                    let sensor = client.link();
+                    assert_eq!(summary.scans, 5, "{what}");
+                    assert_eq!(summary.found_baud, Baud::B9600, "{what}");
+                    assert_eq!(summary.baud, target, "{what}");
+                    // What came is what went, in order, nothing lost.
+                    let sent = sensor.intact_scans();
+                    assert!(sent.len() >= 5, "{what}");
+                    assert_eq!(values(&scans), sent[..5].to_vec(), "{what}");
+                    for s in &scans {
+                        assert_eq!(s.values.count(), variant.beams(), "{what}");
+                        assert_eq!(s.values.units(), units, "{what}");
+                    }
+                    assert_eq!(sensor.variant(), variant);
+                    assert_eq!(sensor.units(), Some(units));
+                    assert!(!sensor.is_streaming());
+                    // Put back at the power-on rate.
+                    assert_eq!(sensor.baud(), Baud::B9600, "{what}");
+                    assert_eq!(summary.line.crc_errors, 0, "{what}");
+                    assert_eq!(summary.line.bytes_skipped, 0, "{what}");
+                    assert_eq!(summary.handshake.resends, 0, "{what}");
+                    // A streamed scan rate close to what the line allows:
+                    // 361 values = 732 bytes = 14.6 ms at 500 kBd, but the
+                    // mirror gives one scan per 26.7 ms.
+                    if !single && target == Baud::B500000 {
+                        assert!(
+                            (30.0..=40.0).contains(&summary.rate()),
+                            "{what}: {}",
+                            summary.rate()
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn fake_finds_a_sensor_left_streaming_at_another_rate() {
+    // Leave a sensor streaming at 38400 Bd.
+    let mut client = fake_client(FakeSensor::new(Baud::B9600));
+    client.set_baud(Baud::B38400).unwrap();
+    client.start_stream().unwrap();
+    let first = client.next_scan().unwrap();
+    let sensor = client.into_link();
+    assert!(sensor.is_streaming());
+
+    // A new client starts at 9600 and finds it.
+    let mut client = fake_client(sensor);
+    let plan = Plan {
+        target: None,
+        scans: 3,
+        ..Plan::default()
+    };
+    let (summary, scans) = session(&mut client, &plan);
+    assert_eq!(summary.found_baud, Baud::B38400);
+    assert_eq!(summary.baud, Baud::B38400);
+    assert_eq!(scans.len(), 3);
+    // Scans streamed before the stop are dropped while waiting for A0.
+    assert!(client.stats().ignored > 0);
+    assert_ne!(scans[0].values, first.values);
+    assert_eq!(client.link().baud(), Baud::B9600);
+}
+
+#[test]
+fn fake_faults_on_the_line_are_skipped_counted_and_the_stream_goes_on() {
+    let mut sensor = FakeSensor::new(Baud::B9600);
+    // Stream scan indices: 1 corrupted (CRC), 3 truncated, 5 after noise
+    // (with false STX bytes), 7 from another address, 9 corrupted in its
+    // header (LEN).
+    sensor.add_stream_fault(1, StreamFault::Corrupt { at: 100 });
+    sensor.add_stream_fault(3, StreamFault::Truncate { keep: 200 });
+    sensor.add_stream_fault(
+        5,
+        StreamFault::NoiseBefore(vec![0xFF, 0x02, 0x80, 0x10, 0x00, 0x55, 0x06, 0x15, 0x02]),
+    );
+    sensor.add_stream_fault(7, StreamFault::Address(0x81));
+    sensor.add_stream_fault(9, StreamFault::Corrupt { at: 3 });
+    // The first request of the session (the probe `20 25`) and the start of
+    // the stream are hit by line noise: the sensor answers NAK.
+    sensor.nak_next = 1;
+    let mut client = fake_client(sensor);
+    client.find_baud(&Baud::ALL).unwrap();
+    assert_eq!(client.stats().resends, 1);
+    client.set_variant(Variant::Fov180Res50).unwrap();
+    client.set_baud(Baud::B500000).unwrap();
+    // Two bits flipped on the way: the sensor's framer finds bad CRCs.
+    client.link_mut().corrupt_next = 2;
+    client.start_stream().unwrap();
+    assert_eq!(client.stats().resends, 3);
+    assert_eq!(
+        client
+            .link()
+            .requests()
+            .iter()
+            .filter(|r| r[..] == [0x20, 0x24])
+            .count(),
+        1
+    );
+
+    let before = client.framer_stats();
+    let scans: Vec<Scan> = (0..12).map(|_| client.next_scan().unwrap()).collect();
+    client.stop_stream().unwrap();
+    let line = host_bridge::scan::framer_delta(&client.framer_stats(), &before);
+
+    // Exactly the intact scans, in order: 1, 3, 7 and 9 never arrive.
+    let sent = client.link().intact_scans().to_vec();
+    assert_eq!(values(&scans), sent[..12].to_vec());
+    assert!(line.crc_errors >= 2, "{line:?}");
+    assert!(line.resyncs >= 4, "{line:?}");
+    assert!(line.bytes_skipped >= 200 + 9, "{line:?}");
+    assert_eq!(client.stats().wrong_address, 1);
+}
+
+#[test]
+fn fake_missing_ack_is_tolerated() {
+    let mut sensor = FakeSensor::new(Baud::B9600);
+    sensor.send_acks = false;
+    let mut client = fake_client(sensor);
+    let plan = Plan {
+        scans: 2,
+        single: true,
+        ..Plan::default()
+    };
+    let (_, scans) = session(&mut client, &plan);
+    assert_eq!(scans.len(), 2);
+    assert!(client.stats().missing_acks >= 5);
+}
+
+#[test]
+fn fake_silent_sensor_and_timeouts_name_what_was_sent() {
+    // Nobody there: every rate tried, the message lists them.
+    let mut sensor = FakeSensor::new(Baud::B9600);
+    sensor.mute = true;
+    let mut client = fake_client(sensor);
+    let e = client.find_baud(&Baud::ALL).unwrap_err();
+    assert!(matches!(e, ClientError::NoSensor { .. }), "{e}");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("fake-sensor") && msg.contains("9600, 19200, 38400, 500000"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("20 25") && msg.contains("02 00 02 00 20 25 35 08"),
+        "{msg}"
+    );
+
+    // A sensor that goes quiet: the time-out names the request and the wait.
+    let mut client = fake_client(FakeSensor::new(Baud::B9600));
+    client.find_baud(&Baud::ALL).unwrap();
+    client.link_mut().mute = true;
+    let t0 = client.link().now();
+    let e = client.start_stream().unwrap_err();
+    let waited = client.link().now() - t0;
+    let msg = e.to_string();
+    assert!(matches!(e, ClientError::Timeout { .. }), "{msg}");
+    assert!(msg.contains("20 24 (continuous output)"), "{msg}");
+    assert!(msg.contains("ACK"), "{msg}");
+    assert!(
+        msg.contains(&format!("{} ms", waited.as_millis())),
+        "{msg} vs {waited:?}"
+    );
+
+    // A stream that stops: the time-out says what it waited for.
+    let mut client = fake_client(FakeSensor::new(Baud::B9600));
+    client.find_baud(&Baud::ALL).unwrap();
+    client.start_stream().unwrap();
+    client.next_scan().unwrap();
+    client.link_mut().mute = true;
+    let e = loop {
+        // What was on the line still arrives; then the time-out.
+        match client.next_scan() {
+            Ok(_) => continue,
+            Err(e) => break e,
+        }
+    };
+    let msg = e.to_string();
+    assert!(
+        msg.contains("the next streamed scan") && msg.contains("20 24"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn fake_nak_every_time_gives_up_after_the_retries() {
+    let mut client = fake_client(FakeSensor::new(Baud::B9600));
+    client.find_baud(&Baud::ALL).unwrap();
+    client.retries = 2;
+    client.link_mut().nak_next = 100;
+    let e = client.set_variant(Variant::Fov100Res50).unwrap_err();
+    assert!(matches!(e, ClientError::Nak { attempts: 3, .. }), "{e}");
+    assert!(e.to_string().contains("3B (variant 100°/0.5°)"), "{e}");
+}
+
+#[test]
+fn fake_scans_recorded_into_a_capture_read_back_bit_exact() {
+    let mut client = fake_client(FakeSensor::new(Baud::B9600));
+    let plan = Plan {
+        variant: Variant::Fov100Res25,
+        units: Units::Centimetre,
+        scans: 4,
+        ..Plan::default()
+    };
+    let mut writer = CaptureWriter::new(Vec::new()).unwrap();
+    run_session(&mut client, &plan, |_, t, scan| {
+        writer.write(t.as_micros() as u64, &scan.telegram)?;
+        Ok(())
+    })
+    .unwrap();
+    let bytes = writer.finish().unwrap();
+    let dir = scratch("capture");
+    let path = dir.join("fake.lmscap");
+    std::fs::write(&path, &bytes).unwrap();
+    let back: Vec<_> = capture::read_values(&path)
+        .unwrap()
+        .collect::<anyhow::Result<_>>()
+        .unwrap();
+    let sent = client.link().intact_scans();
+    assert_eq!(back.len(), 4);
+    for (i, scan) in back.iter().enumerate() {
+        assert_eq!(scan.index, i);
+        assert_eq!(scan.values, sent[i]);
+    }
+    // Times are non-decreasing and at the line's pace (≥ 26.7 ms apart).
+    for w in back.windows(2) {
+        assert!(
+            w[1].time_us >= w[0].time_us + 26_000,
+            "{:?}",
+            (w[0].time_us, w[1].time_us)
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn cli_port_that_does_not_exist_is_named() {
+    let out = run(&["scan", "--port", "/dev/no-such-lms-port", "--scans", "1"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("/dev/no-such-lms-port") && err.contains("cannot open serial port"),
+        "{err}"
+    );
+}
+
+#[test]
+fn cli_bad_arguments_are_explained() {
+    for (args, needle) in [
+        (
+            &["scan", "--port", "/dev/null", "--baud", "115200"][..],
+            "115200",
+        ),
+        (
+            &["scan", "--port", "/dev/null", "--variant", "180/0.25"][..],
+            "180/0.25",
+        ),
+        (
+            &["scan", "--port", "/dev/null", "--units", "m"][..],
+            "units",
+        ),
+        (
+            &["scan", "--port", "/dev/null", "--scans", "0"][..],
+            "--scans",
+        ),
+        (&["scan", "--port", "/dev/null"][..], "not a serial port"),
+        (&["scan"][..], "--port"),
+    ] {
+        let out = run(args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn cli_extract_reads_a_capture_and_rejects_a_broken_one() {
+    let dir = scratch("extract");
+    // A capture of two scans from the fake sensor.
+    let mut client = fake_client(FakeSensor::new(Baud::B9600));
+    let path = dir.join("two.lmscap");
+    let mut file = capture::CaptureFile::create(&path).unwrap();
+    run_session(
+        &mut client,
+        &Plan {
+            scans: 2,
+            ..Plan::default()
+        },
+        |_, t, scan| file.write(t.as_micros() as u64, &scan.telegram),
+    )
+    .unwrap();
+    file.commit().unwrap();
+    let out = run(&["extract", path.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text.lines().count(), 2);
+    let rec: serde_json::Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    assert_eq!(rec["n"], 361);
+    // The first value of the pattern: word 1 mm... as the sensor sent it.
+    let sent = &client.link().intact_scans()[0];
+    let r0 = rec["ranges"][1].as_f64().unwrap();
+    assert!((r0 - f64::from(sent.values()[1]) / 1000.0).abs() < 1e-6);
+
+    // Cut the file inside the second record: the error names the offset.
+    let bytes = std::fs::read(&path).unwrap();
+    let cut = dir.join("cut.lmscap");
+    std::fs::write(&cut, &bytes[..bytes.len() - 100]).unwrap();
+    let out = run(&["extract", cut.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let second = 8 + 10 + 732;
+    assert!(
+        err.contains("cut.lmscap") && err.contains(&format!("truncated record 1 at byte {second}")),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+// ---------------------------------------------------------------------------
+// The client against `lms_core::emulator` (the simulator's sensor model),
+// on a virtual clock: the same exchange as over the pty, without the pty.
+
+/// Scans the source handed to the emulator, in order.
+type Sent = Arc<Mutex<Vec<Vec<u16>>>>;
+
+/// A deterministic source that records what it produced.
+fn recording_source(sent: Sent) -> impl ScanSource {
+    FnSource(move |_variant: Variant, _units: Units, out: &mut [u16]| {
+        let mut sent = sent.lock().unwrap();
+        let k = sent.len();
+        for (j, w) in out.iter_mut().enumerate() {
+            *w = ((j * 13 + k * 101) % 8100 + 1) as u16;
+        }
+        sent.push(out.to_vec());
+        out.len()
+    })
+}
+
+/// [`Emulator`] behind the client's [`Link`] trait, with a virtual clock in
+/// µs. Bytes sent at a rate other than the emulator's are scrambled, as on
+/// a real line.
+struct EmulatorLink<S: ScanSource> {
+    emu: Emulator<S>,
+    now_us: u64,
+    host_baud: Baud,
+    /// The emulator's rate for the bytes `transmit` hands out next.
+    tx_baud: Baud,
+}
+
+impl<S: ScanSource> EmulatorLink<S> {
+    fn new(source: S) -> Self {
+        EmulatorLink {
+            emu: Emulator::new(source, Settings::default(), 0),
+            now_us: 0,
+            host_baud: Baud::B9600,
+            tx_baud: Baud::B9600,
+        }
+    }
+
+    fn drain_events(&mut self) {
+        while let Some(e) = self.emu.next_event() {
+            if let EmuEvent::BaudSwitched { to, .. } = e {
+                self.tx_baud = to;
+            }
+        }
+    }
+}
+
+impl<S: ScanSource> Link for EmulatorLink<S> {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        let rx: Vec<u8> = if self.host_baud == self.emu.baud() {
+            bytes.to_vec()
+        } else {
+            bytes.iter().map(|b| b ^ 0xA5).collect()
+        };
+        self.emu.receive(self.now_us, &rx);
+        Ok(())
+    }
+
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+        let deadline = self.now_us + timeout.as_micros() as u64;
+        loop {
+            let baud = self.tx_baud;
+            let n = self.emu.transmit(self.now_us, buf);
+            self.drain_events();
+            if n > 0 {
+                if baud != self.host_baud {
+                    buf[..n].iter_mut().for_each(|b| *b ^= 0xA5);
+                }
+                return Ok(n);
+            }
+            match self.emu.next_wakeup_us() {
+                Some(t) if t <= deadline => self.now_us = self.now_us.max(t),
+                _ => {
+                    self.now_us = deadline;
+                    return Ok(0);
+                }
+            }
+        }
+    }
+
+    fn set_baud(&mut self, baud: Baud) -> std::io::Result<()> {
+        self.host_baud = baud;
+        Ok(())
+    }
+
+    fn discard_input(&mut self) -> std::io::Result<()> {
+        let mut sink = [0u8; 1024];
+        while self.emu.transmit(self.now_us, &mut sink) > 0 {
+            self.drain_events();
+        }
+        self.drain_events();
+        Ok(())
+    }
+
+    fn now(&self) -> Duration {
+        Duration::from_micros(self.now_us)
+    }
+
+    fn name(&self) -> String {
+        "emulator".into()
+    }
+}
+
+#[test]
+fn emulator_every_rate_variant_and_units() {
+    for target in [Baud::B9600, Baud::B38400, Baud::B500000] {
+        for variant in [Variant::Fov180Res50, Variant::Fov100Res25] {
+            for units in [Units::Millimetre, Units::Centimetre] {
+                for single in [false, true] {
+                    let what = format!("{target:?} {variant:?} {units:?} single={single}");
+                    let sent: Sent = Arc::default();
+                    let link = EmulatorLink::new(recording_source(sent.clone()));
+                    let mut client = Client::new(link, Baud::B9600, Timeouts::default());
+                    let plan = Plan {
+                        target: Some(target),
+                        variant,
+                        units,
+                        scans: 6,
+                        single,
+                        ..Plan::default()
+                    };
+                    let mut got = Vec::new();
+                    let summary = run_session(&mut client, &plan, |_, _, scan| {
+                        got.push(scan.values.clone());
+                        Ok(())
+                    })
+                    .unwrap_or_else(|e| panic!("{what}: {e:#}"));
+                    assert_eq!(summary.baud, target, "{what}");
+                    let sent = sent.lock().unwrap();
+                    assert!(sent.len() >= 6, "{what}");
+                    for (i, v) in got.iter().enumerate() {
+                        assert_eq!(v.values(), &sent[i][..], "{what}: scan {i}");
+                        assert_eq!(v.units(), units, "{what}");
+                        assert_eq!(v.count(), variant.beams(), "{what}");
+                    }
+                    let emu = &client.link().emu;
+                    assert_eq!(emu.variant(), variant, "{what}");
+                    assert_eq!(emu.units(), units, "{what}");
+                    assert!(!emu.streaming(), "{what}");
+                    assert_eq!(emu.baud(), Baud::B9600, "{what}");
+                    assert_eq!(summary.line.crc_errors, 0, "{what}");
+                    assert_eq!(summary.handshake.resends, 0, "{what}");
+                    assert_eq!(summary.handshake.missing_acks, 0, "{what}");
+                    if !single && target == Baud::B500000 && variant == Variant::Fov180Res50 {
+                        // The mirror's pace: one scan per 26.7 ms.
+                        assert!(
+                            (36.0..=39.0).contains(&summary.rate()),
+                            "{what}: {}",
+                            summary.rate()
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn emulator_left_streaming_at_38400_is_found() {
+    let sent: Sent = Arc::default();
+    let link = EmulatorLink::new(recording_source(sent.clone()));
+    let mut client = Client::new(link, Baud::B9600, Timeouts::default());
+    client.find_baud(&Baud::ALL).unwrap();
+    client.set_baud(Baud::B38400).unwrap();
+    client.start_stream().unwrap();
+    client.next_scan().unwrap();
+    let link = client.into_link();
+    let mut client = Client::new(link, Baud::B9600, Timeouts::default());
+    assert_eq!(client.find_baud(&Baud::ALL).unwrap(), Baud::B38400);
+    let scan = client.single_scan().unwrap();
+    let sent = sent.lock().unwrap();
+    assert_eq!(scan.values.values(), &sent.last().unwrap()[..]);
+}
+
+#[test]
+fn emulator_corrupted_request_is_naked_and_resent() {
+    let link = EmulatorLink::new(recording_source(Arc::default()));
+    let mut client = Client::new(link, Baud::B9600, Timeouts::default());
+    client.find_baud(&Baud::ALL).unwrap();
+    // Send a corrupted copy of `3B` by hand first: the emulator NAKs it,
+    // and the client's own request right after goes through.
+    let mut bad = [0u8; 16];
+    let n = lms_core::telegram::Request::set_variant(Variant::Fov100Res50)
+        .emit(0, &mut bad)
+        .unwrap();
+    bad[5] ^= 0x40;
+    client.link_mut().send(&bad[..n]).unwrap();
+    client.set_variant(Variant::Fov100Res50).unwrap();
+    assert_eq!(client.link().emu.stats().naks, 1);
+    // The NAK (for the corrupted copy) made the client send its `3B` again.
+    assert_eq!(client.stats().resends, 1);
+    assert_eq!(client.link().emu.variant(), Variant::Fov100Res50);
+}
+
+// ---------------------------------------------------------------------------
+// Over a real pseudo-terminal: `host-bridge simulate` on one side, the
+// client (library or binary) on the other, the simulator's clock and pacing
+// real. The simulator's scans come from its seeded scene; the test draws the
+// same scans from `host_bridge::simulate::SceneSource` with the same options
+// (the simulator asks its source only for the scans it sends, in order).
+
+/// Scene options given to every simulator here.
+const SEED: u64 = 7;
+const COUNT: usize = 5;
+
+/// Waits of the client in these tests: the simulator answers within
+/// milliseconds, so 1 s for a reply is ample and keeps failures quick.
+fn pty_timeouts() -> Timeouts {
+    Timeouts {
+        ack: Duration::from_millis(300),
+        reply: Duration::from_secs(1),
+        probe: Duration::from_millis(300),
+    }
+}
+
+/// A running `host-bridge simulate`, killed when dropped.
+struct Simulator {
+    child: Child,
+    pty: PathBuf,
+    log: PathBuf,
+}
+
+impl Simulator {
+    fn start(name: &str) -> Simulator {
+        let dir = scratch(&format!("sim-{name}"));
+        let log = dir.join("simulate.log");
+        let mut child = Command::new(BIN)
+            .args(["simulate", "--verbose", "--quit-after", "120"])
+            .args(["--seed", &SEED.to_string(), "--count", &COUNT.to_string()])
+            .stdout(Stdio::piped())
+            .stderr(std::fs::File::create(&log).unwrap())
+            .spawn()
+            .expect("cannot start host-bridge simulate");
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let pty = PathBuf::from(line.trim());
+        assert!(
+            pty.starts_with("/dev/"),
+            "simulate printed {line:?}; its log:\n{}",
+            std::fs::read_to_string(&log).unwrap_or_default()
+        );
+        Simulator { child, pty, log }
+    }
+
+    fn log(&self) -> String {
+        std::fs::read_to_string(&self.log).unwrap_or_default()
+    }
+
+    /// Freeze the simulator (SIGSTOP): the pty stays, nothing answers.
+    fn freeze(&self) {
+        let ok = Command::new("kill")
+            .args(["-STOP", &self.child.id().to_string()])
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok);
+    }
+}
+
+impl Drop for Simulator {
+    fn drop(&mut self) {
+        let _ = Command::new("kill")
+            .args(["-CONT", &self.child.id().to_string()])
+            .status();
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The first `n` scans the simulator's source gives for a variant and units.
+fn scene_scans(variant: Variant, units: Units, n: usize) -> Vec<Vec<u16>> {
+    let args = SceneArgs {
+        seed: SEED,
+        count: COUNT,
+        ..SceneArgs::default()
+    };
+    let mut source = SceneSource::new(&args).unwrap();
+    (0..n)
+        .map(|_| {
+            let mut out = vec![0u16; variant.beams()];
+            let written = source.next_scan(variant, units, &mut out);
+            out[written..].fill(8191);
+            out
+        })
+        .collect()
+}
+
+/// A client on the simulator's pty at 9600 Bd.
+fn pty_client(sim: &Simulator) -> Client<SerialLink> {
+    let link = SerialLink::open(&sim.pty, Baud::B9600).unwrap_or_else(|e| panic!("{e}"));
+    Client::new(link, Baud::B9600, pty_timeouts())
+}
+
+/// Stream (or request) `scans` scans over the pty and compare them with the
+/// scene.
+fn pty_case(name: &str, target: Baud, variant: Variant, units: Units, scans: usize, single: bool) {
+    let started = std::time::Instant::now();
+    let sim = Simulator::start(name);
+    let mut client = pty_client(&sim);
+    let plan = Plan {
+        target: Some(target),
+        variant,
+        units,
+        scans,
+        single,
+        // Leave the sensor at the target rate: the simulator is killed next.
+        restore_9600: false,
+        ..Plan::default()
+    };
+    let mut got = Vec::new();
+    let summary = run_session(&mut client, &plan, |_, _, scan| {
+        got.push(scan.values.clone());
+        Ok(())
+    })
+    .unwrap_or_else(|e| panic!("{name}: {e:#}\nsimulator log:\n{}", sim.log()));
+    assert_eq!(summary.found_baud, Baud::B9600, "{name}");
+    assert_eq!(summary.baud, target, "{name}");
+    let expected = scene_scans(variant, units, scans);
+    for (i, v) in got.iter().enumerate() {
+        assert_eq!(v.units(), units, "{name}: scan {i}");
+        assert_eq!(v.count(), variant.beams(), "{name}: scan {i}");
+        assert_eq!(v.values(), &expected[i][..], "{name}: scan {i}");
+    }
+    assert_eq!(got.len(), scans);
+    assert_eq!(summary.line.crc_errors, 0, "{name}");
+    assert_eq!(summary.line.bytes_skipped, 0, "{name}");
+    eprintln!(
+        "{name}: {scans} scans at {} Bd, {:.1} scans/s, {:.2} s in all; handshake {:?}",
+        target.bits_per_second(),
+        summary.rate(),
+        started.elapsed().as_secs_f64(),
+        summary.handshake
+    );
+}
+
+#[test]
+fn pty_9600_180_half_mm() {
+    // 361 values = 732 bytes = 0.76 s at 9600 Bd each.
+    pty_case(
+        "9600",
+        Baud::B9600,
+        Variant::Fov180Res50,
+        Units::Millimetre,
+        2,
+        false,
+    );
+}
+
+#[test]
+fn pty_38400_100_quarter_cm() {
+    pty_case(
+        "38400",
+        Baud::B38400,
+        Variant::Fov100Res25,
+        Units::Centimetre,
+        4,
+        false,
+    );
+}
+
+#[test]
+fn pty_500000_180_half_cm() {
+    pty_case(
+        "500k-180",
+        Baud::B500000,
+        Variant::Fov180Res50,
+        Units::Centimetre,
+        30,
+        false,
+    );
+}
+
+#[test]
+fn pty_500000_100_quarter_mm() {
+    pty_case(
+        "500k-100",
+        Baud::B500000,
+        Variant::Fov100Res25,
+        Units::Millimetre,
+        15,
+        false,
+    );
+}
+
+#[test]
+fn pty_single_scans_at_38400() {
+    pty_case(
+        "single",
+        Baud::B38400,
+        Variant::Fov180Res50,
+        Units::Millimetre,
+        3,
+        true,
+    );
+}
+
+#[test]
+fn pty_sensor_left_streaming_is_found_at_its_rate() {
+    let sim = Simulator::start("left-streaming");
+    let mut client = pty_client(&sim);
+    client.find_baud(&Baud::ALL).unwrap();
+    client.set_baud(Baud::B38400).unwrap();
+    client.start_stream().unwrap();
+    client.next_scan().unwrap();
+    // The client goes away; the sensor streams on at 38400 Bd.
+    drop(client);
+    std::thread::sleep(Duration::from_millis(300));
+    let mut client = pty_client(&sim);
+    let found = client
+        .find_baud(&Baud::ALL)
+        .unwrap_or_else(|e| panic!("{e}\nsimulator log:\n{}", sim.log()));
+    assert_eq!(found, Baud::B38400);
+    let scan = client.single_scan().unwrap();
+    assert_eq!(scan.values.count(), 181);
+}
+
+#[test]
+fn pty_cli_scan_writes_a_capture_that_extract_reads() {
+    let sim = Simulator::start("cli");
+    let dir = scratch("pty-cli");
+    let capture_path = dir.join("scans.lmscap");
+    let out = run(&[
+        "scan",
+        "--port",
+        sim.pty.to_str().unwrap(),
+        "--baud",
+        "9600",
+        "--variant",
+        "100/0.25",
+        "--units",
+        "cm",
+        "--scans",
+        "2",
+        "--output",
+        capture_path.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}\nsimulator log:\n{}", sim.log());
+    // The summary.
+    assert!(err.contains("2 scans from"), "{err}");
+    assert!(
+        err.contains("(100°/0.25°, 401 values, cm) at 9600 Bd"),
+        "{err}"
+    );
+    assert!(
+        err.contains("0 CRC errors, 0 resyncs, 0 bytes skipped"),
+        "{err}"
+    );
+    assert!(err.contains("scans.lmscap (2 scans, 1652 bytes)"), "{err}");
+    assert!(!capture::CaptureFile::partial_path(&capture_path).exists());
+    // The capture holds what the scene sent.
+    let expected = scene_scans(Variant::Fov100Res25, Units::Centimetre, 2);
+    let back: Vec<_> = capture::read_values(&capture_path)
+        .unwrap()
+        .collect::<anyhow::Result<_>>()
+        .unwrap();
+    assert_eq!(back.len(), 2);
+    for (b, e) in back.iter().zip(&expected) {
+        assert_eq!(b.values.values(), &e[..]);
+        assert_eq!(b.values.units(), Units::Centimetre);
+    }
+    // 401 values = 812 bytes = 0.85 s per scan at 9600 Bd.
+    assert!(back[1].time_us - back[0].time_us >= 800_000);
+    let out = run(&["extract", capture_path.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text.lines().count(), 2);
+    for line in text.lines() {
+        let rec: serde_json::Value = serde_json::from_str(line).unwrap();
+        assert_eq!(rec["n"], 401);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn pty_cli_sensor_that_does_not_answer() {
+    let sim = Simulator::start("frozen");
+    sim.freeze();
+    let dir = scratch("pty-frozen");
+    let capture_path = dir.join("none.lmscap");
+    let started = std::time::Instant::now();
+    let out = run(&[
+        "scan",
+        "--port",
+        sim.pty.to_str().unwrap(),
+        "--scans",
+        "1",
+        "-o",
+        capture_path.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    let pty = sim.pty.display().to_string();
+    assert!(
+        err.contains(&format!("no LMS 2xx answers on {pty}")),
+        "{err}"
+    );
+    assert!(
+        err.contains("20 25 (values on request) [02 00 02 00 20 25 35 08]"),
+        "{err}"
+    );
+    assert!(err.contains("9600, 19200, 38400, 500000"), "{err}");
+    assert!(err.contains("0 scans recorded so far"), "{err}");
+    assert!(!capture_path.exists());
+    // Four rates, each 300 ms plus one longest telegram's line time.
+    assert!(started.elapsed() < Duration::from_secs(10));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
