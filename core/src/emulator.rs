@@ -1668,7 +1668,10 @@ mod tests {
             }
             let cap = 1 + rnd(buf.len() as u64) as usize;
             sent += e.transmit(now, &mut buf[..cap]) as u64;
-            assert!(sent <= now * 960 / 1_000_000 + 1, "{sent} bytes by {now} µs");
+            assert!(
+                sent <= now * 960 / 1_000_000 + 1,
+                "{sent} bytes by {now} µs"
+            );
             while e.next_event().is_some() {}
         }
         assert_eq!(e.baud(), Baud::B9600);

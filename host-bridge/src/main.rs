@@ -1,10 +1,11 @@
 //! `host-bridge`: the host tool of the LMS 2xx feature co-processor.
 //!
-//! Subcommands (more to come: `simulate`, `verify`):
+//! Subcommands (more to come: `verify`):
 //!
 //! * `extract` — features of a CARMEN log, a capture or a synthetic scene, as JSON Lines.
 //! * `plot` — figures of one frame (see `host_bridge::plot`).
 //! * `scan` — record scans from a sensor into a capture file (see `host_bridge::scan`).
+//! * `simulate` — a simulated LMS 2xx on a pseudo-terminal (see `host_bridge::simulate`).
 
 use std::fs::File;
 use std::io::{self, Write};

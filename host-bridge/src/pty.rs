@@ -37,7 +37,7 @@ use nix::fcntl::{fcntl, FcntlArg, OFlag};
 use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
 use nix::pty::{grantpt, posix_openpt, ptsname_r, unlockpt, PtyMaster};
 use nix::sys::termios::{
-    cfgetospeed, cfmakeraw, cfsetspeed, tcflush, tcgetattr, tcsetattr, BaudRate, FlushArg, SetArg,
+    cfmakeraw, cfsetspeed, tcflush, tcgetattr, tcsetattr, BaudRate, ControlFlags, FlushArg, SetArg,
 };
 
 /// What a non-blocking read found.
