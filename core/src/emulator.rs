@@ -99,10 +99,10 @@ use heapless::Deque;
 use crate::frame::{Invalid, Variant};
 use crate::telegram::reply::POWER_ON_LEN;
 use crate::telegram::{
-    copy_into, Baud, Config, Direction, Event as FramerEvent, Framer, FramerStats, MeasuredValues,
-    ModeResult, RangeBits, Reply, Request, StatusBlock, StatusFields, Units, VariantReply, ACK,
-    DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, MAX_TELEGRAM_LEN, MAX_VALUES, NAK,
-    SENSOR_TYPE_LMS200,
+    copy_into, emit_telegram, Baud, Config, Direction, Event as FramerEvent, Framer, FramerStats,
+    MeasuredValues, ModeResult, RangeBits, Reply, Request, StatusBlock, StatusFields, Units,
+    VariantReply, ACK, DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, MAX_TELEGRAM_LEN,
+    MAX_VALUES, NAK, REPLY_ADDRESS_BIT, SENSOR_TYPE_LMS200,
 };
 
 /// Data bytes of the `90` power-on telegram: the type string and a space
@@ -171,7 +171,21 @@ pub trait ScanSource {
         let _ = variant;
         true
     }
+
+    /// A command the LMS 2xx does not know (it would answer `92`): the
+    /// source may answer it instead by writing a reply's data into `reply`
+    /// (at most [`EXTRA_REPLY_CAPACITY`] bytes) and returning the reply's
+    /// command code and data length; the emulator sends `ACK` and that
+    /// reply. `None` (the default) keeps the `92`. The co-processor uses it
+    /// for its counters request.
+    fn extra_command(&mut self, command: u8, data: &[u8], reply: &mut [u8]) -> Option<(u8, usize)> {
+        let _ = (command, data, reply);
+        None
+    }
 }
+
+/// Largest reply data a [`ScanSource::extra_command`] may write.
+pub const EXTRA_REPLY_CAPACITY: usize = 64;
 
 /// A [`ScanSource`] from a closure `(variant, units, out) -> written`.
 #[derive(Clone, Copy, Debug)]
@@ -206,6 +220,13 @@ pub struct Settings {
     pub status: u8,
     /// Time from the end of the `91` reply to the `90` telegram (µs).
     pub restart_us: u64,
+    /// `false` (a simulated sensor): in continuous mode the emulator sends
+    /// scans on its own mirror clock, and paces every byte at the line
+    /// rate. `true` (the co-processor's face towards its client): it sends
+    /// no scans by itself — the caller writes each scan when the real
+    /// sensor delivers it, while [`Emulator::streaming`] — and hands out
+    /// its replies at once, the UART doing the pacing.
+    pub external_scans: bool,
 }
 
 impl Default for Settings {
@@ -216,6 +237,7 @@ impl Default for Settings {
             config: Config::default(),
             status: DEFAULT_STATUS,
             restart_us: DEFAULT_RESTART_US,
+            external_scans: false,
         }
     }
 }
@@ -283,6 +305,12 @@ pub enum Handled {
     },
     /// `10`: reset.
     Reset,
+    /// A command the LMS does not know, answered by the source
+    /// ([`ScanSource::extra_command`]).
+    Extra {
+        /// The command code.
+        command: u8,
+    },
     /// Unknown or malformed (answered with `92`).
     Unknown {
         /// The command code.
@@ -378,6 +406,11 @@ enum ReplyKind {
     Unknown,
     /// `30 01`: a `B0` from the source when the frame starts.
     OneScan,
+    /// A reply from [`ScanSource::extra_command`], its data in `extra`.
+    Extra {
+        command: u8,
+        len: usize,
+    },
 }
 
 /// What happens when a frame's last byte has gone out.
@@ -489,6 +522,10 @@ pub struct Emulator<S> {
     restart_at_us: Option<u64>,
     pending: Deque<Pending, PENDING_CAPACITY>,
     stream: Option<Stream>,
+    /// Continuous mode with [`Settings::external_scans`]: the caller streams.
+    external_stream: bool,
+    /// Data of the last [`ReplyKind::Extra`] reply.
+    extra: [u8; EXTRA_REPLY_CAPACITY],
     /// The frame on the line: `tx[..tx_len]`, of which `tx_sent` handed out.
     tx: [u8; TX_CAPACITY],
     tx_len: usize,
@@ -521,6 +558,8 @@ impl<S: ScanSource> Emulator<S> {
             restart_at_us: None,
             pending: Deque::new(),
             stream: None,
+            external_stream: false,
+            extra: [0; EXTRA_REPLY_CAPACITY],
             tx: [0; TX_CAPACITY],
             tx_len: 0,
             tx_sent: 0,
@@ -545,6 +584,7 @@ impl<S: ScanSource> Emulator<S> {
         self.framer.discard();
         self.pending.clear();
         self.stream = None;
+        self.external_stream = false;
         self.resetting = false;
         self.restart_at_us = None;
         self.tx_len = 0;
@@ -592,6 +632,19 @@ impl<S: ScanSource> Emulator<S> {
                 Some(FramerEvent::Telegram(t)) => t.data().len(),
                 _ => 0,
             };
+            // A command the sensor does not know may be the source's.
+            let extra = match fed.event {
+                Some(FramerEvent::Telegram(t)) if t.address() == self.settings.address => {
+                    match Request::parse(&t) {
+                        Ok(Request::Unknown { command, data }) => self
+                            .source
+                            .extra_command(command, data, &mut self.extra)
+                            .filter(|&(_, len)| len <= EXTRA_REPLY_CAPACITY),
+                        _ => None,
+                    }
+                }
+                _ => None,
+            };
             let done = fed.event.is_none();
             for _ in 0..naks {
                 self.stats.naks = self.stats.naks.wrapping_add(1);
@@ -599,7 +652,7 @@ impl<S: ScanSource> Emulator<S> {
                 self.event(Event::BadChecksum);
             }
             if let Some(incoming) = incoming {
-                self.handle(now_us, incoming, data_len);
+                self.handle(now_us, incoming, data_len, extra);
             }
             if done {
                 break;
@@ -608,7 +661,13 @@ impl<S: ScanSource> Emulator<S> {
     }
 
     /// Answer one request.
-    fn handle(&mut self, now_us: u64, incoming: Incoming, data_len: usize) {
+    fn handle(
+        &mut self,
+        now_us: u64,
+        incoming: Incoming,
+        data_len: usize,
+        extra: Option<(u8, usize)>,
+    ) {
         if incoming.address != self.settings.address {
             self.stats.ignored = self.stats.ignored.wrapping_add(1);
             self.event(Event::IgnoredAddress {
@@ -715,11 +774,21 @@ impl<S: ScanSource> Emulator<S> {
                 self.event(Event::Restarting);
                 (ReplyKind::ResetAck, Done::Restart, Handled::Reset)
             }
-            Request::Unknown { command, .. } => (
-                ReplyKind::Unknown,
-                Done::Nothing,
-                Handled::Unknown { command, data_len },
-            ),
+            Request::Unknown { command, .. } => match extra {
+                Some((reply, len)) => (
+                    ReplyKind::Extra {
+                        command: reply,
+                        len,
+                    },
+                    Done::Nothing,
+                    Handled::Extra { command },
+                ),
+                None => (
+                    ReplyKind::Unknown,
+                    Done::Nothing,
+                    Handled::Unknown { command, data_len },
+                ),
+            },
         };
         self.queue(now_us, Outgoing::Reply { reply, then });
         self.event(Event::Request(handled));
@@ -737,7 +806,8 @@ impl<S: ScanSource> Emulator<S> {
     }
 
     fn stop_stream(&mut self) {
-        if self.stream.take().is_some() {
+        let external = core::mem::replace(&mut self.external_stream, false);
+        if self.stream.take().is_some() || external {
             self.event(Event::StreamStopped);
         }
     }
@@ -801,6 +871,9 @@ impl<S: ScanSource> Emulator<S> {
 
     /// Bytes of the current frame whose stop bit has passed at `now_us`.
     fn bytes_due(&self, now_us: u64) -> usize {
+        if self.settings.external_scans {
+            return self.tx_len;
+        }
         let Some(elapsed) = now_us.checked_sub(self.tx_start_us) else {
             return 0;
         };
@@ -833,10 +906,14 @@ impl<S: ScanSource> Emulator<S> {
             }
             Done::StartStream => {
                 if self.mode == OperatingMode::Continuous && !self.resetting {
-                    self.stream = Some(Stream {
-                        start_us: end,
-                        last: None,
-                    });
+                    if self.settings.external_scans {
+                        self.external_stream = true;
+                    } else {
+                        self.stream = Some(Stream {
+                            start_us: end,
+                            last: None,
+                        });
+                    }
                     self.event(Event::StreamStarted);
                 }
             }
@@ -952,6 +1029,21 @@ impl<S: ScanSource> Emulator<S> {
                     }
                     ReplyKind::ResetAck => Reply::ResetAck,
                     ReplyKind::Unknown | ReplyKind::OneScan => Reply::UnknownCommand,
+                    ReplyKind::Extra { command, len } => {
+                        let extra = self.extra;
+                        let data = extra.get(..len).unwrap_or_default();
+                        let n = self.emit_after_ack(|buf| {
+                            emit_telegram(
+                                buf,
+                                REPLY_ADDRESS_BIT | address,
+                                command,
+                                data,
+                                Some(status),
+                            )
+                        });
+                        self.set_frame(ready_us, n.ok(), then);
+                        return;
+                    }
                 };
                 let n = self.emit_after_ack(|buf| reply.emit(address, status, buf));
                 self.set_frame(ready_us, n.ok(), then);
@@ -1079,7 +1171,7 @@ impl<S: ScanSource> Emulator<S> {
 
     /// `true` while the continuous stream runs.
     pub fn streaming(&self) -> bool {
-        self.stream.is_some()
+        self.stream.is_some() || self.external_stream
     }
 
     /// `true` between a `10` request and the `90` telegram.
