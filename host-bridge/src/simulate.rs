@@ -56,9 +56,9 @@
 //!   for (stated on stderr): a coarser variant takes every 2nd/4th beam, a
 //!   finer one repeats the nearest beam, a 100° variant takes 40°…140° of a
 //!   180° log; a 180° variant from a 100° log is refused (`BB 00`).
-//! * A capture recorded by `host-bridge scan` is recognised by its magic and
-//!   refused for now: replaying it is the job of one more [`Source`]
-//!   variant (the hook is [`Source::open`]).
+//! * `--replay CAPTURE`: a capture recorded by `host-bridge scan`
+//!   (recognised by its magic), its `B0` scans in order, looping, resampled
+//!   and converted to the units asked for like a log's.
 //!
 //! # Exit
 //!
@@ -280,8 +280,12 @@ pub struct ReplaySource {
 }
 
 impl ReplaySource {
-    /// Read a CARMEN log (error codes per file as `carmen` decides).
+    /// Read a capture recorded by `host-bridge scan` (recognised by its
+    /// magic) or a CARMEN log (error codes per file as `carmen` decides).
     pub fn open(path: &Path) -> Result<Self> {
+        if crate::capture::is_capture(path).unwrap_or(false) {
+            return Self::open_capture(path);
+        }
         let log = carmen::read_log(path, UnitMode::Auto)?;
         let first = log
             .scans
@@ -301,6 +305,38 @@ impl ReplaySource {
         Ok(ReplaySource {
             path: path.to_path_buf(),
             scans: log.scans.into_iter().map(|s| s.frame).collect(),
+            variant,
+            beams,
+            next: 0,
+            announced: HashSet::new(),
+            loops: 0,
+        })
+    }
+
+    /// The `B0` scans of a capture, as frames in metres (so they can be
+    /// resampled and re-expressed in the units the client asks for).
+    fn open_capture(path: &Path) -> Result<Self> {
+        let mut scans = Vec::new();
+        for item in crate::capture::read_frames(path)? {
+            let (_, frame, _) = item?;
+            scans.push(frame);
+        }
+        let first = scans
+            .first()
+            .with_context(|| format!("{}: no B0 scans in the capture", path.display()))?;
+        let beams = first.len();
+        let variant = Variant::from_beams(beams)
+            .with_context(|| format!("{}: {beams} values per scan", path.display()))?;
+        if let Some(i) = scans.iter().position(|f| f.len() != beams) {
+            bail!(
+                "{}: scan {i} has {} values, the first {beams}; one variant per capture",
+                path.display(),
+                scans[i].len()
+            );
+        }
+        Ok(ReplaySource {
+            path: path.to_path_buf(),
+            scans,
             variant,
             beams,
             next: 0,
@@ -390,16 +426,11 @@ impl ScanSource for ReplaySource {
 }
 
 /// Where `simulate` takes its scans from.
-///
-/// Hook for the capture replay (`crate::capture`, files recorded by
-/// `host-bridge scan`): add a variant here wrapping a [`ScanSource`] over
-/// the capture's `B0` values, a branch in [`Source::open`] (where captures
-/// are recognised and refused today) and in [`Source::describe`].
 #[derive(Debug)]
 pub enum Source {
     /// The built-in synthetic scene.
     Scene(SceneSource),
-    /// A CARMEN log.
+    /// A CARMEN log or a capture of `host-bridge scan`.
     Replay(ReplaySource),
 }
 
@@ -407,11 +438,6 @@ impl Source {
     /// The source the options ask for.
     pub fn open(args: &SimulateArgs) -> Result<Self> {
         match &args.log {
-            Some(path) if crate::capture::is_capture(path).unwrap_or(false) => bail!(
-                "{}: a capture file from `host-bridge scan`; `simulate --replay` reads only \
-                 CARMEN logs so far (hook: host_bridge::simulate::Source)",
-                path.display()
-            ),
             Some(path) => Ok(Source::Replay(ReplaySource::open(path)?)),
             None => Ok(Source::Scene(SceneSource::new(&args.scene)?)),
         }
@@ -655,6 +681,7 @@ fn describe(h: Handled) -> String {
             b.bits_per_second()
         ),
         Handled::OneScan => "30 01: one scan".into(),
+        Handled::Extra { command } => format!("{command:02X}: answered by the scan source"),
         Handled::Status => "31: status".into(),
         Handled::SensorType => "3A: sensor type".into(),
         Handled::SetVariant {

@@ -632,11 +632,17 @@ struct Simulator {
 
 impl Simulator {
     fn start(name: &str) -> Simulator {
+        let seed = SEED.to_string();
+        let count = COUNT.to_string();
+        Simulator::start_with(name, &["--seed", &seed, "--count", &count])
+    }
+
+    fn start_with(name: &str, source: &[&str]) -> Simulator {
         let dir = scratch(&format!("sim-{name}"));
         let log = dir.join("simulate.log");
         let mut child = Command::new(BIN)
             .args(["simulate", "--verbose", "--quit-after", "120"])
-            .args(["--seed", &SEED.to_string(), "--count", &COUNT.to_string()])
+            .args(source)
             .stdout(Stdio::piped())
             .stderr(std::fs::File::create(&log).unwrap())
             .spawn()
@@ -885,6 +891,51 @@ fn pty_cli_scan_writes_a_capture_that_extract_reads() {
         let rec: serde_json::Value = serde_json::from_str(line).unwrap();
         assert_eq!(rec["n"], 401);
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A capture recorded with `scan` is replayed by `simulate --replay` and
+/// scanned again: the same values come back.
+#[test]
+fn pty_capture_replayed_by_simulate_gives_the_same_scans() {
+    let dir = scratch("pty-replay");
+    let capture_path = dir.join("first.lmscap");
+    let second_path = dir.join("second.lmscap");
+    let record = |sim: &Simulator, path: &PathBuf| {
+        let out = run(&[
+            "scan",
+            "--port",
+            sim.pty.to_str().unwrap(),
+            "--baud",
+            "500000",
+            "--units",
+            "mm",
+            "--scans",
+            "4",
+            "--output",
+            path.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}\nsimulator log:\n{}",
+            String::from_utf8_lossy(&out.stderr),
+            sim.log()
+        );
+    };
+    let sim = Simulator::start("replay-source");
+    record(&sim, &capture_path);
+    drop(sim);
+    let sim = Simulator::start_with("replay", &["--replay", capture_path.to_str().unwrap()]);
+    record(&sim, &second_path);
+    let values = |p: &PathBuf| -> Vec<Vec<u16>> {
+        capture::read_values(p)
+            .unwrap()
+            .map(|s| s.unwrap().values.values().to_vec())
+            .collect()
+    };
+    let (first, second) = (values(&capture_path), values(&second_path));
+    assert_eq!(first.len(), 4);
+    assert_eq!(first, second, "the replayed scans equal the recorded ones");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
