@@ -1,0 +1,40 @@
+//! Link setup (as in cortex-m-quickstart): put the workspace's `memory.x`
+//! where cortex-m-rt's `link.x` finds it, and link with `link.x` and
+//! defmt's `defmt.x`. Also turns `LMS_EXIT_AFTER_SCANS` into a constant.
+
+use std::env;
+use std::fs;
+use std::path::PathBuf;
+
+fn main() {
+    let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    let memory_x = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets it"))
+        .join("..")
+        .join("memory.x");
+    fs::copy(&memory_x, out.join("memory.x")).expect("copy ../memory.x into OUT_DIR");
+    println!("cargo:rustc-link-search={}", out.display());
+    println!("cargo:rerun-if-changed={}", memory_x.display());
+    println!("cargo:rerun-if-changed=build.rs");
+
+    println!("cargo:rustc-link-arg-bins=--nmagic");
+    println!("cargo:rustc-link-arg-bins=-Tlink.x");
+    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+
+    // Scans after which the `exit-after-scans` build exits (semihosting, code 0).
+    println!("cargo:rerun-if-env-changed=LMS_EXIT_AFTER_SCANS");
+    let scans: u32 = match env::var("LMS_EXIT_AFTER_SCANS") {
+        Ok(s) => s
+            .trim()
+            .parse()
+            .expect("LMS_EXIT_AFTER_SCANS must be a whole number"),
+        Err(_) => 100,
+    };
+    fs::write(
+        out.join("build_config.rs"),
+        format!(
+            "/// Scans after which an `exit-after-scans` build exits (`LMS_EXIT_AFTER_SCANS` at build time).\n\
+             pub const EXIT_AFTER_SCANS: u32 = {scans};\n"
+        ),
+    )
+    .expect("write build_config.rs");
+}

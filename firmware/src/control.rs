@@ -1,0 +1,179 @@
+//! The control console on USART3 (QEMU's third `-serial`): one-byte
+//! commands, answered with one line of `key=value` text.
+//!
+//! | byte | effect |
+//! |---|---|
+//! | `s` | report (the line below, also logged) |
+//! | `q` | report, then exit through semihosting with code 0 |
+//! | anything else | ignored |
+//!
+//! The report line, all values decimal:
+//!
+//! ```text
+//! now_us=… scans=… stack_peak=… stack_size=… emulator_us=… host_rx=… host_dropped=… host_overrun=… host_line_errors=… host_peak=… sensor_rx=… sensor_dropped=… sensor_overrun=… sensor_line_errors=… sensor_peak=… scans_in=… feature_scans_out=… feature_telegrams_out=… sensor_crc_errors=… sensor_resyncs=… sensor_bytes_skipped=… host_crc_errors=… scans_dropped=… scans_rejected=…
+//! ```
+//!
+//! The last nine are the co-processor's [`Counters`] (also readable by the
+//! host with request `55`).
+//!
+//! `emulator_us` is the emulator's own clock read at the same moment
+//! (semihosting `SYS_ELAPSED` / `SYS_TICKFREQ`; QEMU: the host's monotonic
+//! clock since QEMU started), printed beside `now_us` to check the time
+//! base; 0 where semihosting has no such clock.
+
+use lms_core::telegram::features::Counters;
+
+use crate::board::{stack_usage, ControlPort, StackUsage};
+use crate::serial::RxCounts;
+
+/// What the console is asked to do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Command {
+    /// Report.
+    Report,
+    /// Report, then exit with success.
+    Quit,
+}
+
+impl Command {
+    /// The command a received byte stands for.
+    pub fn from_byte(b: u8) -> Option<Self> {
+        match b {
+            b's' => Some(Command::Report),
+            b'q' => Some(Command::Quit),
+            _ => None,
+        }
+    }
+}
+
+/// The numbers the console reports.
+#[derive(Clone, Copy, Debug, defmt::Format)]
+pub struct Report {
+    /// Time base (µs since boot).
+    pub now_us: u64,
+    /// Scans completed.
+    pub scans: u32,
+    /// The co-processor's counters.
+    pub counters: Counters,
+    /// Stack high-water mark.
+    pub stack: StackUsage,
+    /// The emulator's clock (µs), 0 if unknown.
+    pub emulator_us: u64,
+    /// Host port receive counters.
+    pub host: RxCounts,
+    /// Sensor port receive counters.
+    pub sensor: RxCounts,
+}
+
+impl Report {
+    /// Gather the numbers now.
+    pub fn collect(
+        now_us: u64,
+        scans: u32,
+        counters: Counters,
+        host: RxCounts,
+        sensor: RxCounts,
+    ) -> Self {
+        Report {
+            now_us,
+            scans,
+            counters,
+            stack: stack_usage(),
+            emulator_us: emulator_us().unwrap_or(0),
+            host,
+            sensor,
+        }
+    }
+
+    /// Write the report as one text line.
+    pub fn write_line(&self, out: &mut ControlPort) {
+        let mut w = Line { out, first: true };
+        w.field("now_us", self.now_us);
+        w.field("scans", self.scans.into());
+        w.field("stack_peak", self.stack.peak.into());
+        w.field("stack_size", self.stack.size.into());
+        w.field("emulator_us", self.emulator_us);
+        for (side, c) in [("host", &self.host), ("sensor", &self.sensor)] {
+            w.counts(side, c);
+        }
+        let c = &self.counters;
+        for (name, v) in [
+            ("scans_in", c.scans_in),
+            ("feature_scans_out", c.feature_scans_out),
+            ("feature_telegrams_out", c.feature_telegrams_out),
+            ("sensor_crc_errors", c.sensor_crc_errors),
+            ("sensor_resyncs", c.sensor_resyncs),
+            ("sensor_bytes_skipped", c.sensor_bytes_skipped),
+            ("host_crc_errors", c.host_crc_errors),
+            ("scans_dropped", c.scans_dropped),
+            ("scans_rejected", c.scans_rejected),
+        ] {
+            w.field(name, v.into());
+        }
+        w.out.write_all(b"\n");
+    }
+}
+
+/// The emulator's clock in µs (semihosting `SYS_ELAPSED` ticks at
+/// `SYS_TICKFREQ` Hz), if it has one.
+fn emulator_us() -> Option<u64> {
+    use semihosting::sys::arm_compat::{sys_elapsed, sys_tickfreq};
+    let ticks = sys_elapsed().ok()?;
+    let hz = u64::try_from(sys_tickfreq().ok()?).ok()?;
+    if hz == 0 {
+        return None;
+    }
+    Some((u128::from(ticks) * 1_000_000 / u128::from(hz)) as u64)
+}
+
+/// `key=value` fields separated by spaces.
+struct Line<'a> {
+    out: &'a mut ControlPort,
+    first: bool,
+}
+
+impl Line<'_> {
+    fn field(&mut self, key: &str, value: u64) {
+        if !self.first {
+            self.out.write_all(b" ");
+        }
+        self.first = false;
+        self.out.write_all(key.as_bytes());
+        self.out.write_all(b"=");
+        let mut digits = [0u8; 20];
+        self.out.write_all(decimal(value, &mut digits));
+    }
+
+    fn counts(&mut self, side: &str, c: &RxCounts) {
+        for (name, v) in [
+            ("rx", c.received),
+            ("dropped", c.dropped_full),
+            ("overrun", c.overrun),
+            ("line_errors", c.line_errors),
+            ("peak", c.peak_queued),
+        ] {
+            if !self.first {
+                self.out.write_all(b" ");
+            }
+            self.first = false;
+            self.out.write_all(side.as_bytes());
+            self.out.write_all(b"_");
+            self.first = true;
+            self.field(name, v.into());
+        }
+    }
+}
+
+/// `value` in decimal, in the tail of `buf` (20 digits hold any u64).
+fn decimal(mut value: u64, buf: &mut [u8; 20]) -> &[u8] {
+    let mut i = buf.len();
+    loop {
+        i -= 1;
+        buf[i] = b'0' + (value % 10) as u8;
+        value /= 10;
+        if value == 0 {
+            break;
+        }
+    }
+    &buf[i..]
+}

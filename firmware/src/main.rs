@@ -1,0 +1,207 @@
+//! Firmware for the LMS 2xx feature co-processor on an STM32F405, as QEMU's
+//! `netduinoplus2` models it. Only glue: board bring-up ([`board`]), the
+//! UARTs as `embedded-io` streams ([`serial`]), the time base ([`clock`]),
+//! a control console ([`control`]) and the loop that feeds the core's
+//! [`CoProcessor`](lms_core::coprocessor::CoProcessor) (or, with the
+//! `standin` feature, a plain forwarder, [`standin`]).
+//!
+//! Exit codes (semihosting, become QEMU's exit status): see [`EXIT_SUCCESS`]
+//! and the constants after it.
+#![no_std]
+#![no_main]
+#![deny(unsafe_code)]
+
+mod board;
+mod clock;
+mod control;
+mod serial;
+#[cfg(feature = "standin")]
+mod standin;
+
+use core::panic::PanicInfo;
+
+use cortex_m_rt::entry;
+use defmt_semihosting as _; // the global defmt logger
+
+use lms_core::coprocessor::PollError;
+
+use crate::control::{Command, Report};
+
+include!(concat!(env!("OUT_DIR"), "/build_config.rs"));
+
+/// Exit code: asked to stop (console `q`, or `exit-after-scans`).
+pub const EXIT_SUCCESS: i32 = 0;
+/// Exit code: panic.
+pub const EXIT_PANIC: i32 = 1;
+/// Exit code: hard fault.
+pub const EXIT_HARD_FAULT: i32 = 2;
+/// Exit code: an exception or interrupt without a handler.
+pub const EXIT_UNEXPECTED_IRQ: i32 = 3;
+
+/// The application the loop runs: `App`, its constructor, and its sensor
+/// bring-up step for the log.
+#[cfg(not(feature = "standin"))]
+mod app {
+    use lms_core::coprocessor::{CoProcessor, SensorSetup, Step};
+    use lms_core::Params;
+
+    pub type App = CoProcessor;
+
+    /// The co-processor with the default parameters and sensor set-up
+    /// (180°/0.5°, mm, 500 kBd).
+    pub fn new(now_us: u64) -> App {
+        let params = Params::default();
+        if let Err(e) = params.validate() {
+            defmt::error!("default parameters invalid: {}", e);
+        }
+        CoProcessor::new(params, SensorSetup::default(), now_us)
+    }
+
+    pub fn step(app: &App) -> Option<Step> {
+        Some(app.link().step())
+    }
+}
+
+#[cfg(feature = "standin")]
+mod app {
+    pub type App = crate::standin::Forwarder;
+
+    pub fn new(_now_us: u64) -> App {
+        App::new()
+    }
+
+    pub fn step(_app: &App) -> Option<lms_core::coprocessor::Step> {
+        None
+    }
+}
+
+/// The application's state (about 20 KiB): a static, not on the stack.
+static APP: static_cell::StaticCell<app::App> = static_cell::StaticCell::new();
+
+defmt::timestamp!("{=u64:us}", clock::now_us());
+
+#[entry]
+fn main() -> ! {
+    let Some(board::Board {
+        mut host,
+        mut sensor,
+        mut control,
+    }) = board::init()
+    else {
+        defmt::panic!("board::init called twice");
+    };
+    let app = init_app();
+    // From here on the stack report covers the loop only.
+    let boot_stack = board::repaint_stack();
+    defmt::info!(
+        "lms-firmware {=str} ready: host=USART1 (rx queue {=usize} B), sensor=USART2 (rx queue {=usize} B), control=USART3; start-up stack peak {=u32} B",
+        env!("CARGO_PKG_VERSION"),
+        host.rx_capacity(),
+        sensor.rx_capacity(),
+        boot_stack.peak
+    );
+
+    let mut scans: u32 = 0;
+    let mut sensor_losses_seen = 0;
+    let mut step = None;
+    loop {
+        let now_us = clock::now_us();
+        // `scan_begin` opens every poll, `scan_end` closes only a poll that
+        // processed a scan: an instruction counter that measures from the
+        // last begin to each end sees exactly the polls that carried scans.
+        board::scan_begin();
+        match app.poll(&mut sensor, &mut host, now_us) {
+            Ok(outcome) => {
+                if outcome.scans > 0 {
+                    board::scan_end();
+                    scans = scans.wrapping_add(outcome.scans);
+                }
+                if let Some(baud) = outcome.sensor_baud {
+                    defmt::info!("sensor line to {=u32} Bd", baud.bits_per_second());
+                    sensor.set_baud(baud.bits_per_second());
+                }
+                if let Some(baud) = outcome.host_baud {
+                    defmt::info!("host line to {=u32} Bd", baud.bits_per_second());
+                    host.set_baud(baud.bits_per_second());
+                }
+            }
+            Err(PollError::Sensor(never) | PollError::Host(never)) => match never {},
+        }
+        let losses = sensor.rx_counts().lost();
+        if losses != sensor_losses_seen {
+            sensor_losses_seen = losses;
+            defmt::warn!("sensor receive queue lost bytes ({=u32} so far)", losses);
+            app.note_sensor_overflow();
+        }
+        let now_step = app::step(app);
+        if now_step != step {
+            step = now_step;
+            if let Some(s) = step {
+                defmt::info!("sensor bring-up: {}", s);
+            }
+        }
+
+        let report = || {
+            Report::collect(
+                clock::now_us(),
+                scans,
+                app.counters(),
+                host.rx_counts(),
+                sensor.rx_counts(),
+            )
+        };
+        if let Some(command) = control.try_read().and_then(Command::from_byte) {
+            let r = report();
+            defmt::info!("{}", r);
+            r.write_line(&mut control);
+            if command == Command::Quit {
+                defmt::info!("exit on console command");
+                semihosting::process::exit(EXIT_SUCCESS);
+            }
+        }
+        if cfg!(feature = "exit-after-scans") && scans >= EXIT_AFTER_SCANS {
+            let r = report();
+            defmt::info!("{}", r);
+            r.write_line(&mut control);
+            defmt::info!("exit after {=u32} scans", scans);
+            semihosting::process::exit(EXIT_SUCCESS);
+        }
+
+        // Sleep until the next interrupt (at the latest the next SysTick,
+        // 1 ms) unless bytes are already waiting. Interrupts are masked
+        // while deciding, so one that arrives in between still wakes WFI.
+        critical_section::with(|_| {
+            if host.rx_pending() == 0 && sensor.rx_pending() == 0 {
+                cortex_m::asm::wfi();
+            }
+        });
+    }
+}
+
+/// Build the application in its static. Not inlined: the value may be built
+/// on the stack first (`CoProcessor::new` is not `const`), and that space
+/// must be given back before the loop, not stay reserved in `main`'s frame.
+#[inline(never)]
+fn init_app() -> &'static mut app::App {
+    APP.init_with(|| app::new(clock::now_us()))
+}
+
+#[panic_handler]
+fn panic(info: &PanicInfo) -> ! {
+    let message = info.message().as_str().unwrap_or("(formatted message)");
+    match info.location() {
+        Some(l) => defmt::error!(
+            "panic at {=str}:{=u32}: {=str}",
+            l.file(),
+            l.line(),
+            message
+        ),
+        None => defmt::error!("panic: {=str}", message),
+    }
+    semihosting::process::exit(EXIT_PANIC)
+}
+
+#[defmt::panic_handler]
+fn defmt_panic() -> ! {
+    semihosting::process::exit(EXIT_PANIC)
+}
