@@ -9,8 +9,9 @@
 //! D = vᵀ·S⁻¹·v         K = P̂·S⁻¹            x⁺ = x̂ + K·v
 //! ```
 //!
-//! `K·v` is evaluated as `P̂·(S⁻¹·v)`, which is the same product associated
-//! so that `S⁻¹·v` serves both `D` and the update.
+//! With `u = S⁻¹·v` (solved once, it serves `D = vᵀ·u` too), the update is
+//! evaluated as `x⁺ = z − sigma²·u`, which equals `x̂ + K·v`:
+//! `K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·u` and `x̂ + v = z`.
 
 use crate::line_model::{predict_unchecked, Prediction};
 use crate::maths::{Sym3, Vec3};
@@ -88,10 +89,14 @@ impl WindowFilter {
         let v = z - pred.f;
         let (u, solvable) = s.solve_spd_unchecked(v); // S⁻¹·v
         let d = v.dot(u);
-        let posterior = pred.f + p_hat.mul_vec(u); // x̂ + P̂·S⁻¹·v
+        // x⁺ = x̂ + K·v with K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·u,
+        // so x⁺ = z − sigma²·u: the same quantity without the 3×3 product.
+        let posterior = z - Vec3([self.r * u.0[0], self.r * u.0[1], self.r * u.0[2]]);
         let [x0, x1, x2] = posterior.0;
-        // Overflow or NaN anywhere upstream propagates into these.
-        let finite = d.is_finite() && x0.is_finite() && x1.is_finite() && x2.is_finite();
+        // Overflow or NaN anywhere upstream propagates into the sum (a sum
+        // that overflows marks the window invalid too: D or a range near
+        // f32::MAX is no estimate).
+        let finite = (d + x0 + x1 + x2).is_finite();
         // D is a quadratic form with S⁻¹ positive definite: clamp the
         // rounding of a near-zero result to 0.
         let mahalanobis = if d < 0.0 { 0.0 } else { d };

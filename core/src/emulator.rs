@@ -231,15 +231,20 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings {
-            address: DEFAULT_ADDRESS,
-            variant: Variant::Fov180Res100,
-            config: Config::default(),
-            status: DEFAULT_STATUS,
-            restart_us: DEFAULT_RESTART_US,
-            external_scans: false,
-        }
+        Settings::DEFAULT
     }
+}
+
+impl Settings {
+    /// The defaults, usable in `const` contexts.
+    pub const DEFAULT: Settings = Settings {
+        address: DEFAULT_ADDRESS,
+        variant: Variant::Fov180Res100,
+        config: Config::ZERO,
+        status: DEFAULT_STATUS,
+        restart_us: DEFAULT_RESTART_US,
+        external_scans: false,
+    };
 }
 
 /// The operating mode (the `B1` mode byte, payload `[8]`).
@@ -388,6 +393,23 @@ pub struct EmulatorStats {
     /// Replies that could not be written (cannot happen; counted, not
     /// panicked on).
     pub emit_errors: u32,
+}
+
+impl EmulatorStats {
+    /// All counters at zero (`const`).
+    pub const ZERO: EmulatorStats = EmulatorStats {
+        requests: 0,
+        naks: 0,
+        ignored: 0,
+        dropped_requests: 0,
+        abandoned: 0,
+        ignored_bytes: 0,
+        scans_sent: 0,
+        scans_skipped: 0,
+        bytes_sent: 0,
+        events_dropped: 0,
+        emit_errors: 0,
+    };
 }
 
 /// A reply as decided when its request arrived.
@@ -543,9 +565,18 @@ impl<S: ScanSource> Emulator<S> {
     /// A sensor switched on at `now_us`: 9600 Bd, mode `25`, the `90`
     /// telegram queued.
     pub fn new(source: S, settings: Settings, now_us: u64) -> Self {
+        let mut emulator = Emulator::off(source, settings);
+        emulator.power_on(now_us);
+        emulator
+    }
+
+    /// A sensor not yet switched on: silent until [`Emulator::power_on`].
+    /// `const`, so an emulator can be placed in a `static` without passing
+    /// through the stack.
+    pub const fn off(source: S, settings: Settings) -> Self {
         let mut settings = settings;
         settings.address &= 0x7F;
-        let mut emulator = Emulator {
+        Emulator {
             source,
             settings,
             baud: Baud::B9600,
@@ -553,7 +584,7 @@ impl<S: ScanSource> Emulator<S> {
             variant: settings.variant,
             config: settings.config,
             framer: Framer::new(Direction::HostToSensor, false),
-            last_rx_us: now_us,
+            last_rx_us: 0,
             resetting: false,
             restart_at_us: None,
             pending: Deque::new(),
@@ -563,15 +594,13 @@ impl<S: ScanSource> Emulator<S> {
             tx: [0; TX_CAPACITY],
             tx_len: 0,
             tx_sent: 0,
-            tx_start_us: now_us,
+            tx_start_us: 0,
             tx_done: Done::Nothing,
-            line_free_us: now_us,
+            line_free_us: 0,
             scan: [0; MAX_VALUES],
             events: Deque::new(),
-            stats: EmulatorStats::default(),
-        };
-        emulator.power_on(now_us);
-        emulator
+            stats: EmulatorStats::ZERO,
+        }
     }
 
     /// Switch the sensor off and on at `now_us`: whatever was queued or on

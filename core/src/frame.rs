@@ -244,6 +244,29 @@ impl Frame {
         })
     }
 
+    /// A placeholder frame (3 invalid beams, 1 rad apart) to be filled in
+    /// place later with [`Frame::reset`]; `const`, for a `static`.
+    pub const fn empty() -> Self {
+        Frame {
+            geometry: Geometry {
+                first_bearing: 0.0,
+                step: 1.0,
+            },
+            len: MIN_BEAMS,
+            ranges: [0.0; MAX_BEAMS],
+            beams: [Beam::Invalid(Invalid::NoEcho); MAX_BEAMS],
+        }
+    }
+
+    /// Make this frame an all-invalid frame of `variant`, in place (no
+    /// 3 KiB temporary on the stack).
+    pub fn reset(&mut self, variant: Variant) {
+        self.geometry = variant.geometry();
+        self.len = variant.beams();
+        self.ranges.fill(0.0);
+        self.beams.fill(Beam::Invalid(Invalid::NoEcho));
+    }
+
     /// A frame of the given LMS variant, all beams invalid until set.
     pub fn for_variant(variant: Variant) -> Self {
         // Variants always have a valid beam count and geometry.

@@ -45,22 +45,27 @@ pub struct Params {
 
 impl Default for Params {
     fn default() -> Self {
-        Params {
-            sigma: 0.005,
-            q: 0.0,
-            iterations: 30,
-            tau: 9.0,
-            min_points: 5,
-            max_chi2: 4.0,
-            min_length: 0.1,
-            fit_shared_points: true,
-            merge: true,
-            merge_gap_beams: 3,
-            merge_gate: 9.21,
-            corner_gap: 0.2,
-            min_corner_angle_deg: 30.0,
-        }
+        Params::DEFAULT
     }
+}
+
+impl Params {
+    /// The defaults of ALGORITHM.md, usable in `const` contexts.
+    pub const DEFAULT: Params = Params {
+        sigma: 0.005,
+        q: 0.0,
+        iterations: 30,
+        tau: 9.0,
+        min_points: 5,
+        max_chi2: 4.0,
+        min_length: 0.1,
+        fit_shared_points: true,
+        merge: true,
+        merge_gap_beams: 3,
+        merge_gate: 9.21,
+        corner_gap: 0.2,
+        min_corner_angle_deg: 30.0,
+    };
 }
 
 /// Largest accepted number of smoothing passes.

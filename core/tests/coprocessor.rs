@@ -103,7 +103,11 @@ impl Bench {
         let source: RoomSource = Box::new(move |v, u, out| room_scan(&mut seed, v, u, out));
         Bench {
             lms: Emulator::new(FnSource(source), Settings::default(), 0),
-            cop: CoProcessor::new(Params::default(), SensorSetup::default(), 0),
+            cop: {
+                let mut cop = CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT);
+                cop.start(0);
+                cop
+            },
             sensor: Port::default(),
             host: Port::default(),
             now: 0,

@@ -48,10 +48,10 @@ pub const CONTROL_BAUD: u32 = 115_200;
 
 /// Slots of the host receive queue (holds one less byte): requests are short.
 pub const HOST_RX_SLOTS: usize = 1024;
-/// Slots of the sensor receive queue (holds one less byte): eleven 732-byte
-/// scans, i.e. ~290 ms of a 500 kBd stream, for a loop that is busy with a
-/// scan for tens of milliseconds.
-pub const SENSOR_RX_SLOTS: usize = 8192;
+/// Slots of the sensor receive queue (holds one less byte): five 732-byte
+/// scans, i.e. ~80 ms of a 500 kBd stream (50 kB/s), for a loop that is
+/// busy with one scan for ~20–30 ms (3.3 M instructions at 168 MHz).
+pub const SENSOR_RX_SLOTS: usize = 4096;
 
 /// The host port (USART1).
 pub type HostPort = Serial<pac::USART1>;

@@ -48,13 +48,15 @@ mod app {
     pub type App = CoProcessor;
 
     /// The co-processor with the default parameters and sensor set-up
-    /// (180°/0.5°, mm, 500 kBd).
-    pub fn new(now_us: u64) -> App {
-        let params = Params::default();
-        if let Err(e) = params.validate() {
+    /// (180°/0.5°, mm, 500 kBd), built at compile time into `.bss`/`.data`.
+    pub const INITIAL: App = CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT);
+
+    /// Switch it on: its host side sends the LMS power-on telegram.
+    pub fn start(app: &mut App, now_us: u64) {
+        if let Err(e) = Params::DEFAULT.validate() {
             defmt::error!("default parameters invalid: {}", e);
         }
-        CoProcessor::new(params, SensorSetup::default(), now_us)
+        app.start(now_us);
     }
 
     pub fn step(app: &App) -> Option<Step> {
@@ -66,17 +68,19 @@ mod app {
 mod app {
     pub type App = crate::standin::Forwarder;
 
-    pub fn new(_now_us: u64) -> App {
-        App::new()
-    }
+    pub const INITIAL: App = App::new();
+
+    pub fn start(_app: &mut App, _now_us: u64) {}
 
     pub fn step(_app: &App) -> Option<lms_core::coprocessor::Step> {
         None
     }
 }
 
-/// The application's state (about 20 KiB): a static, not on the stack.
-static APP: static_cell::StaticCell<app::App> = static_cell::StaticCell::new();
+/// The application's state (about 20 KiB): a static built at compile time,
+/// so it never passes through the stack.
+static APP: static_cell::ConstStaticCell<app::App> =
+    static_cell::ConstStaticCell::new(app::INITIAL);
 
 defmt::timestamp!("{=u64:us}", clock::now_us());
 
@@ -178,12 +182,12 @@ fn main() -> ! {
     }
 }
 
-/// Build the application in its static. Not inlined: the value may be built
-/// on the stack first (`CoProcessor::new` is not `const`), and that space
-/// must be given back before the loop, not stay reserved in `main`'s frame.
+/// Take the application out of its static and switch it on.
 #[inline(never)]
 fn init_app() -> &'static mut app::App {
-    APP.init_with(|| app::new(clock::now_us()))
+    let app = APP.take();
+    app::start(app, clock::now_us());
+    app
 }
 
 #[panic_handler]

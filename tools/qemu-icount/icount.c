@@ -11,7 +11,8 @@
  * `scan_end` functions (nm lms-firmware | grep scan_). Every executed guest
  * instruction increments one counter (inline, exact); the instruction at
  * `begin` records the counter, the one at `end` takes the difference. At
- * exit it prints one line per measured interval and a summary:
+ * exit it prints one line per measured interval and a summary (with
+ * profile=1 also instructions per translation block inside the intervals):
  *   icount: scans=N min=.. max=.. mean=.. (after skipping the first `skip`)
  */
 #include <inttypes.h>
@@ -53,9 +54,44 @@ static int open_interval;
 static uint64_t intervals[MAX_INTERVALS];
 static size_t n_intervals, skip;
 
+/* profile=1: instructions executed inside measured intervals, per
+ * translation block start address (a flat profile to map with addr2line). */
+#define MAX_BLOCKS 65536
+static int profile;
+static uint64_t block_pc[MAX_BLOCKS], block_insns[MAX_BLOCKS], block_hits[MAX_BLOCKS];
+/* Hits in the open interval, kept apart until `end` confirms it. */
+static uint64_t pending_hits[MAX_BLOCKS];
+static size_t touched[MAX_BLOCKS], n_touched;
+static size_t n_blocks;
+
+static void on_block(unsigned int vcpu, void *udata)
+{
+    (void)vcpu;
+    size_t slot = (size_t)(uintptr_t)udata;
+    if (open_interval) {
+        if (pending_hits[slot]++ == 0 && n_touched < MAX_BLOCKS) {
+            touched[n_touched++] = slot;
+        }
+    }
+}
+
+/* Move (keep = 1) or drop (keep = 0) the open interval's block hits. */
+static void settle_profile(int keep)
+{
+    for (size_t i = 0; i < n_touched; i++) {
+        size_t slot = touched[i];
+        if (keep) {
+            block_hits[slot] += pending_hits[slot];
+        }
+        pending_hits[slot] = 0;
+    }
+    n_touched = 0;
+}
+
 static void on_begin(unsigned int vcpu, void *udata)
 {
     (void)vcpu; (void)udata;
+    settle_profile(0);
     started_at = executed;
     open_interval = 1;
 }
@@ -66,6 +102,7 @@ static void on_end(unsigned int vcpu, void *udata)
     if (open_interval && n_intervals < MAX_INTERVALS) {
         intervals[n_intervals++] = executed - started_at;
     }
+    settle_profile(open_interval && n_intervals > skip);
     open_interval = 0;
 }
 
@@ -73,6 +110,13 @@ static void on_translate(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
 {
     (void)id;
     size_t n = qemu_plugin_tb_n_insns(tb);
+    if (profile && n > 0 && n_blocks < MAX_BLOCKS) {
+        struct qemu_plugin_insn *first = qemu_plugin_tb_get_insn(tb, 0);
+        size_t slot = n_blocks++;
+        block_pc[slot] = qemu_plugin_insn_vaddr(first);
+        block_insns[slot] = n;
+        qemu_plugin_register_vcpu_insn_exec_cb(first, on_block, QEMU_PLUGIN_CB_NO_REGS, (void *)(uintptr_t)slot);
+    }
     for (size_t i = 0; i < n; i++) {
         struct qemu_plugin_insn *insn = qemu_plugin_tb_get_insn(tb, i);
         uint64_t pc = qemu_plugin_insn_vaddr(insn);
@@ -109,6 +153,15 @@ static void at_exit(qemu_plugin_id_t id, void *udata)
              "icount: scans=%zu min=%" PRIu64 " max=%" PRIu64 " mean=%" PRIu64 " total=%" PRIu64 "\n",
              used, min, max, used ? sum / used : 0, executed);
     qemu_plugin_outs(line);
+    if (profile) {
+        for (size_t i = 0; i < n_blocks; i++) {
+            if (block_hits[i] > 0) {
+                snprintf(line, sizeof line, "icount: block 0x%08" PRIx64 " insns %" PRIu64 " hits %" PRIu64 " total %" PRIu64 "\n",
+                         block_pc[i], block_insns[i], block_hits[i], block_insns[i] * block_hits[i]);
+                qemu_plugin_outs(line);
+            }
+        }
+    }
 }
 
 QEMU_PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_t *info, int argc, char **argv)
@@ -119,6 +172,8 @@ QEMU_PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_
             begin_addr = strtoull(argv[i] + 6, NULL, 0);
         } else if (strncmp(argv[i], "end=", 4) == 0) {
             end_addr = strtoull(argv[i] + 4, NULL, 0);
+        } else if (strncmp(argv[i], "profile=", 8) == 0) {
+            profile = atoi(argv[i] + 8);
         } else if (strncmp(argv[i], "skip=", 5) == 0) {
             skip = (size_t)strtoull(argv[i] + 5, NULL, 0);
         } else {

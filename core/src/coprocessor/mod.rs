@@ -26,7 +26,7 @@ use crate::telegram::features::{emit_features, Counters, EchoedParams, REQ_COUNT
 use crate::telegram::{
     Baud, Direction, MeasuredView, RangeBits, Telegram, Units, MAX_TELEGRAM_LEN, MAX_VALUES,
 };
-use crate::Variant;
+use crate::{Frame, Variant};
 
 pub use sensor_link::{LinkEvent, SensorLink, SensorSetup, Step};
 
@@ -123,29 +123,38 @@ pub struct CoProcessor {
     /// Features of the latest scan, ready for a `30 01`.
     have_features: bool,
     beams: u16,
+    /// The latest scan in metres, decoded in place.
+    frame: Frame,
 }
 
 impl CoProcessor {
     /// A co-processor with validated `params` that will bring the sensor up
-    /// with `setup`; `now_us` is the power-on time of its host-side face.
-    pub fn new(params: Params, setup: SensorSetup, now_us: u64) -> Self {
-        let settings = Settings {
-            variant: setup.variant,
-            external_scans: true,
-            ..Settings::default()
-        };
+    /// with `setup`. `const`, so it can be placed in a `static` without
+    /// passing through the stack; call [`CoProcessor::start`] before the
+    /// first poll.
+    pub const fn new(params: Params, setup: SensorSetup) -> Self {
+        let mut settings = Settings::DEFAULT;
+        settings.variant = setup.variant;
+        settings.external_scans = true;
         let mut latest = LatestScan::new();
         latest.variant = setup.variant;
         CoProcessor {
             params,
             link: SensorLink::new(setup),
             extractor: Extractor::new(),
-            host: Emulator::new(latest, settings, now_us),
-            counters: Counters::default(),
+            host: Emulator::off(latest, settings),
+            counters: LatestScan::new().counters,
             scan_counter: 0,
             have_features: false,
             beams: 0,
+            frame: Frame::empty(),
         }
+    }
+
+    /// Switch the host-side face on at `now_us`: like an LMS at power-on it
+    /// sends the `90` telegram to the client.
+    pub fn start(&mut self, now_us: u64) {
+        self.host.power_on(now_us);
     }
 
     /// The counters (also readable by the host with request `55`).
@@ -267,14 +276,12 @@ impl CoProcessor {
         self.counters.scans_in = self.counters.scans_in.wrapping_add(1);
         self.scan_counter = self.counters.scans_in;
         let bytes = self.link.scan_bytes();
-        let frame = Telegram::new_checked(bytes, Direction::SensorToHost)
+        let frame = &mut self.frame;
+        let measured = Telegram::new_checked(bytes, Direction::SensorToHost)
             .ok()
-            .and_then(|t| {
-                MeasuredView::parse(&t)
-                    .ok()
-                    .map(|m| (m, m.to_frame(RangeBits::Bits13)))
-            });
-        let Some((measured, Ok(frame))) = frame else {
+            .and_then(|t| MeasuredView::parse(&t).ok())
+            .filter(|m| m.to_frame_into(RangeBits::Bits13, frame).is_ok());
+        let Some(measured) = measured else {
             self.counters.scans_rejected = self.counters.scans_rejected.wrapping_add(1);
             self.have_features = false;
             return Ok(());
@@ -286,8 +293,8 @@ impl CoProcessor {
             *slot = word;
             latest.count += 1;
         }
-        self.beams = frame.len() as u16;
-        if self.extractor.run(&frame, &self.params).is_err() {
+        self.beams = self.frame.len() as u16;
+        if self.extractor.run(&self.frame, &self.params).is_err() {
             self.counters.scans_rejected = self.counters.scans_rejected.wrapping_add(1);
             self.have_features = false;
             return Ok(());

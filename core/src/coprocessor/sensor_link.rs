@@ -36,12 +36,17 @@ pub struct SensorSetup {
 
 impl Default for SensorSetup {
     fn default() -> Self {
-        SensorSetup {
-            variant: Variant::Fov180Res50,
-            units: Units::Millimetre,
-            baud: Baud::B500000,
-        }
+        SensorSetup::DEFAULT
     }
+}
+
+impl SensorSetup {
+    /// 180°/0.5°, mm, 500000 Bd (`const`).
+    pub const DEFAULT: SensorSetup = SensorSetup {
+        variant: Variant::Fov180Res50,
+        units: Units::Millimetre,
+        baud: Baud::B500000,
+    };
 }
 
 /// Steps of the bring-up.

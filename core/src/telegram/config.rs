@@ -28,13 +28,15 @@ pub struct Config {
 impl Default for Config {
     /// All bytes 0: no blanking, no real-time indices, mode 0, cm.
     fn default() -> Self {
-        Config {
-            bytes: [0; CONFIG_LEN],
-        }
+        Config::ZERO
     }
 }
 
 impl Config {
+    /// All bytes 0 (`const` form of the default).
+    pub const ZERO: Config = Config {
+        bytes: [0; CONFIG_LEN],
+    };
     /// Byte offset of the blanking word.
     pub const BLANKING: usize = 0;
     /// Byte offset of the availability byte.

@@ -265,8 +265,21 @@ fn words_to_frame(
     units: Units,
     bits: RangeBits,
 ) -> Result<Frame, MeasuredError> {
+    let mut frame = Frame::empty();
+    words_into_frame(count, words, units, bits, &mut frame)?;
+    Ok(frame)
+}
+
+/// Fill `frame` in place from value words; on error it is left unchanged.
+fn words_into_frame(
+    count: usize,
+    words: impl Iterator<Item = u16>,
+    units: Units,
+    bits: RangeBits,
+    frame: &mut Frame,
+) -> Result<(), MeasuredError> {
     let variant = Variant::from_beams(count).ok_or(MeasuredError::UnsupportedCount { count })?;
-    let mut frame = Frame::for_variant(variant);
+    frame.reset(variant);
     let per_metre = units.per_metre();
     for (j, word) in words.take(count).enumerate() {
         match bits.decode(word) {
@@ -274,7 +287,7 @@ fn words_to_frame(
             Err(why) => frame.set_invalid(j, why),
         }
     }
-    Ok(frame)
+    Ok(())
 }
 
 /// The `B0` data (count word + values) read in place.
@@ -356,6 +369,11 @@ impl<'a> MeasuredView<'a> {
     /// A frame in metres with `bits` range bits (see the [module docs](self)).
     pub fn to_frame(&self, bits: RangeBits) -> Result<Frame, MeasuredError> {
         words_to_frame(self.count(), self.words(), self.units(), bits)
+    }
+
+    /// [`MeasuredView::to_frame`] into an existing frame (no temporary).
+    pub fn to_frame_into(&self, bits: RangeBits, frame: &mut Frame) -> Result<(), MeasuredError> {
+        words_into_frame(self.count(), self.words(), self.units(), bits, frame)
     }
 
     /// An owned copy, with the telegram's status byte.
