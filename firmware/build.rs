@@ -29,11 +29,24 @@ fn main() {
             .expect("LMS_EXIT_AFTER_SCANS must be a whole number"),
         Err(_) => 100,
     };
+    // Smoothing passes (the first scale parameter) of this build: the
+    // default of ALGORITHM.md unless `LMS_ITERATIONS` says otherwise (the
+    // budget measurements build with 1 and 30).
+    println!("cargo:rerun-if-env-changed=LMS_ITERATIONS");
+    let iterations: u16 = match env::var("LMS_ITERATIONS") {
+        Ok(s) => s
+            .trim()
+            .parse()
+            .expect("LMS_ITERATIONS must be a whole number 1..=1000"),
+        Err(_) => 30,
+    };
     fs::write(
         out.join("build_config.rs"),
         format!(
             "/// Scans after which an `exit-after-scans` build exits (`LMS_EXIT_AFTER_SCANS` at build time).\n\
-             pub const EXIT_AFTER_SCANS: u32 = {scans};\n"
+             pub const EXIT_AFTER_SCANS: u32 = {scans};\n\
+             /// Smoothing passes (`LMS_ITERATIONS` at build time, default 30).\n\
+             pub const ITERATIONS: u16 = {iterations};\n"
         ),
     )
     .expect("write build_config.rs");

@@ -49,11 +49,18 @@ mod app {
 
     /// The co-processor with the default parameters and sensor set-up
     /// (180°/0.5°, mm, 500 kBd), built at compile time into `.bss`/`.data`.
-    pub const INITIAL: App = CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT);
+    pub const INITIAL: App = CoProcessor::new(PARAMS, SensorSetup::DEFAULT);
+
+    /// The defaults of ALGORITHM.md with the passes of this build.
+    const PARAMS: Params = {
+        let mut p = Params::DEFAULT;
+        p.iterations = crate::ITERATIONS;
+        p
+    };
 
     /// Switch it on: its host side sends the LMS power-on telegram.
     pub fn start(app: &mut App, now_us: u64) {
-        if let Err(e) = Params::DEFAULT.validate() {
+        if let Err(e) = PARAMS.validate() {
             defmt::error!("default parameters invalid: {}", e);
         }
         app.start(now_us);

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Measure the firmware's budgets (issue: firmware under QEMU), reproducibly:
+#   flash = .text + .rodata (+ .vector_table), static RAM = .data + .bss,
+#   peak stack (painted stack, read back by the console report),
+#   guest instructions per scan at 1 and 30 passes, default and fast-math,
+#   counted exactly by tools/qemu-icount between `scan_begin` and `scan_end`.
+# Usage: firmware/budgets.sh   (needs qemu-system-arm, gcc, python3, binutils)
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+cd "$here"
+elf=target/thumbv7em-none-eabihf/release/lms-firmware
+mkdir -p target
+gcc -O2 -shared -fPIC -Wall -o target/icount.so ../tools/qemu-icount/icount.c
+
+section() { size -A "$elf" | awk -v s="$1" '$1 == s { print $2 }'; }
+
+measure() { # label, then cargo build arguments
+  local label="$1"; shift
+  cargo build -q --release "$@"
+  local begin end
+  begin=$(nm "$elf" | awk '/ T scan_begin$/ { print "0x" $1 }')
+  end=$(nm "$elf" | awk '/ T scan_end$/ { print "0x" $1 }')
+  rm -f target/icount.log
+  QEMU_EXTRA="-plugin $here/target/icount.so,begin=$begin,end=$end,skip=1 -d plugin -D $here/target/icount.log" \
+    ./qemu-smoke.py > target/budget-smoke.txt 2>&1 || { cat target/budget-smoke.txt; exit 1; }
+  local counts stack
+  counts=$(grep 'scans=' target/icount.log | sed 's/icount: //')
+  stack=$(grep -o 'stack peak reported: [0-9]* of [0-9]* bytes' target/budget-smoke.txt | awk '{print $4}')
+  printf '%-22s %s, loop stack peak %s B\n' "$label" "$counts" "$stack"
+}
+
+cargo build -q --release
+text=$(section .text); rodata=$(section .rodata); vt=$(section .vector_table)
+data=$(section .data); bss=$(section .bss)
+kib() { awk -v b="$1" 'BEGIN { printf "%.1f", b / 1024 }'; }
+flash=$((vt + text + rodata)); ram=$((data + bss))
+echo "flash (.vector_table + .text + .rodata): $flash B ($(kib $flash) KiB; goal <= 64 KiB)"
+echo "static RAM (.data + .bss): $ram B ($(kib $ram) KiB; goal <= 16 KiB); .data image in flash: $data B"
+LMS_ITERATIONS=30 measure "30 passes" 
+LMS_ITERATIONS=1 measure "1 pass"
+LMS_ITERATIONS=30 measure "30 passes, fast-math" --features fast-math
+LMS_ITERATIONS=30 cargo build -q --release
