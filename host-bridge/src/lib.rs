@@ -11,6 +11,8 @@
 //! 5. The sensor side: [`client`] (an LMS 2xx client over a serial link),
 //!    [`fake_sensor`] (its in-memory test double), [`scan`] (the `scan`
 //!    session) and [`capture`] (the file format of recorded scans).
+//! 6. [`verify`] — a co-processor (in a thread, under QEMU, or on serial
+//!    ports) checked bit for bit against the std build.
 //!
 //! The binary `host-bridge` (src/main.rs) wires these into subcommands.
 #![forbid(unsafe_code)]
@@ -27,3 +29,4 @@ pub mod pty;
 pub mod scan;
 pub mod simulate;
 pub mod synthetic;
+pub mod verify;

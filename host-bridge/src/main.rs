@@ -1,11 +1,12 @@
 //! `host-bridge`: the host tool of the LMS 2xx feature co-processor.
 //!
-//! Subcommands (more to come: `verify`):
+//! Subcommands:
 //!
 //! * `extract` — features of a CARMEN log, a capture or a synthetic scene, as JSON Lines.
 //! * `plot` — figures of one frame (see `host_bridge::plot`).
 //! * `scan` — record scans from a sensor into a capture file (see `host_bridge::scan`).
 //! * `simulate` — a simulated LMS 2xx on a pseudo-terminal (see `host_bridge::simulate`).
+//! * `verify` — check a co-processor's features bit for bit (see `host_bridge::verify`).
 
 use std::fs::File;
 use std::io::{self, Write};
@@ -47,6 +48,10 @@ enum Command {
     /// Simulate an LMS 2xx on a pseudo-terminal: prints the device path,
     /// answers a real client, streams synthetic or replayed scans
     Simulate(host_bridge::simulate::SimulateArgs),
+    /// Check a co-processor (in a thread, under QEMU, or on two serial
+    /// ports): play the sensor, be its client, recompute every scan's
+    /// features and compare them bit for bit
+    Verify(host_bridge::verify::VerifyArgs),
 }
 
 #[derive(Args, Debug)]
@@ -82,6 +87,7 @@ fn main() -> ExitCode {
         Command::Plot(args) => host_bridge::plot::run(&args),
         Command::Scan(args) => host_bridge::scan::run(&args),
         Command::Simulate(args) => host_bridge::simulate::run(&args),
+        Command::Verify(args) => host_bridge::verify::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,150 @@
+//! `host-bridge verify --host`: the core's co-processor in a thread behind
+//! two pseudo-terminals, driven from both lines by the verify command, on
+//! synthetic and real (CSAIL) scans; and a deliberately wrong recomputation
+//! that must make it fail, so that the check is seen to be able to fail.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::Instant;
+
+const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+
+/// Run `host-bridge verify ARGS`; prints its output (shown on failure).
+fn verify(args: &[&str]) -> Output {
+    let started = Instant::now();
+    let out = Command::new(BIN)
+        .arg("verify")
+        .args(args)
+        .output()
+        .expect("cannot start host-bridge");
+    println!(
+        "$ host-bridge verify {} ({:.1} s, {})\n{}{}",
+        args.join(" "),
+        started.elapsed().as_secs_f64(),
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn csail() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/carmen/csail-corrected.log.gz")
+}
+
+/// The summary says `n/n scans bit-identical; 0 lost`.
+fn assert_all_identical(out: &Output, n: usize) {
+    let text = stdout(out);
+    assert!(out.status.success(), "verify failed:\n{text}");
+    assert!(
+        text.contains(&format!("{n}/{n} scans bit-identical; 0 lost")),
+        "{text}"
+    );
+    assert!(!text.contains("MISMATCH"), "{text}");
+    assert!(text.contains("co-processor counters: scans_in="), "{text}");
+}
+
+#[test]
+fn verify_host_synthetic_scans_are_bit_identical() {
+    let out = verify(&["--host", "--count", "30", "--timeout", "30"]);
+    assert_all_identical(&out, 30);
+}
+
+#[test]
+fn verify_host_csail_frames_are_bit_identical() {
+    let log = csail();
+    if !log.exists() {
+        println!("skipped: no CSAIL log at {}", log.display());
+        return;
+    }
+    let out = verify(&[
+        "--host",
+        "--replay",
+        log.to_str().unwrap(),
+        "--frames",
+        "100..120",
+        "--timeout",
+        "30",
+    ]);
+    assert_all_identical(&out, 20);
+}
+
+#[test]
+fn verify_host_fails_on_a_wrong_recomputation() {
+    // tau 9 on the co-processor, 3 in the recomputation: segmentation
+    // differs, so every scan with structure mismatches.
+    let out = verify(&[
+        "--host",
+        "--count",
+        "5",
+        "--timeout",
+        "30",
+        "--recompute-tau",
+        "3",
+    ]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    let mismatch = text
+        .lines()
+        .find(|l| l.starts_with("MISMATCH scan "))
+        .unwrap_or_else(|| panic!("no mismatch line:\n{text}"));
+    // Scan counter, item, field, both values as bits and decimal.
+    assert!(mismatch.contains("co-processor 0x"), "{mismatch}");
+    assert!(mismatch.contains(", recomputed 0x"), "{mismatch}");
+    assert!(text.contains("scans bit-identical"), "{text}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("verify failed:"), "{err}");
+}
+
+#[test]
+fn verify_refuses_bad_options() {
+    for args in [
+        &["--host", "--count", "5", "--scans", "6"][..],
+        &["--host", "--host-baud", "12345"],
+        &["--host", "--frames", "0..3"],
+        &["--host", "--ports", "/dev/null", "/dev/null"],
+    ] {
+        let out = verify(args);
+        assert!(!out.status.success(), "{args:?} accepted");
+    }
+}
+
+#[test]
+fn verify_ports_mode_on_two_pseudo_terminals() {
+    use host_bridge::pty::Pty;
+    use host_bridge::verify::{run_coprocessor, PtyPort};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    // The co-processor in this process, on the masters; verify opens the
+    // two slave devices as serial ports.
+    let sensor = PtyPort::new(Pty::open(9600).unwrap());
+    let host = PtyPort::new(Pty::open(9600).unwrap());
+    let (sensor_dev, host_dev) = (
+        sensor.slave_path().to_path_buf(),
+        host.slave_path().to_path_buf(),
+    );
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    let cop = std::thread::spawn(move || {
+        run_coprocessor(lms_core::Params::default(), sensor, host, &flag)
+    });
+    let out = verify(&[
+        "--ports",
+        host_dev.to_str().unwrap(),
+        sensor_dev.to_str().unwrap(),
+        "--count",
+        "10",
+        "--timeout",
+        "30",
+    ]);
+    stop.store(true, Ordering::Relaxed);
+    let counters = cop.join().unwrap().unwrap();
+    assert_all_identical(&out, 10);
+    // The warm-up scan drawn as the sensor stream started, and the ten.
+    assert_eq!(counters.scans_in, 11, "{counters:?}");
+}

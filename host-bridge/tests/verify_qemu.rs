@@ -1,0 +1,121 @@
+//! `host-bridge verify --qemu`: the firmware under QEMU, checked bit for bit.
+//! Runs only if `qemu-system-arm` is on PATH and the firmware ELF is built
+//! (`cd firmware && cargo build --release`); otherwise it prints why it
+//! skipped and passes. `LMS_FIRMWARE_ELF` may name another ELF.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+
+fn on_path(name: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(name).is_file()))
+}
+
+fn elf() -> PathBuf {
+    std::env::var_os("LMS_FIRMWARE_ELF").map_or_else(
+        || {
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../firmware/target/thumbv7em-none-eabihf/release/lms-firmware")
+        },
+        PathBuf::from,
+    )
+}
+
+/// Run `host-bridge verify ARGS`, printing its output (shown on failure).
+fn verify(args: &[&str]) -> (bool, String, String) {
+    let started = Instant::now();
+    let out = Command::new(BIN)
+        .arg("verify")
+        .args(args)
+        .output()
+        .expect("cannot start host-bridge");
+    let (text, err) = (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    );
+    println!(
+        "$ host-bridge verify {} ({:.1} s, {})\n{text}{err}",
+        args.join(" "),
+        started.elapsed().as_secs_f64(),
+        out.status
+    );
+    (out.status.success(), text, err)
+}
+
+/// The reason to skip, if QEMU or the ELF is missing.
+fn skip() -> Option<String> {
+    if !on_path("qemu-system-arm") {
+        return Some("qemu-system-arm is not on PATH".into());
+    }
+    let elf = elf();
+    if !elf.is_file() {
+        return Some(format!(
+            "no firmware ELF at {} (cd firmware && cargo build --release)",
+            elf.display()
+        ));
+    }
+    None
+}
+
+#[test]
+fn verify_qemu_firmware_is_bit_identical() {
+    if let Some(why) = skip() {
+        println!("skipped: {why}");
+        return;
+    }
+    let elf = elf();
+    let elf = elf.to_str().unwrap();
+    let (ok, text, _) = verify(&["--qemu", elf, "--count", "10", "--timeout", "60"]);
+    assert!(ok, "{text}");
+    assert!(text.contains("10/10 scans bit-identical; 0 lost"), "{text}");
+    assert!(text.contains("firmware report: "), "{text}");
+
+    let log = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/data/carmen/csail-corrected.log.gz");
+    if log.exists() {
+        let (ok, text, _) = verify(&[
+            "--qemu",
+            elf,
+            "--replay",
+            log.to_str().unwrap(),
+            "--frames",
+            "200..210",
+            "--timeout",
+            "60",
+        ]);
+        assert!(ok, "{text}");
+        assert!(text.contains("10/10 scans bit-identical; 0 lost"), "{text}");
+    }
+}
+
+#[test]
+fn verify_qemu_reports_a_firmware_that_does_not_boot() {
+    if !on_path("qemu-system-arm") {
+        println!("skipped: qemu-system-arm is not on PATH");
+        return;
+    }
+    // Not an ELF: QEMU loads it as a raw image and locks up at once.
+    let bogus = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
+    let (ok, _, err) = verify(&[
+        "--qemu",
+        bogus.to_str().unwrap(),
+        "--count",
+        "3",
+        "--timeout",
+        "20",
+    ]);
+    assert!(!ok);
+    assert!(err.contains("QEMU exited during the run"), "{err}");
+    // A failed run keeps QEMU's log directory for diagnosis: not this one.
+    if let Some(at) = err.find("host-bridge-verify-") {
+        let digits: String = err[at + 19..]
+            .chars()
+            .take_while(char::is_ascii_digit)
+            .collect();
+        let dir = std::env::temp_dir().join(format!("host-bridge-verify-{digits}"));
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
