@@ -1,0 +1,140 @@
+//! `host-bridge evaluate` end to end with a tiny count: the report is
+//! written with its sections and tables, the figures exist when a font is
+//! available, and bad options fail with a message.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "host-bridge-evaluate-test-{}-{name}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn csail() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/carmen/csail-corrected.log.gz")
+}
+
+#[test]
+fn evaluate_a_tiny_evaluation_writes_the_report() {
+    let out = scratch("out");
+    // One real log, if the data is there (linked into a folder of its own).
+    let data = scratch("data");
+    let have_log = csail().is_file();
+    if have_log {
+        std::fs::copy(csail(), data.join("csail-corrected.log.gz")).unwrap();
+    }
+    let o = Command::new(BIN)
+        .args([
+            "evaluate",
+            "--scans",
+            "2",
+            "--scale-scans",
+            "1",
+            "--sigmas",
+            "0.01,0.02",
+        ])
+        .args(["--real-every", "100", "--data"])
+        .arg(&data)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .expect("cannot start host-bridge");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "evaluate failed: {stderr}");
+    assert!(stderr.contains("wrote"), "{stderr}");
+    let md = std::fs::read_to_string(out.join("README.md")).unwrap();
+    for needle in [
+        "## Summary: the goals at σ = 20 mm",
+        "| TruePos (resolvable walls) | ≥ 0.95 |",
+        "| FalsePos (all extracted lines) | ≤ 0.02 |",
+        "| σΔα / CRB | ≤ 1.2 |",
+        "| mean corner NEES | 1.8 … 2.2 |",
+        "### Against the baselines at σ ≥ 10 mm",
+        "## 1. Accuracy against ground truth",
+        "### Detection",
+        "### Line accuracy",
+        "### Corners",
+        "## 2. Where the lines go",
+        "### Corner evidence in one window",
+        "### One change at a time",
+        "## 3. Scale space: passes and q",
+        "**Against passes (q = 0).**",
+        "## 4. Real scans",
+        "## Findings and proposals",
+        "### Proposed changes to ALGORITHM.md",
+        "## Reproduce",
+    ] {
+        assert!(md.contains(needle), "report lacks {needle:?}");
+    }
+    // Every main method has a row per σ in the detection table.
+    for m in [
+        "spec (defaults)",
+        "fit_shared_points = false",
+        "split-and-merge (4σ)",
+        "Gaussian mask (s = 1.35)",
+    ] {
+        for s in ["10 mm", "20 mm"] {
+            assert!(md.contains(&format!("| {s} | {m} |")), "no row {s} {m}");
+        }
+    }
+    // 2 scans × 4 families × 2 noise levels.
+    assert!(
+        md.contains("(4 families × 2 noise levels = 16 scans"),
+        "{}",
+        &md[..600]
+    );
+    if have_log {
+        assert!(md.contains("| csail-corrected.log.gz | 5 × 361 (cm) | spec (defaults) |"));
+    }
+    if host_bridge::plot::find_font().is_some() {
+        for f in [
+            "accuracy-vs-sigma.svg",
+            "corner-evidence.svg",
+            "scale-passes.svg",
+            "scale-q.svg",
+        ] {
+            let svg = std::fs::read_to_string(out.join(f)).unwrap();
+            assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{f}");
+            assert!(md.contains(&format!("]({f})")), "{f} not linked");
+        }
+        if have_log {
+            let real: Vec<_> = std::fs::read_dir(&out)
+                .unwrap()
+                .filter_map(|e| e.ok())
+                .filter(|e| e.file_name().to_string_lossy().starts_with("real-csail"))
+                .collect();
+            assert_eq!(real.len(), 1);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+#[test]
+fn evaluate_bad_options_fail_with_a_message() {
+    let out = scratch("bad");
+    for (args, want) in [
+        (vec!["--scans", "0"], "--scans"),
+        (vec!["--sigmas", "-0.01"], "--sigmas"),
+        (vec!["--dropout", "2"], "--dropout"),
+    ] {
+        let o = Command::new(BIN)
+            .arg("evaluate")
+            .args(&args)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "{args:?} accepted");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains(want), "{args:?}: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
