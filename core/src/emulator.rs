@@ -683,6 +683,14 @@ impl<S: ScanSource> Emulator<S> {
             if let Some(incoming) = incoming {
                 self.handle(now_us, incoming, data_len, extra);
             }
+            if self.resetting {
+                // The sensor ignores what follows a reset in the same burst,
+                // as it ignores later bytes (see `receive`).
+                self.framer.discard();
+                let n = u32::try_from(input.len()).unwrap_or(u32::MAX);
+                self.stats.ignored_bytes = self.stats.ignored_bytes.wrapping_add(n);
+                break;
+            }
             if done {
                 break;
             }
@@ -1704,6 +1712,23 @@ mod tests {
             to: Baud::B9600
         }));
         assert_eq!(ev.last(), Some(&Event::PowerOnSent));
+    }
+
+    #[test]
+    fn emulator_ignores_requests_after_a_reset_in_the_same_burst() {
+        // Found by the `emulator` fuzz target: a second `10` behind the first
+        // was answered too, and the restart cut that second `91` short.
+        let mut e = lms();
+        drain(&mut e, 2_000_000);
+        let burst: Vec<u8> = [RESET.as_slice(), &RESET, &STATUS].concat();
+        e.receive(2_000_000, &burst);
+        let got = drain(&mut e, 2_500_000);
+        assert_eq!(got, acked(&sensor(&[0x91, 0x10])));
+        assert_eq!(e.stats().ignored_bytes, (RESET.len() + STATUS.len()) as u32);
+        // Much later, in one read: the 90, nothing cut, nothing more.
+        let got = drain(&mut e, 60_000_000);
+        assert_eq!(got.len(), 29);
+        assert_eq!(got[4], 0x90);
     }
 
     #[test]

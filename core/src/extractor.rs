@@ -143,14 +143,18 @@ impl Extractor {
         F: FnMut(u16, &[f32], &[f32]),
     {
         params.validate()?;
-        let n = frame.len();
+        // A frame never holds more than MAX_BEAMS beams; the `min`s make
+        // that visible to the optimiser, so no slice below can panic.
+        let n = frame.len().min(MAX_BEAMS);
         self.len = n;
         self.prepare_bearings(frame.geometry(), n);
-        let windows = n.saturating_sub(2);
+        let windows = n.saturating_sub(2).min(MAX_WINDOWS);
         let beams = frame.beams();
 
         // §4–5: the scale space.
-        self.smoothed[..n].copy_from_slice(frame.ranges());
+        for (s, &r) in self.smoothed.iter_mut().zip(frame.ranges()) {
+            *s = r;
+        }
         valid_windows(beams, &mut self.window_ok[..windows]);
         let filter = WindowFilter::new(frame.geometry().step, params.sigma, params.q);
         for pass in 1..=params.iterations {
@@ -255,12 +259,14 @@ impl Extractor {
 
     /// Smoothed ranges of the last run (m; invalid beams keep their 0).
     pub fn smoothed(&self) -> &[f32] {
-        &self.smoothed[..self.len]
+        self.smoothed.get(..self.len).unwrap_or_default()
     }
 
     /// `D` per window of the last pass of the last run (`+inf` where invalid).
     pub fn mahalanobis(&self) -> &[f32] {
-        &self.mahalanobis[..self.len.saturating_sub(2)]
+        self.mahalanobis
+            .get(..self.len.saturating_sub(2))
+            .unwrap_or_default()
     }
 
     /// Fill the `cos phi_j`, `sin phi_j` tables if the geometry changed.

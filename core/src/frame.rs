@@ -301,17 +301,20 @@ impl Frame {
             self.set_invalid(j, Invalid::Zero);
         } else if !(r.is_finite() && r > 0.0) {
             self.set_invalid(j, Invalid::NotFinite);
-        } else {
-            self.ranges[j] = r;
-            self.beams[j] = Beam::Valid;
+        } else if let (Some(range), Some(beam)) = (self.ranges.get_mut(j), self.beams.get_mut(j)) {
+            *range = r;
+            *beam = Beam::Valid;
         }
     }
 
     /// Mark beam `j` invalid with its reason; the range slot reads 0.
     pub fn set_invalid(&mut self, j: usize, why: Invalid) {
-        if j < self.len {
-            self.ranges[j] = 0.0;
-            self.beams[j] = Beam::Invalid(why);
+        if j >= self.len {
+            return;
+        }
+        if let (Some(range), Some(beam)) = (self.ranges.get_mut(j), self.beams.get_mut(j)) {
+            *range = 0.0;
+            *beam = Beam::Invalid(why);
         }
     }
 
@@ -336,13 +339,13 @@ impl Frame {
     /// Ranges in metres (0 for invalid beams).
     #[inline]
     pub fn ranges(&self) -> &[f32] {
-        &self.ranges[..self.len]
+        self.ranges.get(..self.len).unwrap_or_default()
     }
 
     /// Status of every beam.
     #[inline]
     pub fn beams(&self) -> &[Beam] {
-        &self.beams[..self.len]
+        self.beams.get(..self.len).unwrap_or_default()
     }
 
     /// Number of valid beams.

@@ -96,7 +96,19 @@ pub fn fit_line(
     if lo >= hi {
         return Err(FitError::TooFewPoints);
     }
-    let valid = |j: &usize| beams[*j].is_valid();
+    // The beams `lo..hi` as four slices of one length, indexed from 0
+    // below: the optimiser sees that no index can be out of bounds.
+    let (Some(ranges), Some(beams), Some(cos), Some(sin)) = (
+        ranges.get(lo..hi),
+        beams.get(lo..hi),
+        bearings.cos.get(lo..hi),
+        bearings.sin.get(lo..hi),
+    ) else {
+        return Err(FitError::TooFewPoints); // not reached: hi <= n
+    };
+    let bearings = Bearings { cos, sin };
+    let (lo, hi) = (0, hi - lo);
+    let valid = |j: &usize| beams.get(*j).is_some_and(|b| b.is_valid());
     let point = |j: usize| (ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]);
 
     // 1. Total least squares start: centroid and central second moments.
@@ -180,7 +192,11 @@ pub fn fit_line(
     // 5. Endpoints: first and last valid points projected onto the line.
     let first_valid = (lo..hi).find(valid).unwrap_or(lo);
     let last_valid = (lo..hi).rev().find(valid).unwrap_or(lo);
-    let project = |(x, y): (f32, f32)| {
+    let endpoint = |j: usize| {
+        let (Some(&d), Some(&c), Some(&s)) = (ranges.get(j), cos.get(j), sin.get(j)) else {
+            return [0.0; 2]; // not reached: j < hi
+        };
+        let (x, y) = (d * c, d * s);
         let dist = x * ca + y * sa - r;
         [x - dist * ca, y - dist * sa]
     };
@@ -189,10 +205,10 @@ pub fn fit_line(
         r,
         cov,
         first,
-        last: (hi - 1) as u16,
+        last: (first as usize + hi - 1) as u16,
         points: m.min(u16::MAX as u32) as u16,
         chi2,
-        endpoints: [project(point(first_valid)), project(point(last_valid))],
+        endpoints: [endpoint(first_valid), endpoint(last_valid)],
     })
 }
 

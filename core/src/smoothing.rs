@@ -91,27 +91,29 @@ pub fn smoothing_pass(
     let mut start = 0;
     while start < windows {
         let m = BLOCK.min(windows - start);
+        let (Some(points), Some(ok), Some(d)) = (
+            ranges.get(start..start + m + 2),
+            window_ok.get(start..start + m),
+            mahalanobis.get_mut(start..start + m),
+        ) else {
+            break; // not reached: `windows` fits all three slices
+        };
         // The filter on every window of the block (§2–3).
-        filter_block(
-            filter,
-            &ranges[start..start + m + 2],
-            &window_ok[start..start + m],
-            &mut block,
-            &mut mahalanobis[start..start + m],
-        );
+        filter_block(filter, points, ok, &mut block, d);
         // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
-        for t in 0..m {
-            let d = mahalanobis[start + t];
-            block.third_weight[t + 2] = if d < f32::INFINITY {
+        for (w, &d) in block.third_weight[2..].iter_mut().zip(d.iter()) {
+            *w = if d < f32::INFINITY {
                 weight(d) / 3.0
             } else {
                 0.0
             };
         }
         // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
-        for t in 0..m {
-            let j = start + t;
-            ranges[j] = blend(&block, ranges[j], t + 2);
+        let Some(points) = ranges.get_mut(start..start + m) else {
+            break; // not reached, as above
+        };
+        for (t, point) in points.iter_mut().enumerate() {
+            *point = blend(&block, *point, t + 2);
         }
         // Carry the last two windows into slots 0 and 1.
         for slot in 0..2 {
@@ -126,8 +128,11 @@ pub fn smoothing_pass(
     // hold windows n−4 and n−3; slots 2 and 3 stand for absent windows.
     block.third_weight[2] = 0.0;
     block.third_weight[3] = 0.0;
-    for (j, slot) in [(n - 2, 2), (n - 1, 3)] {
-        ranges[j] = blend(&block, ranges[j], slot);
+    if let Some(point) = ranges.get_mut(n - 2) {
+        *point = blend(&block, *point, 2);
+    }
+    if let Some(point) = ranges.get_mut(n - 1) {
+        *point = blend(&block, *point, 3);
     }
 }
 
@@ -164,6 +169,10 @@ fn filter_block(
         .min(ok.len())
         .min(ranges.len().saturating_sub(2))
         .min(BLOCK);
+    // Exactly the block's points: `t + 2 < m + 2` below needs no check.
+    let Some(ranges) = ranges.get(..m + 2) else {
+        return;
+    };
     // A fixed-size copy of the flags keeps the loop free of bounds checks.
     let mut window_ok = [false; BLOCK];
     window_ok[..m].copy_from_slice(&ok[..m]);

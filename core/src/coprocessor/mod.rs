@@ -68,8 +68,11 @@ impl ScanSource for LatestScan {
         if variant != self.variant {
             return 0; // all "not valid": the sensor runs another variant
         }
-        let n = self.count.min(out.len());
-        out[..n].copy_from_slice(&self.values[..n]);
+        let mut n = 0;
+        for (slot, &word) in out.iter_mut().zip(&self.values).take(self.count) {
+            *slot = word;
+            n += 1;
+        }
         n
     }
 
@@ -202,7 +205,8 @@ impl CoProcessor {
             if n == 0 {
                 break;
             }
-            self.host.receive(now_us, &chunk[..n]);
+            // `min`: a port that claims more than it was given is not trusted.
+            self.host.receive(now_us, &chunk[..n.min(CHUNK)]);
         }
         self.drain_host(host, now_us, &mut outcome)?;
 
@@ -213,7 +217,7 @@ impl CoProcessor {
             if n == 0 {
                 break;
             }
-            let mut input = &chunk[..n];
+            let mut input = &chunk[..n.min(CHUNK)];
             loop {
                 let (event, rest) = self.link.feed(input);
                 input = rest;
@@ -232,8 +236,12 @@ impl CoProcessor {
         }
 
         // 3. The next bring-up request, if one is due.
-        if let Some(n) = self.link.due_request(now_us, &mut buf) {
-            sensor.write_all(&buf[..n]).map_err(PollError::Sensor)?;
+        if let Some(request) = self
+            .link
+            .due_request(now_us, &mut buf)
+            .and_then(|n| buf.get(..n))
+        {
+            sensor.write_all(request).map_err(PollError::Sensor)?;
         }
         self.sync_counters();
         Ok(outcome)
@@ -249,10 +257,10 @@ impl CoProcessor {
         let mut buf = [0u8; CHUNK];
         loop {
             let n = self.host.transmit(now_us, &mut buf);
-            if n == 0 {
+            let Some(bytes) = buf.get(..n).filter(|b| !b.is_empty()) else {
                 break;
-            }
-            host.write_all(&buf[..n]).map_err(PollError::Host)?;
+            };
+            host.write_all(bytes).map_err(PollError::Host)?;
         }
         while let Some(event) = self.host.next_event() {
             match event {

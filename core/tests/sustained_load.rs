@@ -1,0 +1,362 @@
+//! Sustained load: the co-processor in memory, fed the sensor's full rate.
+//!
+//! The core's LMS emulator streams 361-value scans at 500 kBd (one every
+//! 26.7 ms, each 14.6 ms on the line: the sensor's own rate) into the
+//! co-processor with the default parameters (30 passes); a client on the
+//! host side takes the pass-through and the features. Simulated time, so
+//! the run is exact and repeatable.
+//!
+//! Checked: no scan dropped or skipped anywhere — the LMS sent every scan
+//! its mirror produced, and scans sent = `scans_in` = `feature_scans_out`
+//! = `B0`s the client got = feature groups it assembled, in order; no CRC
+//! error, no resync, nothing rejected; and memory is constant: a counting
+//! global allocator sees no allocation inside `poll` (the core has no
+//! allocator; the ports here are fixed rings, allocated before).
+//!
+//! `sustained_load_short` (300 scans) runs with `cargo test`;
+//! `sustained_load_10000_scans` is `#[ignore]`d and run in release by
+//! `.ci/robustness.sh`:
+//! `cargo test --release -p lms-core --test sustained_load -- --ignored --nocapture`.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::convert::Infallible;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+use lms_core::coprocessor::{CoProcessor, SensorSetup, Step};
+use lms_core::emulator::{Emulator, FnSource, Settings};
+use lms_core::telegram::features::{Assembled, FeatureAssembler};
+use lms_core::telegram::{Direction, Event, Framer, Request, Units};
+use lms_core::{Params, Variant};
+
+// ------------------------------------------------- the counting allocator --
+
+/// Counts allocations made on a thread while its `MEASURING` flag is set.
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    static MEASURING: Cell<bool> = const { Cell::new(false) };
+}
+
+fn note_allocation() {
+    if MEASURING.try_with(Cell::get).unwrap_or(false) {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+// SAFETY: forwards every call to the system allocator unchanged.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note_allocation();
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note_allocation();
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note_allocation();
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+// ------------------------------------------------------------- fixed ports --
+
+/// A byte ring of fixed capacity: reading and writing never allocate.
+struct Ring {
+    buf: Box<[u8]>,
+    head: usize,
+    len: usize,
+    /// Most bytes ever held.
+    peak: usize,
+}
+
+impl Ring {
+    fn new(capacity: usize) -> Self {
+        Ring {
+            buf: vec![0; capacity].into_boxed_slice(),
+            head: 0,
+            len: 0,
+            peak: 0,
+        }
+    }
+    fn push(&mut self, bytes: &[u8]) {
+        let cap = self.buf.len();
+        assert!(self.len + bytes.len() <= cap, "ring full");
+        for &b in bytes {
+            self.buf[(self.head + self.len) % cap] = b;
+            self.len += 1;
+        }
+        self.peak = self.peak.max(self.len);
+    }
+    fn pop(&mut self, out: &mut [u8]) -> usize {
+        let n = out.len().min(self.len);
+        let cap = self.buf.len();
+        for b in out.iter_mut().take(n) {
+            *b = self.buf[self.head];
+            self.head = (self.head + 1) % cap;
+        }
+        self.len -= n;
+        n
+    }
+}
+
+/// A serial port: `rx` is what the co-processor reads, `tx` what it writes.
+struct Port {
+    rx: Ring,
+    tx: Ring,
+}
+
+impl Port {
+    fn new() -> Self {
+        Port {
+            rx: Ring::new(1 << 16),
+            tx: Ring::new(1 << 16),
+        }
+    }
+}
+
+impl embedded_io::ErrorType for Port {
+    type Error = Infallible;
+}
+impl embedded_io::Read for Port {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
+        Ok(self.rx.pop(buf))
+    }
+}
+impl embedded_io::ReadReady for Port {
+    fn read_ready(&mut self) -> Result<bool, Infallible> {
+        Ok(self.rx.len > 0)
+    }
+}
+impl embedded_io::Write for Port {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
+        self.tx.push(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+}
+
+// ---------------------------------------------------------------- the run --
+
+/// A room with a box, mm, a little deterministic noise, a few no-echo beams.
+fn room(seed: &mut u64, out: &mut [u16]) -> usize {
+    let g = Variant::Fov180Res50.geometry();
+    for (j, v) in out.iter_mut().enumerate() {
+        let phi = f64::from(g.bearing(j));
+        let (c, s) = (phi.cos(), phi.sin());
+        let mut d = f64::INFINITY;
+        if c > 1e-6 {
+            d = d.min(3.0 / c);
+        }
+        if s.abs() > 1e-6 {
+            d = d.min(2.0 / s.abs());
+        }
+        if (-0.2..0.1).contains(&phi) {
+            d = d.min(1.5 / c);
+        }
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 7;
+        *seed ^= *seed << 17;
+        let noise = ((*seed >> 40) as f64 / (1u64 << 24) as f64 - 0.5) * 0.01;
+        *v = if (*seed >> 20) % 97 == 0 {
+            8191
+        } else {
+            (((d + noise) * 1000.0).round() as u32).min(8182) as u16
+        };
+    }
+    out.len()
+}
+
+struct Report {
+    scans: u32,
+    simulated_s: f64,
+    allocations_in_poll: usize,
+    polls: u64,
+    poll_time: Duration,
+    scan_poll_max: Duration,
+    sensor_peak: usize,
+    host_peak: usize,
+}
+
+/// Stream `scans` scans through the co-processor; assert everything above.
+fn sustained(scans: u32) -> Report {
+    const STEP_US: u64 = 500;
+    let mut seed = 0x1234_5678_9ABC_DEF1u64;
+    let source = FnSource::new(move |_: Variant, _: Units, out: &mut [u16]| room(&mut seed, out));
+    let mut lms = Emulator::new(source, Settings::default(), 0);
+    let mut cop = Box::new(CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT));
+    cop.start(0);
+    let (mut sensor, mut host) = (Port::new(), Port::new());
+    let mut client = Framer::new(Direction::SensorToHost, true);
+    let mut asm = FeatureAssembler::new();
+    let mut line = [0u8; 4096];
+    let mut chunk = [0u8; 4096];
+    let mut now = 0u64;
+
+    let mut client_b0 = 0u32;
+    let mut groups = 0u32;
+    let mut last_counter = 0u32;
+    // The client asks for the stream at once: every scan the co-processor
+    // takes is then passed on with its features.
+    let mut buf = [0u8; 16];
+    let n = Request::Continuous.emit(0, &mut buf).unwrap();
+    host.rx.push(&buf[..n]);
+    let (mut polls, mut poll_time, mut scan_poll_max) = (0u64, Duration::ZERO, Duration::ZERO);
+    // The counter counts (a self-check of the test).
+    ALLOCATIONS.store(0, Ordering::Relaxed);
+    MEASURING.with(|m| m.set(true));
+    drop(std::hint::black_box(vec![0u8; 16]));
+    MEASURING.with(|m| m.set(false));
+    assert_eq!(
+        ALLOCATIONS.swap(0, Ordering::Relaxed),
+        1,
+        "allocation counter"
+    );
+    loop {
+        now += STEP_US;
+        // Co-processor → LMS.
+        let n = sensor.tx.pop(&mut chunk);
+        lms.receive(now, &chunk[..n]);
+        // LMS → co-processor.
+        loop {
+            let n = lms.transmit(now, &mut line);
+            if n == 0 {
+                break;
+            }
+            sensor.rx.push(&line[..n]);
+        }
+        while lms.next_event().is_some() {}
+
+        // The co-processor, measured.
+        MEASURING.with(|m| m.set(true));
+        let t0 = Instant::now();
+        let outcome = cop.poll(&mut sensor, &mut host, now).unwrap();
+        let dt = t0.elapsed();
+        MEASURING.with(|m| m.set(false));
+        polls += 1;
+        poll_time += dt;
+        if outcome.scans > 0 {
+            scan_poll_max = scan_poll_max.max(dt);
+        }
+
+        // The client.
+        loop {
+            let n = host.tx.pop(&mut chunk);
+            if n == 0 {
+                break;
+            }
+            let mut input = &chunk[..n];
+            loop {
+                let fed = client.feed(input);
+                input = fed.remaining;
+                match fed.event {
+                    Some(Event::Telegram(t)) => {
+                        if t.command() == 0xB0 {
+                            client_b0 += 1;
+                        }
+                        if let Assembled::Complete(summary, features) = asm.push(&t).unwrap() {
+                            groups += 1;
+                            if last_counter != 0 {
+                                assert_eq!(
+                                    summary.scan_counter,
+                                    last_counter + 1,
+                                    "scans in order"
+                                );
+                            }
+                            last_counter = summary.scan_counter;
+                            assert!(!features.lines.is_empty(), "the room has lines");
+                        }
+                    }
+                    Some(_) => {}
+                    None => break,
+                }
+            }
+        }
+        if groups >= scans {
+            break;
+        }
+        assert!(
+            now < 1_000_000 + u64::from(scans) * 30_000,
+            "stalled: {groups} groups"
+        );
+    }
+    let c = cop.counters();
+    let stats = *lms.stats();
+    assert_eq!(cop.link().step(), Step::Streaming);
+    assert_eq!(stats.scans_skipped, 0, "the LMS never had to skip a scan");
+    assert_eq!(stats.scans_sent, c.scans_in, "{c:?}");
+    assert_eq!(c.scans_in, c.feature_scans_out, "{c:?}");
+    assert_eq!(c.feature_scans_out, client_b0, "{c:?}");
+    assert_eq!(client_b0, groups, "every B0 followed by its features");
+    assert_eq!(
+        (
+            c.scans_dropped,
+            c.scans_rejected,
+            c.sensor_crc_errors,
+            c.sensor_resyncs
+        ),
+        (0, 0, 0, 0),
+        "{c:?}"
+    );
+    assert_eq!(client.stats().crc_errors, 0);
+    assert_eq!(asm.discarded(), 0);
+    let allocations = ALLOCATIONS.load(Ordering::Relaxed);
+    assert_eq!(allocations, 0, "allocations inside poll");
+    Report {
+        scans: groups,
+        simulated_s: now as f64 / 1e6,
+        allocations_in_poll: allocations,
+        polls,
+        poll_time,
+        scan_poll_max,
+        sensor_peak: sensor.rx.peak,
+        host_peak: host.tx.peak,
+    }
+}
+
+fn print(r: &Report) {
+    println!(
+        "\nsustained load: {} scans in {:.1} s simulated ({:.2} scans/s), 0 dropped, 0 skipped, \
+         0 rejected; {} allocations in {} polls; poll time {:.3} s in total ({:.2} ms per scan, \
+         longest poll with a scan {:.2} ms, real-time factor {:.1}); port peaks: sensor rx {} B, host tx {} B; \
+         CoProcessor {} B",
+        r.scans,
+        r.simulated_s,
+        f64::from(r.scans) / r.simulated_s,
+        r.allocations_in_poll,
+        r.polls,
+        r.poll_time.as_secs_f64(),
+        r.poll_time.as_secs_f64() * 1e3 / f64::from(r.scans),
+        r.scan_poll_max.as_secs_f64() * 1e3,
+        r.simulated_s / r.poll_time.as_secs_f64(),
+        r.sensor_peak,
+        r.host_peak,
+        std::mem::size_of::<CoProcessor>(),
+    );
+}
+
+#[test]
+fn sustained_load_short() {
+    let r = sustained(300);
+    print(&r);
+}
+
+#[test]
+#[ignore = "10 000 scans: run in release (.ci/robustness.sh)"]
+fn sustained_load_10000_scans() {
+    let r = sustained(10_000);
+    print(&r);
+    assert!(r.scans >= 10_000);
+}
