@@ -6,6 +6,7 @@
 //!                      [--noise-sigma S] [--dropout P]
 //!                      [--replay LOG]
 //!                      [--scans N] [--quit-after SECONDS] [--restart-delay SECONDS]
+//!                      [--bit-error-rate P] [--drop-rate P] [--fault-seed N]
 //! ```
 //!
 //! It opens a pseudo-terminal ([`crate::pty`]), prints the slave device
@@ -59,6 +60,14 @@
 //! * `--replay CAPTURE`: a capture recorded by `host-bridge scan`
 //!   (recognised by its magic), its `B0` scans in order, looping, resampled
 //!   and converted to the units asked for like a log's.
+//!
+//! # A faulty line
+//!
+//! `--bit-error-rate P` flips each bit on the line with probability `P`,
+//! `--drop-rate P` loses each byte with probability `P`, in both directions
+//! (seeded by `--fault-seed`), to try a client against a noisy RS-232/422
+//! link: the sensor NAKs damaged requests, the client has to skip damaged
+//! telegrams. The summary counts the bits flipped and bytes dropped.
 //!
 //! # Exit
 //!
@@ -123,6 +132,17 @@ pub struct SimulateArgs {
     /// stderr
     #[arg(long, short)]
     pub verbose: bool,
+    /// A faulty line: flip each bit, in both directions, with this
+    /// probability (e.g. 1e-5)
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    pub bit_error_rate: f64,
+    /// A faulty line: lose each byte, in both directions, with this
+    /// probability
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    pub drop_rate: f64,
+    /// Seed of the line faults
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub fault_seed: u64,
 }
 
 // ---------------------------------------------------------------------------
@@ -492,6 +512,66 @@ impl Scrambler {
     }
 }
 
+/// Bit errors and lost bytes on the line (`--bit-error-rate`,
+/// `--drop-rate`): xorshift64*, one draw per bit and per byte.
+#[derive(Debug)]
+struct LineFaults {
+    bit_error_rate: f64,
+    drop_rate: f64,
+    state: u64,
+    bits_flipped: u64,
+    bytes_dropped: u64,
+}
+
+impl LineFaults {
+    fn new(bit_error_rate: f64, drop_rate: f64, seed: u64) -> Self {
+        LineFaults {
+            bit_error_rate,
+            drop_rate,
+            // Any non-zero state; splitmix-style spread of small seeds.
+            state: seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1,
+            bits_flipped: 0,
+            bytes_dropped: 0,
+        }
+    }
+
+    fn active(&self) -> bool {
+        self.bit_error_rate > 0.0 || self.drop_rate > 0.0
+    }
+
+    /// Uniform in [0, 1).
+    fn uniform(&mut self) -> f64 {
+        let mut x = self.state;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.state = x;
+        (x.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// `bytes` as they arrive at the other end of the line.
+    fn apply(&mut self, bytes: &[u8]) -> Vec<u8> {
+        let mut out = Vec::with_capacity(bytes.len());
+        for &b in bytes {
+            if self.drop_rate > 0.0 && self.uniform() < self.drop_rate {
+                self.bytes_dropped += 1;
+                continue;
+            }
+            let mut b = b;
+            if self.bit_error_rate > 0.0 {
+                for bit in 0..8 {
+                    if self.uniform() < self.bit_error_rate {
+                        b ^= 1 << bit;
+                        self.bits_flipped += 1;
+                    }
+                }
+            }
+            out.push(b);
+        }
+        out
+    }
+}
+
 /// Counters for the summary.
 #[derive(Debug, Default)]
 struct Counters {
@@ -511,6 +591,7 @@ struct Line {
     /// The (client, sensor) speeds of the mismatch last reported.
     mismatch: Option<(Option<u32>, Baud)>,
     scrambler: Scrambler,
+    faults: LineFaults,
     counters: Counters,
     verbose: bool,
     clock: Instant,
@@ -588,7 +669,12 @@ impl Line {
             match self.pty.read(&mut buf)? {
                 ReadOutcome::Data(n) => {
                     if self.speeds_match(lms.baud())? {
-                        lms.receive(now_us, &buf[..n]);
+                        if self.faults.active() {
+                            let arrived = self.faults.apply(&buf[..n]);
+                            lms.receive(now_us, &arrived);
+                        } else {
+                            lms.receive(now_us, &buf[..n]);
+                        }
                     } else {
                         self.counters.dropped_in += n as u64;
                     }
@@ -607,7 +693,12 @@ impl Line {
         }
         let garbled: Vec<u8>;
         let mut rest = if self.speeds_match(sensor)? {
-            bytes
+            if self.faults.active() {
+                garbled = self.faults.apply(bytes);
+                &garbled
+            } else {
+                bytes
+            }
         } else {
             garbled = bytes.iter().map(|&b| self.scrambler.byte(b)).collect();
             self.counters.garbled_out += bytes.len() as u64;
@@ -721,6 +812,15 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         args.restart_delay.is_finite() && args.restart_delay >= 0.0,
         "--restart-delay must be >= 0 (seconds)"
     );
+    for (name, p) in [
+        ("--bit-error-rate", args.bit_error_rate),
+        ("--drop-rate", args.drop_rate),
+    ] {
+        ensure!(
+            (0.0..=1.0).contains(&p),
+            "{name} must be a probability in 0..=1, not {p}"
+        );
+    }
     let source = Source::open(args)?;
     let about = source.describe();
     let stop = Arc::new(AtomicBool::new(false));
@@ -746,6 +846,13 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if let Some(l) = &link {
         let _ = write!(banner, " (link {})", l.path.display());
     }
+    if args.bit_error_rate > 0.0 || args.drop_rate > 0.0 {
+        let _ = write!(
+            banner,
+            " with line faults (bit error rate {:e}, drop rate {:e}, seed {})",
+            args.bit_error_rate, args.drop_rate, args.fault_seed
+        );
+    }
     eprintln!("{banner}; 9600 Bd, values on request; scans from {about}");
 
     let clock = Instant::now();
@@ -760,6 +867,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         connected: false,
         mismatch: None,
         scrambler: Scrambler(0x2545_F491),
+        faults: LineFaults::new(args.bit_error_rate, args.drop_rate, args.fault_seed),
         counters: Counters::default(),
         verbose: args.verbose,
         clock,
@@ -879,6 +987,13 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
          {} overrun; {} connections",
         c.no_client, c.garbled_out, c.dropped_in, c.overrun, c.connections
     );
+    if line.faults.active() {
+        let _ = write!(
+            summary,
+            "; line faults: {} bits flipped, {} bytes dropped",
+            line.faults.bits_flipped, line.faults.bytes_dropped
+        );
+    }
     eprintln!("{summary}");
     drop(link);
     Ok(())

@@ -832,6 +832,62 @@ fn pty_sensor_left_streaming_is_found_at_its_rate() {
     assert_eq!(scan.values.count(), 181);
 }
 
+/// `simulate --bit-error-rate`: the client on a noisy line brings the
+/// sensor up (retrying what the noise spoils), skips and counts damaged
+/// telegrams, and records only scans the sensor really sent.
+#[test]
+fn pty_noisy_line_damaged_scans_are_counted_never_recorded() {
+    let seed = SEED.to_string();
+    let count = COUNT.to_string();
+    let sim = Simulator::start_with(
+        "noisy",
+        &[
+            "--seed",
+            &seed,
+            "--count",
+            &count,
+            "--bit-error-rate",
+            "2e-5",
+            "--fault-seed",
+            "3",
+        ],
+    );
+    let mut client = pty_client(&sim);
+    let scans = 150;
+    let plan = Plan {
+        target: Some(Baud::B500000),
+        variant: Variant::Fov180Res50,
+        units: Units::Millimetre,
+        scans,
+        restore_9600: false,
+        ..Plan::default()
+    };
+    let mut got = Vec::new();
+    let summary = run_session(&mut client, &plan, |_, _, scan| {
+        got.push(scan.values.clone());
+        Ok(())
+    })
+    .unwrap_or_else(|e| panic!("{e:#}\nsimulator log:\n{}", sim.log()));
+    // 5856 bits per B0: about 11 % of them are hit at 2e-5 per bit.
+    assert_eq!(got.len(), scans);
+    assert!(
+        summary.line.crc_errors >= 3,
+        "damage went unnoticed: {:?}",
+        summary.line
+    );
+    let sent = scene_scans(Variant::Fov180Res50, Units::Millimetre, COUNT);
+    for (i, v) in got.iter().enumerate() {
+        assert!(
+            sent.iter().any(|s| v.values() == &s[..]),
+            "scan {i} was never sent: a damaged scan was accepted"
+        );
+    }
+    eprintln!(
+        "noisy line: {scans} scans recorded intact, {} CRC errors, {} resyncs, {} bytes skipped; handshake {:?}",
+        summary.line.crc_errors, summary.line.resyncs, summary.line.bytes_skipped, summary.handshake
+    );
+}
+
 #[test]
 fn pty_cli_scan_writes_a_capture_that_extract_reads() {
     let sim = Simulator::start("cli");
