@@ -12,7 +12,8 @@
 //! - invalid beams are never modified; a window with an invalid beam has
 //!   `D = +inf`;
 //! - segments are in scan order and overlap at most in one shared point;
-//!   each line's first and last beams lie within segments, lines are in
+//!   each line's first and last beams lie within segments, its endpoints
+//!   are the projections of its first and last valid points, lines are in
 //!   scan order;
 //! - every covariance is positive definite (`a > 0`, `det > 0`; symmetric
 //!   by construction, `Sym2`) — lines always, corners from 1° between
@@ -362,6 +363,32 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
             l.last,
             f.segments
         );
+    }
+    // Endpoints: the projections onto the line of the first and last valid
+    // raw points of the line's beams (f64 here; tolerance 1e-4 relative to
+    // the point's range, well above f32 rounding, far below a beam spacing).
+    let geometry = frame.geometry();
+    for l in &f.lines {
+        let beams = usize::from(l.first)..=usize::from(l.last);
+        let valid: Vec<usize> = beams.filter(|&j| frame.beams()[j].is_valid()).collect();
+        let (ca, sa) = (f64::from(l.alpha).cos(), f64::from(l.alpha).sin());
+        for (end, j) in [(0, valid[0]), (1, valid[valid.len() - 1])] {
+            let (d, phi) = (f64::from(frame.ranges()[j]), f64::from(geometry.bearing(j)));
+            let (x, y) = (d * phi.cos(), d * phi.sin());
+            let dist = x * ca + y * sa - f64::from(l.r);
+            let want = [x - dist * ca, y - dist * sa];
+            let got = l.endpoints[end];
+            let err = (f64::from(got[0]) - want[0]).hypot(f64::from(got[1]) - want[1]);
+            prop_assert!(
+                err <= 1e-4 * (1.0 + d),
+                "line {}..={}: endpoint {} is {} m from the projection of beam {}",
+                l.first,
+                l.last,
+                end,
+                err,
+                j
+            );
+        }
     }
     for w in f.lines.windows(2) {
         prop_assert!(w[1].first >= w[0].last, "lines out of order: {:?}", w);
