@@ -15,15 +15,21 @@
 //!
 //! [`run`] wraps it for the command line: a real serial port, a progress
 //! bar on a terminal, the capture written to `NAME.partial` and renamed when
-//! all scans are in, and a summary on stderr.
+//! all scans are in, and a summary on stderr. Ctrl-C (SIGINT) or SIGTERM
+//! ends the run after the scan being read: the stream is stopped, the
+//! sensor put back at 9600 Bd (unless `--keep-baud`), the scans so far are
+//! left in `NAME.partial`, and the exit status is non-zero; a second signal
+//! exits at once.
 
 use std::fmt;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::str::FromStr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Duration;
 
-use anyhow::{ensure, Context, Result};
+use anyhow::{bail, ensure, Context, Result};
 use clap::{Args, ValueEnum};
 use lms_core::telegram::{Baud, FramerStats, Units};
 use lms_core::Variant;
@@ -290,9 +296,11 @@ pub fn run_session<L: Link>(
     let (first, elapsed) = match result {
         Ok(times) => times,
         Err(e) => {
-            // Best effort: leave the sensor quiet.
-            if client.is_streaming() {
-                let _ = client.stop_stream();
+            // Best effort: leave the sensor quiet and, if it still answers,
+            // at 9600 Bd as asked.
+            let quiet = !client.is_streaming() || client.stop_stream().is_ok();
+            if quiet && plan.restore_9600 && client.baud() != Baud::B9600 {
+                let _ = client.set_baud(Baud::B9600);
             }
             return Err(e);
         }
@@ -397,12 +405,24 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         indicatif::ProgressBar::hidden()
     };
 
-    let result = run_session(&mut client, &plan, |_, since_start, scan| {
+    // Ctrl-C / SIGTERM: finish the scan in hand, then stop cleanly (see
+    // the module docs); a second signal exits at once with status 130.
+    let interrupted = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(signal, 130, Arc::clone(&interrupted))
+            .and_then(|_| signal_hook::flag::register(signal, Arc::clone(&interrupted)))
+            .context("cannot install the signal handler")?;
+    }
+
+    let result = run_session(&mut client, &plan, |i, since_start, scan| {
         if let Some(c) = capture.as_mut() {
             let us = u64::try_from(since_start.as_micros()).unwrap_or(u64::MAX);
             c.write(us, &scan.telegram)?;
         }
         progress.inc(1);
+        if interrupted.load(Ordering::Relaxed) {
+            bail!("interrupted after {} of {} scans", i + 1, plan.scans);
+        }
         Ok(())
     });
     progress.finish_and_clear();

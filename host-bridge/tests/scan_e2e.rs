@@ -950,6 +950,50 @@ fn pty_cli_scan_writes_a_capture_that_extract_reads() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Ctrl-C during `scan`: it stops the stream, puts the sensor back at
+/// 9600 Bd, leaves the scans so far in the `.partial` file and exits
+/// non-zero.
+#[test]
+fn pty_cli_scan_interrupted_leaves_the_sensor_quiet() {
+    let sim = Simulator::start("interrupted");
+    let dir = scratch("pty-interrupted");
+    let capture_path = dir.join("scans.lmscap");
+    let partial = capture::CaptureFile::partial_path(&capture_path);
+    let child = Command::new(BIN)
+        .args(["scan", "--port", sim.pty.to_str().unwrap()])
+        .args(["--baud", "500000", "--scans", "100000", "--output"])
+        .arg(&capture_path)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until scans arrive (a 361-value scan is 732 bytes).
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    while std::fs::metadata(&partial).map_or(0, |m| m.len()) < 20 * 732 {
+        assert!(std::time::Instant::now() < deadline, "no scans recorded");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let ok = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok);
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("interrupted after"), "{err}");
+    assert!(err.contains("the capture is incomplete"), "{err}");
+    assert!(!capture_path.exists());
+    let kept = capture::read_values(&partial).unwrap().count();
+    assert!(kept >= 20, "{kept} scans in the partial capture");
+    // The sensor was told: stream stopped, then back to 9600 Bd.
+    let log = sim.log();
+    let stopped = log.rfind("continuous output stopped").expect(&log);
+    let back = log.rfind("line switched 500000 -> 9600 Bd");
+    assert!(back.is_some_and(|b| b > stopped), "{log}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A capture recorded with `scan` is replayed by `simulate --replay` and
 /// scanned again: the same values come back.
 #[test]
