@@ -409,9 +409,16 @@ def main():
         # Loose on purpose: QEMU loses SysTick ticks when the host is busy
         # (measured -0.6 % idle, -3 % under load); a wrong clock would be
         # off by a factor (8 for the reference clock, 10.5 for 16 MHz).
-        check("time base follows QEMU's clock", abs(fw - emu) < 0.10 * emu,
-              f"now_us advanced {fw:.4f} s while SYS_ELAPSED advanced {emu:.4f} s "
-              f"({(fw / emu - 1) * 100:+.2f} %), test's wall clock {wall:.4f} s")
+        # Under an instrumenting TCG plugin (budgets.sh sets
+        # SMOKE_NO_CLOCK_CHECK) the guest runs slower than QEMU's clock and
+        # loses more (measured -10 to -26 %): reported, not checked.
+        if os.environ.get("SMOKE_NO_CLOCK_CHECK"):
+            print(f"skip time base (instrumented run): now_us {fw:.4f} s, "
+                  f"SYS_ELAPSED {emu:.4f} s ({(fw / emu - 1) * 100:+.2f} %)")
+        else:
+            check("time base follows QEMU's clock", abs(fw - emu) < 0.10 * emu,
+                  f"now_us advanced {fw:.4f} s while SYS_ELAPSED advanced {emu:.4f} s "
+                  f"({(fw / emu - 1) * 100:+.2f} %), test's wall clock {wall:.4f} s")
 
         peak, size = int(r2["stack_peak"]), int(r2["stack_size"])
         check("stack peak reported", 0 < peak < size, f"{peak} of {size} bytes")

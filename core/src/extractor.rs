@@ -16,6 +16,7 @@ use crate::line_fit::{fit_line, parameter_distance, Bearings, Line};
 use crate::params::{ParamError, Params};
 use crate::segmentation::{segment, Segment};
 use crate::smoothing::{smoothing_pass, valid_windows};
+use crate::split::split_before_reject;
 
 /// Most windows in a frame (`MAX_BEAMS − 2`).
 pub const MAX_WINDOWS: usize = MAX_BEAMS - 2;
@@ -55,6 +56,14 @@ pub struct Stats {
     pub degenerate_corners: u16,
     /// Corners beyond [`MAX_CORNERS`].
     pub corner_overflow: u16,
+    /// Split before reject ([`crate::split`], off by default): segments
+    /// split in two. Not carried by the `D0` telegram.
+    pub splits: u16,
+    /// Split before reject: halves dropped for fewer than `min_points` beams.
+    pub split_short: u16,
+    /// Split before reject: pieces dropped because they are still not one
+    /// straight line (a circle explains them, or the depth is reached).
+    pub split_rejected: u16,
 }
 
 /// The features of one frame.
@@ -119,6 +128,9 @@ impl Extractor {
                     line_overflow: 0,
                     degenerate_corners: 0,
                     corner_overflow: 0,
+                    splits: 0,
+                    split_short: 0,
+                    split_rejected: 0,
                 },
             },
         }
@@ -196,6 +208,9 @@ impl Extractor {
             sin: &self.sin_phi[..n],
         };
         let raw = frame.ranges();
+        if params.split_depth > 0 {
+            split_before_reject(bearings, raw, beams, params, &mut f.segments, &mut stats);
+        }
         for k in 0..f.segments.len() {
             let (first, last) = fit_span(&f.segments, k, params.fit_shared_points);
             let line = match fit_line(bearings, raw, beams, first, last, params.sigma) {

@@ -40,6 +40,7 @@ pub mod maths;
 pub mod params;
 pub mod segmentation;
 pub mod smoothing;
+pub mod split;
 pub mod telegram;
 
 pub use extractor::{Extractor, Features};

@@ -41,6 +41,13 @@ pub struct Params {
     /// Smallest angle between lines for a well-conditioned corner (degrees,
     /// 0..=90). Default 30.
     pub min_corner_angle_deg: f32,
+    /// Split before reject (not in ALGORITHM.md; proposal P1 of
+    /// docs/evaluation): how many levels a segment that is not one straight
+    /// line may be split at its farthest point before the §7 gates
+    /// ([`crate::split`]). 0 (the default) is the spec; 8 is the evaluated
+    /// proposal (TruePos 0.66 → 0.97 at σ = 20 mm). At most
+    /// [`MAX_SPLIT_DEPTH`].
+    pub split_depth: u8,
 }
 
 impl Default for Params {
@@ -65,11 +72,15 @@ impl Params {
         merge_gate: 9.21,
         corner_gap: 0.2,
         min_corner_angle_deg: 30.0,
+        split_depth: 0,
     };
 }
 
 /// Largest accepted number of smoothing passes.
 pub const MAX_ITERATIONS: u16 = 1000;
+
+/// Largest accepted [`Params::split_depth`].
+pub const MAX_SPLIT_DEPTH: u8 = 16;
 
 /// A parameter that makes no sense; names the field.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -95,6 +106,8 @@ pub enum ParamError {
     CornerGap,
     /// `min_corner_angle_deg` must be in 0..=90.
     MinCornerAngle,
+    /// `split_depth` must be at most [`MAX_SPLIT_DEPTH`].
+    SplitDepth,
 }
 
 impl fmt::Display for ParamError {
@@ -110,6 +123,7 @@ impl fmt::Display for ParamError {
             ParamError::MergeGate => "merge_gate must be finite and > 0",
             ParamError::CornerGap => "corner_gap must be finite and >= 0 (metres)",
             ParamError::MinCornerAngle => "min_corner_angle_deg must be between 0 and 90",
+            ParamError::SplitDepth => "split_depth must be at most 16",
         })
     }
 }
@@ -155,6 +169,9 @@ impl Params {
         }
         if !(self.min_corner_angle_deg >= 0.0 && self.min_corner_angle_deg <= 90.0) {
             return Err(ParamError::MinCornerAngle);
+        }
+        if self.split_depth > MAX_SPLIT_DEPTH {
+            return Err(ParamError::SplitDepth);
         }
         Ok(())
     }

@@ -132,7 +132,11 @@ fn params_strategy() -> impl Strategy<Value = Params> {
         ),
         (0.5f32..100.0, 3u16..=30, 0.1f32..1000.0, 0.0f32..2.0),
         (any::<bool>(), any::<bool>(), 0u16..=10, 0.1f32..100.0),
-        (0.0f32..2.0, 0.0f32..=90.0),
+        (
+            0.0f32..2.0,
+            0.0f32..=90.0,
+            prop_oneof![Just(0u8), 1u8..=lms_core::params::MAX_SPLIT_DEPTH],
+        ),
     )
         .prop_map(|(a, b, c, d)| Params {
             sigma: a.0,
@@ -148,6 +152,7 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             merge_gate: c.3,
             corner_gap: d.0,
             min_corner_angle_deg: d.1,
+            split_depth: d.2,
         })
 }
 
@@ -304,11 +309,20 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
     // Counts add up: segments, edge points.
     let (long, short, edges) = count_runs(d, params.tau, params.min_points);
     prop_assert_eq!(usize::from(f.stats.short_segments), short);
+    // Split before reject turns one segment into two per split, drops short
+    // halves and pieces that still fail.
+    let st = &f.stats;
     prop_assert_eq!(
-        f.segments.len() + usize::from(f.stats.segment_overflow),
-        long,
-        "segments kept + overflow"
+        f.segments.len()
+            + usize::from(st.segment_overflow)
+            + usize::from(st.split_short)
+            + usize::from(st.split_rejected),
+        long + usize::from(st.splits),
+        "segments kept + overflow (+ split accounting)"
     );
+    if params.split_depth == 0 {
+        prop_assert_eq!((st.splits, st.split_short, st.split_rejected), (0, 0, 0));
+    }
     prop_assert_eq!(f.edges.len() + usize::from(f.stats.edge_overflow), edges);
     prop_assert!(f.edges.windows(2).all(|w| w[0] < w[1]));
     prop_assert_eq!(usize::from(f.stats.valid_beams), frame.valid_count());
@@ -509,6 +523,13 @@ fn invalid_params_are_refused() {
     for iterations in [0, 1001, u16::MAX] {
         let p = Params {
             iterations,
+            ..Params::default()
+        };
+        assert!(extractor.run(&frame, &p).is_err());
+    }
+    for split_depth in [lms_core::params::MAX_SPLIT_DEPTH + 1, u8::MAX] {
+        let p = Params {
+            split_depth,
             ..Params::default()
         };
         assert!(extractor.run(&frame, &p).is_err());

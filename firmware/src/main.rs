@@ -55,6 +55,10 @@ mod app {
     const PARAMS: Params = {
         let mut p = Params::DEFAULT;
         p.iterations = crate::ITERATIONS;
+        if cfg!(feature = "split-before-reject") {
+            p.split_depth = 8;
+            p.fit_shared_points = false;
+        }
         p
     };
 

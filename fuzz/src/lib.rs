@@ -243,6 +243,8 @@ pub fn decode_features(input: &mut Input<'_>) -> (u32, u16, Features) {
         line_overflow: st[9],
         degenerate_corners: st[10],
         corner_overflow: st[11],
+        // Not carried by D0 (split before reject is off on the co-processor).
+        ..Stats::default()
     };
     for _ in 0..segments {
         let s = lms_core::segmentation::Segment {
@@ -492,6 +494,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 merge_gate: f32::from_bits(raw[8]),
                 corner_gap: f32::from_bits(raw[9]),
                 min_corner_angle_deg: f32::from_bits(raw[10]),
+                split_depth: raw[11] as u8,
             }
         }
         PARAMS_SANE => Params {
@@ -512,6 +515,11 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
             merge_gate: 0.01 + unit(raw[8]) * 100.0,
             corner_gap: unit(raw[9]) * 2.0,
             min_corner_angle_deg: unit(raw[10]) * 90.0,
+            split_depth: if flags & 4 == 0 {
+                0
+            } else {
+                (raw[11] % (u32::from(lms_core::params::MAX_SPLIT_DEPTH) + 1)) as u8
+            },
         },
         _ => Params {
             iterations: 1 + (raw[2] % 40) as u16,

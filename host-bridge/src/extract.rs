@@ -102,6 +102,9 @@ pub struct StatsRecord {
     pub line_overflow: u16,
     pub degenerate_corners: u16,
     pub corner_overflow: u16,
+    pub splits: u16,
+    pub split_short: u16,
+    pub split_rejected: u16,
 }
 
 impl From<&Stats> for StatsRecord {
@@ -119,6 +122,9 @@ impl From<&Stats> for StatsRecord {
             line_overflow: s.line_overflow,
             degenerate_corners: s.degenerate_corners,
             corner_overflow: s.corner_overflow,
+            splits: s.splits,
+            split_short: s.split_short,
+            split_rejected: s.split_rejected,
         }
     }
 }

@@ -33,6 +33,15 @@ pub struct ParamArgs {
     /// Do not merge consecutive agreeing lines (ALGORITHM.md §7.6)
     #[arg(long)]
     pub no_merge: bool,
+    /// Leave a corner point shared by two segments out of both line fits
+    /// (better calibrated corner covariances; docs/evaluation P2)
+    #[arg(long)]
+    pub no_shared_points: bool,
+    /// Split before reject: levels a segment that is not one straight line
+    /// may be split before the chi2 gate (docs/evaluation P1; 8 is the
+    /// evaluated proposal) [default: 0, as ALGORITHM.md]
+    #[arg(long, value_name = "LEVELS")]
+    pub split_depth: Option<u8>,
 }
 
 impl ParamArgs {
@@ -47,6 +56,8 @@ impl ParamArgs {
             min_points: self.min_points.unwrap_or(d.min_points),
             max_chi2: self.max_chi2.unwrap_or(d.max_chi2),
             merge: !self.no_merge,
+            fit_shared_points: !self.no_shared_points,
+            split_depth: self.split_depth.unwrap_or(d.split_depth),
             ..d
         };
         p.validate()

@@ -85,6 +85,7 @@
 //!   [`PtyPort`], an `embedded-io` 0.7 port); verify opens the two slave
 //!   devices with the `serialport` crate, exactly as in `--ports`.
 //! * `--qemu [ELF]`: the firmware under `qemu-system-arm -M netduinoplus2`
+//!   (extra QEMU arguments from the `QEMU_EXTRA` environment variable)
 //!   with its three serial ports on TCP sockets on 127.0.0.1 (free ports
 //!   chosen at start), as `firmware/run-qemu.sh` does: USART1 = host line,
 //!   USART2 = sensor line, USART3 = console (read all the time, since QEMU
@@ -1192,6 +1193,13 @@ impl Qemu {
         .args(["-serial", &serial(ports[0])])
         .args(["-serial", &serial(ports[1])])
         .args(["-serial", &serial(ports[2])])
+        // Extra QEMU arguments, as firmware/run-qemu.sh takes them (e.g. the
+        // instruction-counting plugin of tools/qemu-icount).
+        .args(
+            std::env::var("QEMU_EXTRA")
+                .unwrap_or_default()
+                .split_whitespace(),
+        )
         .arg("-kernel")
         .arg(elf)
         .stdin(Stdio::null())

@@ -353,6 +353,10 @@ fn stats_from(v: [u16; 12]) -> Stats {
         line_overflow: v[9],
         degenerate_corners: v[10],
         corner_overflow: v[11],
+        // Split before reject is off on the co-processor: not carried.
+        splits: 0,
+        split_short: 0,
+        split_rejected: 0,
     }
 }
 

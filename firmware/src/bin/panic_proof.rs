@@ -115,6 +115,7 @@ fn any_params() -> Params {
         merge_gate: any_f32(),
         corner_gap: any_f32(),
         min_corner_angle_deg: any_f32(),
+        split_depth: black_box(0),
     }
 }
 

@@ -1685,7 +1685,11 @@ fn findings(md: &mut String, ctx: &Ctx) {
          still fails, σΔα/CRB is {} and the mean line NEES {}. Cost: {} ms per synthetic scan on \
          this host (spec {}), {} ms per real scan (spec {}), with this unoptimised f64 code; on \
          the MCU it is one more fit per split and a 3×3 solve per guarded segment, and a small \
-         stack of segments — its budget has to be measured there.\n",
+         stack of segments — its budget has to be measured there. P1 is in the core as \
+         `Params::split_depth` (f32, no allocation; `extract --split-depth 8 \
+         --no-shared-points`): it gives the same pieces as this prototype \
+         (`host-bridge/tests/split_before_reject.rs`) and costs about a third more instructions \
+         per noisy scan on the MCU (README, firmware budgets).\n",
         super::PROPOSED_SPLIT_DEPTH,
         mm(h),
         f(a.true_pos, 3),

@@ -1,0 +1,392 @@
+//! Split before reject (not in ALGORITHM.md; proposal P1 of
+//! `docs/evaluation/README.md`), on when [`Params::split_depth`] > 0.
+//!
+//! §6 finds a corner only where `D` of a three-point window crosses `tau`;
+//! at σ = 20 mm most corners stay below it, two walls share one segment and
+//! §7.4's χ² test then rejects both. Here every segment is first tested
+//! with all its points as evidence:
+//!
+//! 1. fit the line to the valid raw points (§7); if `Σe²/σ²` is above the
+//!    99.9 % quantile of χ² with `m − 2` degrees of freedom, the segment is
+//!    not one straight line;
+//! 2. unless a circle explains it (an algebraic circle fit with
+//!    `Σ(‖p − c‖ − R)²/σ²` below the 99.9 % quantile of χ²ₘ₋₃: a curved
+//!    wall or a pillar is not cut into a polyline), split it at the valid
+//!    beam farthest from the chord of its first and last valid points; that
+//!    beam belongs to both halves, like §6's corner point;
+//! 3. treat each half the same way, at most `split_depth` levels deep;
+//!    halves with fewer than `min_points` beams are dropped;
+//! 4. a piece that still fails (a circle explains it, or the depth is
+//!    reached) is dropped.
+//!
+//! The pieces replace the segments, in scan order; §7.4–7.6 and §8 follow
+//! unchanged. Counted in [`Stats`]: `splits`, `split_short`,
+//! `split_rejected`; pieces beyond [`MAX_SEGMENTS`] in `segment_overflow`.
+//! All f32 via libm, in a fixed order, like the rest of the core.
+
+use heapless::Vec;
+
+use crate::extractor::{Stats, MAX_SEGMENTS};
+use crate::frame::Beam;
+use crate::line_fit::{fit_line, Bearings};
+use crate::params::{Params, MAX_SPLIT_DEPTH};
+use crate::segmentation::Segment;
+
+/// Upper 0.1 % quantile of χ² with `nu` degrees of freedom (Wilson–Hilferty:
+/// 1.8 % above the exact value at ν = 3, 0.6 % at ν = 10, 0.04 % at ν = 100).
+pub fn chi2_quantile_999(nu: f32) -> f32 {
+    const Z: f32 = 3.090_232; // standard normal 99.9 %
+    let a = 2.0 / (9.0 * nu);
+    let c = 1.0 - a + Z * libm::sqrtf(a);
+    nu * (c * c * c)
+}
+
+/// `true` if the valid points of `first..=last` are not one straight line:
+/// `Σe²/σ²` of their fit above [`chi2_quantile_999`] of `m − 2`, or no fit.
+///
+/// A cheap bound decides most failing pieces without the fit (whose
+/// Gauss–Newton steps need `sinf`/`cosf`, done in software f64 on the
+/// M4F): a range residual is never smaller than the perpendicular one, so
+/// `Σe²` of the fit is at least the least sum of squared perpendicular
+/// distances, the smaller eigenvalue of the points' scatter matrix. If that
+/// alone is above the quantile, so is the fit's.
+fn not_straight(
+    bearings: Bearings<'_>,
+    ranges: &[f32],
+    beams: &[Beam],
+    piece: Segment,
+    sigma: f32,
+) -> bool {
+    let span = usize::from(piece.first)..=usize::from(piece.last);
+    let points = || {
+        span.clone()
+            .filter_map(|j| point(&bearings, ranges, beams, j))
+    };
+    let (mut m, mut sx, mut sy) = (0u32, 0.0f32, 0.0f32);
+    for (x, y) in points() {
+        m += 1;
+        sx += x;
+        sy += y;
+    }
+    if m >= 3 {
+        let mf = m as f32;
+        let (cx, cy) = (sx / mf, sy / mf);
+        let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
+        for (x, y) in points() {
+            let (u, v) = (x - cx, y - cy);
+            sxx += u * u;
+            syy += v * v;
+            sxy += u * v;
+        }
+        let half_diff = (sxx - syy) / 2.0;
+        let least = (sxx + syy) / 2.0 - libm::sqrtf(half_diff * half_diff + sxy * sxy);
+        let dof = mf - 2.0;
+        if least / (sigma * sigma) > chi2_quantile_999(dof) {
+            return true;
+        }
+    }
+    match fit_line(bearings, ranges, beams, piece.first, piece.last, sigma) {
+        Ok(line) => {
+            let dof = f32::from(line.points.saturating_sub(2)).max(1.0);
+            line.chi2 * dof > chi2_quantile_999(dof)
+        }
+        Err(_) => true,
+    }
+}
+
+/// The point of beam `j` (m), if it is valid and inside the slices.
+fn point(bearings: &Bearings<'_>, ranges: &[f32], beams: &[Beam], j: usize) -> Option<(f32, f32)> {
+    match (
+        beams.get(j),
+        ranges.get(j),
+        bearings.cos.get(j),
+        bearings.sin.get(j),
+    ) {
+        (Some(b), Some(&d), Some(&c), Some(&s)) if b.is_valid() => Some((d * c, d * s)),
+        _ => None,
+    }
+}
+
+/// Whether a circle explains the valid points of `piece` within the noise
+/// `sigma` (m): the algebraic (Kåsa) fit of `x² + y² + D·x + E·y + F = 0`
+/// on centred, scaled points, then `Σ(‖p − c‖ − R)²/σ²` against
+/// [`chi2_quantile_999`] of `m − 3`. Fewer than 5 points: no.
+pub fn circle_explains(
+    bearings: Bearings<'_>,
+    ranges: &[f32],
+    beams: &[Beam],
+    piece: Segment,
+    sigma: f32,
+) -> bool {
+    let span = usize::from(piece.first)..=usize::from(piece.last);
+    let points = || {
+        span.clone()
+            .filter_map(|j| point(&bearings, ranges, beams, j))
+    };
+    // Centroid and RMS spread: the fit runs on O(1) coordinates.
+    let (mut m, mut sx, mut sy) = (0u32, 0.0f32, 0.0f32);
+    for (x, y) in points() {
+        m += 1;
+        sx += x;
+        sy += y;
+    }
+    if m < 5 {
+        return false;
+    }
+    let mf = m as f32;
+    let (cx, cy) = (sx / mf, sy / mf);
+    let mut spread = 0.0f32;
+    for (x, y) in points() {
+        spread += (x - cx) * (x - cx) + (y - cy) * (y - cy);
+    }
+    let scale = libm::sqrtf(spread / mf);
+    if !(scale > 0.0) {
+        return false;
+    }
+    // Normal equations: rows (u, v, 1), right-hand side −(u² + v²).
+    let (mut suu, mut suv, mut svv, mut su, mut sv) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    let (mut bu, mut bv, mut b1) = (0.0f32, 0.0f32, 0.0f32);
+    for (x, y) in points() {
+        let (u, v) = ((x - cx) / scale, (y - cy) / scale);
+        let rhs = -(u * u + v * v);
+        suu += u * u;
+        suv += u * v;
+        svv += v * v;
+        su += u;
+        sv += v;
+        bu += u * rhs;
+        bv += v * rhs;
+        b1 += rhs;
+    }
+    // Cramer's rule on the symmetric [[suu, suv, su], [suv, svv, sv], [su, sv, m]].
+    let det3 = |a: [[f32; 3]; 3]| {
+        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+    };
+    let a = [[suu, suv, su], [suv, svv, sv], [su, sv, mf]];
+    let det = det3(a);
+    // Relative to the diagonal: a straight run of points makes it vanish.
+    if !(libm::fabsf(det) > 1e-6 * suu * svv * mf) {
+        return false;
+    }
+    let solve = |col: usize| {
+        let mut c = a;
+        for (row, b) in [bu, bv, b1].into_iter().enumerate() {
+            c[row][col] = b;
+        }
+        det3(c) / det
+    };
+    let (d, e, f) = (solve(0), solve(1), solve(2));
+    let (ou, ov) = (-d / 2.0, -e / 2.0);
+    let rr = ou * ou + ov * ov - f;
+    if !(rr > 0.0) {
+        return false;
+    }
+    let radius = libm::sqrtf(rr);
+    let mut sum = 0.0f32;
+    for (x, y) in points() {
+        let (u, v) = ((x - cx) / scale, (y - cy) / scale);
+        // `sqrtf`, not `hypotf`: libm's `hypotf` works in f64, which the
+        // M4F does in software; the coordinates here are O(1), no overflow.
+        let (du, dv) = (u - ou, v - ov);
+        let e = (libm::sqrtf(du * du + dv * dv) - radius) * scale / sigma;
+        sum += e * e;
+    }
+    sum < chi2_quantile_999(mf - 3.0)
+}
+
+/// The valid beam of `piece` farthest from the chord of its first and last
+/// valid points, strictly between them; `None` if there is none.
+fn farthest_from_chord(
+    bearings: &Bearings<'_>,
+    ranges: &[f32],
+    beams: &[Beam],
+    piece: Segment,
+) -> Option<u16> {
+    let span = usize::from(piece.first)..=usize::from(piece.last);
+    let a = span
+        .clone()
+        .find(|&j| point(bearings, ranges, beams, j).is_some())?;
+    let b = span
+        .rev()
+        .find(|&j| point(bearings, ranges, beams, j).is_some())?;
+    let (pa, pb) = (
+        point(bearings, ranges, beams, a)?,
+        point(bearings, ranges, beams, b)?,
+    );
+    let (ex, ey) = (pb.0 - pa.0, pb.1 - pa.1);
+    let len = libm::sqrtf(ex * ex + ey * ey);
+    if !(len > 0.0) {
+        return None;
+    }
+    let mut best: Option<(f32, usize)> = None;
+    for j in a + 1..b {
+        if let Some(p) = point(bearings, ranges, beams, j) {
+            let dist = libm::fabsf(ex * (p.1 - pa.1) - ey * (p.0 - pa.0)) / len;
+            if best.is_none_or(|(d, _)| dist > d) {
+                best = Some((dist, j));
+            }
+        }
+    }
+    best.and_then(|(_, j)| u16::try_from(j).ok())
+}
+
+/// Replace `segments` by their pieces (see the module docs), counting in
+/// `stats`. `ranges` are the raw ranges (m) the lines are fitted to.
+#[inline(never)] // its buffers live on the stack only while it runs
+pub fn split_before_reject(
+    bearings: Bearings<'_>,
+    ranges: &[f32],
+    beams: &[Beam],
+    params: &Params,
+    segments: &mut Vec<Segment, MAX_SEGMENTS>,
+    stats: &mut Stats,
+) {
+    let depth = params.split_depth.min(MAX_SPLIT_DEPTH);
+    let mut out: Vec<Segment, MAX_SEGMENTS> = Vec::new();
+    // Depth-first, left half on top: at most one entry per level plus one.
+    let mut todo: Vec<(Segment, u8), { MAX_SPLIT_DEPTH as usize + 2 }> = Vec::new();
+    for &segment in segments.iter() {
+        todo.clear();
+        let _ = todo.push((segment, 0));
+        while let Some((piece, level)) = todo.pop() {
+            if !not_straight(bearings, ranges, beams, piece, params.sigma) {
+                if out.push(piece).is_err() {
+                    stats.segment_overflow = stats.segment_overflow.saturating_add(1);
+                }
+                continue;
+            }
+            let split_at = if level < depth
+                && !circle_explains(bearings, ranges, beams, piece, params.sigma)
+            {
+                farthest_from_chord(&bearings, ranges, beams, piece)
+            } else {
+                None
+            };
+            let Some(m) = split_at else {
+                stats.split_rejected = stats.split_rejected.saturating_add(1);
+                continue;
+            };
+            stats.splits = stats.splits.saturating_add(1);
+            let left = Segment {
+                first: piece.first,
+                last: m,
+            };
+            let right = Segment {
+                first: m,
+                last: piece.last,
+            };
+            for half in [right, left] {
+                if half.points() < usize::from(params.min_points) {
+                    stats.split_short = stats.split_short.saturating_add(1);
+                } else if todo.push((half, level + 1)).is_err() {
+                    // Not reached: the stack holds depth + 2 entries.
+                    stats.split_rejected = stats.split_rejected.saturating_add(1);
+                }
+            }
+        }
+    }
+    *segments = out;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Extractor, Frame, Variant};
+
+    /// Distance of the walls of [`corner_frame`] (m).
+    const WALL: f32 = 4.0;
+    /// Range noise assumed for it (m).
+    const SIGMA: f32 = 0.1;
+
+    /// A room corner seen from inside, noise-free: the wall `x = WALL` for
+    /// bearings below 45° and `y = WALL` above, at 180°/0.5°; beams beyond
+    /// 100° and below −10° see nothing (invalid).
+    fn corner_frame() -> Frame {
+        let mut frame = Frame::for_variant(Variant::Fov180Res50);
+        let g = frame.geometry();
+        for j in 0..frame.len() {
+            let phi = g.bearing(j);
+            let deg = phi.to_degrees();
+            if !(-10.0..=100.0).contains(&deg) {
+                frame.set_invalid(j, crate::Invalid::AboveMax);
+            } else if deg < 45.0 {
+                frame.set_metres(j, WALL / libm::cosf(phi));
+            } else {
+                frame.set_metres(j, WALL / libm::sinf(phi));
+            }
+        }
+        frame
+    }
+
+    #[test]
+    fn a_corner_the_windows_miss_is_split_and_found() {
+        // σ = 0.1 m: the three-point windows cannot see the 90° corner, so
+        // §6 gives one segment, which the spec's χ² gate rejects.
+        let frame = corner_frame();
+        let spec = Params {
+            sigma: SIGMA,
+            ..Params::default()
+        };
+        let mut ex = Extractor::new();
+        let f = ex.run(&frame, &spec).unwrap().clone();
+        assert_eq!(f.segments.len(), 1, "{:?}", f.segments);
+        assert!(f.lines.is_empty());
+        // Split before reject: two walls and their corner.
+        let split = Params {
+            split_depth: 8,
+            ..spec
+        };
+        let f = ex.run(&frame, &split).unwrap();
+        assert_eq!(f.stats.splits, 1, "{:?}", f.stats);
+        assert_eq!(f.lines.len(), 2, "{:?}", f.lines);
+        let c = f.corners.first().expect("a corner");
+        assert!(
+            (c.x - WALL).abs() < 1e-3 && (c.y - WALL).abs() < 1e-3,
+            "{c:?}"
+        );
+        assert!((c.angle_deg - 90.0).abs() < 0.1);
+    }
+
+    #[test]
+    fn an_arc_is_not_cut_into_a_polyline() {
+        // A circle of radius 1 m around (0, 3), seen from the origin.
+        let mut frame = Frame::for_variant(Variant::Fov180Res50);
+        let g = frame.geometry();
+        for j in 0..frame.len() {
+            let phi = g.bearing(j) + core::f32::consts::FRAC_PI_2;
+            // Near intersection of the ray (cos φ, sin φ) with the circle.
+            let b = 3.0 * libm::sinf(phi);
+            let disc = b * b - 8.0;
+            if disc > 0.0 {
+                frame.set_metres(j, b - libm::sqrtf(disc));
+            } else {
+                frame.set_invalid(j, crate::Invalid::AboveMax);
+            }
+        }
+        let p = Params {
+            sigma: 0.005,
+            split_depth: 8,
+            ..Params::default()
+        };
+        let mut ex = Extractor::new();
+        let f = ex.run(&frame, &p).unwrap();
+        assert!(f.lines.is_empty(), "{:?}", f.lines);
+        assert_eq!(f.stats.splits, 0, "{:?}", f.stats);
+        assert!(f.stats.split_rejected >= 1, "{:?}", f.stats);
+    }
+
+    #[test]
+    fn quantile_close_to_tables() {
+        // χ² 99.9 % quantiles (tables) and the approximation's error bound.
+        for (nu, exact, bound) in [
+            (3.0, 16.266, 0.02),
+            (10.0, 29.588, 0.007),
+            (100.0, 149.449, 0.001),
+        ] {
+            let q = chi2_quantile_999(nu);
+            assert!((q - exact).abs() / exact < bound, "nu {nu}: {q} vs {exact}");
+        }
+    }
+}
