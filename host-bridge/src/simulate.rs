@@ -65,7 +65,8 @@
 //!
 //! `--bit-error-rate P` flips each bit on the line with probability `P`,
 //! `--drop-rate P` loses each byte with probability `P`, in both directions
-//! (seeded by `--fault-seed`), to try a client against a noisy RS-232/422
+//! (seeded by `--fault-seed`, one generator per direction, so what reaches
+//! the client depends only on what was sent), to try a client against a noisy RS-232/422
 //! link: the sensor NAKs damaged requests, the client has to skip damaged
 //! telegrams. The summary counts the bits flipped and bytes dropped.
 //!
@@ -591,7 +592,10 @@ struct Line {
     /// The (client, sensor) speeds of the mismatch last reported.
     mismatch: Option<(Option<u32>, Baud)>,
     scrambler: Scrambler,
-    faults: LineFaults,
+    /// Faults on the client → sensor and sensor → client directions, each
+    /// with its own generator, so that what reaches the client depends only
+    /// on the bytes sent, not on how the two directions interleave.
+    faults: [LineFaults; 2],
     counters: Counters,
     verbose: bool,
     clock: Instant,
@@ -669,8 +673,8 @@ impl Line {
             match self.pty.read(&mut buf)? {
                 ReadOutcome::Data(n) => {
                     if self.speeds_match(lms.baud())? {
-                        if self.faults.active() {
-                            let arrived = self.faults.apply(&buf[..n]);
+                        if self.faults[0].active() {
+                            let arrived = self.faults[0].apply(&buf[..n]);
                             lms.receive(now_us, &arrived);
                         } else {
                             lms.receive(now_us, &buf[..n]);
@@ -693,8 +697,8 @@ impl Line {
         }
         let garbled: Vec<u8>;
         let mut rest = if self.speeds_match(sensor)? {
-            if self.faults.active() {
-                garbled = self.faults.apply(bytes);
+            if self.faults[1].active() {
+                garbled = self.faults[1].apply(bytes);
                 &garbled
             } else {
                 bytes
@@ -867,7 +871,14 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         connected: false,
         mismatch: None,
         scrambler: Scrambler(0x2545_F491),
-        faults: LineFaults::new(args.bit_error_rate, args.drop_rate, args.fault_seed),
+        faults: [
+            LineFaults::new(args.bit_error_rate, args.drop_rate, args.fault_seed),
+            LineFaults::new(
+                args.bit_error_rate,
+                args.drop_rate,
+                args.fault_seed ^ 0xA5A5_A5A5_A5A5_A5A5,
+            ),
+        ],
         counters: Counters::default(),
         verbose: args.verbose,
         clock,
@@ -987,11 +998,12 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
          {} overrun; {} connections",
         c.no_client, c.garbled_out, c.dropped_in, c.overrun, c.connections
     );
-    if line.faults.active() {
+    if line.faults[0].active() {
         let _ = write!(
             summary,
             "; line faults: {} bits flipped, {} bytes dropped",
-            line.faults.bits_flipped, line.faults.bytes_dropped
+            line.faults[0].bits_flipped + line.faults[1].bits_flipped,
+            line.faults[0].bytes_dropped + line.faults[1].bytes_dropped
         );
     }
     eprintln!("{summary}");
