@@ -302,7 +302,7 @@ impl Extractor {
 /// The beams fitted for segment `k`: the whole segment (§7), or, with
 /// `fit_shared_points == false`, without a first/last point it shares with
 /// the neighbouring segment (a corner point lies on neither line exactly).
-fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16, u16) {
+pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16, u16) {
     let Some(seg) = segments.get(k) else {
         return (0, 0);
     };
@@ -320,7 +320,7 @@ fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16, u1
 /// §7.6: merge `prev` and `next` if only invalid beams (or at most
 /// `merge_gap_beams` valid ones) lie between them, their parameters agree
 /// within `merge_gate`, and the refit of the union passes `max_chi2`.
-fn try_merge(
+pub fn try_merge(
     bearings: Bearings<'_>,
     raw: &[f32],
     beams: &[Beam],

@@ -4,9 +4,6 @@
 //! features that are bit-identical to running the extractor on the scan the
 //! client received.
 
-use std::collections::VecDeque;
-use std::convert::Infallible;
-
 use lms_core::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{
@@ -17,39 +14,8 @@ use lms_core::telegram::{
 };
 use lms_core::{Extractor, Params, Variant};
 
-/// One direction of a serial line in memory.
-#[derive(Default)]
-struct Port {
-    rx: VecDeque<u8>,
-    tx: Vec<u8>,
-}
-
-impl embedded_io::ErrorType for Port {
-    type Error = Infallible;
-}
-impl embedded_io::Read for Port {
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
-        let n = buf.len().min(self.rx.len());
-        for b in buf.iter_mut().take(n) {
-            *b = self.rx.pop_front().unwrap();
-        }
-        Ok(n)
-    }
-}
-impl embedded_io::ReadReady for Port {
-    fn read_ready(&mut self) -> Result<bool, Infallible> {
-        Ok(!self.rx.is_empty())
-    }
-}
-impl embedded_io::Write for Port {
-    fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
-        self.tx.extend_from_slice(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-}
+mod common;
+use common::Port;
 
 /// A room: a wall 3 m ahead, side walls 2 m away, a box; mm values with a
 /// little deterministic noise and some no-echo beams.

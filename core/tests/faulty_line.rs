@@ -41,8 +41,7 @@
 //!
 //! `cargo test -p lms-core --test faulty_line -- --nocapture` prints the tables.
 
-use std::collections::{HashMap, HashSet, VecDeque};
-use std::convert::Infallible;
+use std::collections::{HashMap, HashSet};
 
 use lms_core::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::emulator::{Emulator, FnSource, Settings};
@@ -52,45 +51,13 @@ use lms_core::telegram::{
 };
 use lms_core::{Params, Variant};
 
+mod common;
+use common::Port;
+
 /// Scans per fault type.
 const SCANS: u32 = 300;
 /// Simulation step (µs).
 const STEP_US: u64 = 1000;
-
-// ------------------------------------------------------------------ ports --
-
-#[derive(Default)]
-struct Port {
-    rx: VecDeque<u8>,
-    tx: Vec<u8>,
-}
-
-impl embedded_io::ErrorType for Port {
-    type Error = Infallible;
-}
-impl embedded_io::Read for Port {
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
-        let n = buf.len().min(self.rx.len());
-        for (b, v) in buf.iter_mut().zip(self.rx.drain(..n)) {
-            *b = v;
-        }
-        Ok(n)
-    }
-}
-impl embedded_io::ReadReady for Port {
-    fn read_ready(&mut self) -> Result<bool, Infallible> {
-        Ok(!self.rx.is_empty())
-    }
-}
-impl embedded_io::Write for Port {
-    fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
-        self.tx.extend_from_slice(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-}
 
 // ------------------------------------------------------------- the faults --
 

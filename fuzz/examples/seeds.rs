@@ -9,8 +9,6 @@
 //!
 //! Deterministic: the same files every run.
 
-use std::collections::VecDeque;
-use std::convert::Infallible;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
@@ -20,8 +18,8 @@ use lms_core::telegram::features::{emit_features, EchoedParams};
 use lms_core::telegram::{MeasuredValues, RangeBits, Request, Units, ACK};
 use lms_core::{Extractor, Params, Variant};
 use lms_fuzz::{
-    encode_features, encode_pipeline_words, units_byte, FramerInput, Ops, Output, FRAMER_ABANDON,
-    FRAMER_HANDSHAKE, FRAMER_HOST_TO_SENSOR,
+    encode_features, encode_pipeline_words, units_byte, FramerInput, Ops, Output, Port,
+    FRAMER_ABANDON, FRAMER_HANDSHAKE, FRAMER_HOST_TO_SENSOR,
 };
 
 /// Telegrams of PROTOCOL.md §4 (hex).
@@ -203,39 +201,6 @@ impl Corpus {
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join(name), bytes).unwrap();
         self.files += 1;
-    }
-}
-
-/// One direction of a serial line in memory.
-#[derive(Default)]
-struct Port {
-    rx: VecDeque<u8>,
-    tx: Vec<u8>,
-}
-impl embedded_io::ErrorType for Port {
-    type Error = Infallible;
-}
-impl embedded_io::Read for Port {
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
-        let n = buf.len().min(self.rx.len());
-        for (b, v) in buf.iter_mut().zip(self.rx.drain(..n)) {
-            *b = v;
-        }
-        Ok(n)
-    }
-}
-impl embedded_io::ReadReady for Port {
-    fn read_ready(&mut self) -> Result<bool, Infallible> {
-        Ok(!self.rx.is_empty())
-    }
-}
-impl embedded_io::Write for Port {
-    fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
-        self.tx.extend_from_slice(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> Result<(), Infallible> {
-        Ok(())
     }
 }
 

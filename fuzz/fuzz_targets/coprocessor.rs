@@ -10,46 +10,13 @@
 //! "not valid" throughout).
 #![no_main]
 
-use std::collections::{HashSet, VecDeque};
-use std::convert::Infallible;
+use std::collections::HashSet;
 
 use libfuzzer_sys::fuzz_target;
 use lms_core::coprocessor::{CoProcessor, SensorSetup};
 use lms_core::telegram::{Direction, Framer};
 use lms_core::Params;
-use lms_fuzz::{drain, op, Ev, Input};
-
-#[derive(Default)]
-struct Port {
-    rx: VecDeque<u8>,
-    tx: Vec<u8>,
-}
-impl embedded_io::ErrorType for Port {
-    type Error = Infallible;
-}
-impl embedded_io::Read for Port {
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
-        let n = buf.len().min(self.rx.len());
-        for (b, v) in buf.iter_mut().zip(self.rx.drain(..n)) {
-            *b = v;
-        }
-        Ok(n)
-    }
-}
-impl embedded_io::ReadReady for Port {
-    fn read_ready(&mut self) -> Result<bool, Infallible> {
-        Ok(!self.rx.is_empty())
-    }
-}
-impl embedded_io::Write for Port {
-    fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
-        self.tx.extend_from_slice(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-}
+use lms_fuzz::{drain, op, Ev, Input, Port};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);

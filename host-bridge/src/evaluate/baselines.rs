@@ -28,12 +28,12 @@
 use heapless::Vec as HVec;
 use lms_core::corners::{intersect, Corner};
 use lms_core::ekf::WindowFilter;
-use lms_core::extractor::{MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
+use lms_core::extractor::{fit_span, try_merge, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 use lms_core::frame::MAX_BEAMS;
-use lms_core::line_fit::{fit_line, parameter_distance, Bearings, Line};
+use lms_core::line_fit::{fit_line, Bearings, Line};
 use lms_core::maths::Vec3;
 use lms_core::segmentation::{segment, Segment};
-use lms_core::{Beam, Extractor, Frame, Params};
+use lms_core::{Extractor, Frame, Params};
 
 /// The bearing tables of a frame, computed as the extractor does (`libm`).
 #[derive(Clone, Debug, PartialEq)]
@@ -83,50 +83,6 @@ pub fn run_core(ex: &mut Extractor, frame: &Frame, params: &Params) -> Extractio
             corners: f.corners.to_vec(),
         },
         Err(_) => Extraction::default(),
-    }
-}
-
-/// The beams fitted for segment `k` (the extractor's `fit_span`).
-fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16, u16) {
-    let Some(seg) = segments.get(k) else {
-        return (0, 0);
-    };
-    if fit_shared_points {
-        return (seg.first, seg.last);
-    }
-    let shares_first = k > 0 && segments.get(k - 1).is_some_and(|p| p.last == seg.first);
-    let shares_last = segments.get(k + 1).is_some_and(|n| n.first == seg.last);
-    (
-        seg.first.saturating_add(u16::from(shares_first)),
-        seg.last.saturating_sub(u16::from(shares_last)),
-    )
-}
-
-/// §7.6 (the extractor's `try_merge`).
-fn try_merge(
-    bearings: Bearings<'_>,
-    ranges: &[f32],
-    beams: &[Beam],
-    prev: &Line,
-    next: &Line,
-    params: &Params,
-) -> Option<Line> {
-    let gap_start = prev.last as usize + 1;
-    let gap_end = next.first as usize;
-    let valid_between = beams
-        .get(gap_start..gap_end.max(gap_start))
-        .map_or(0, |b| b.iter().filter(|b| b.is_valid()).count());
-    if valid_between > params.merge_gap_beams as usize {
-        return None;
-    }
-    if !(parameter_distance(prev, next)? < params.merge_gate) {
-        return None;
-    }
-    let merged = fit_line(bearings, ranges, beams, prev.first, next.last, params.sigma).ok()?;
-    if merged.chi2 <= params.max_chi2 {
-        Some(merged)
-    } else {
-        None
     }
 }
 
