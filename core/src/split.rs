@@ -57,20 +57,10 @@ fn not_straight(
     piece: Segment,
     sigma: f32,
 ) -> bool {
-    let span = usize::from(piece.first)..=usize::from(piece.last);
-    let points = || {
-        span.clone()
-            .filter_map(|j| point(&bearings, ranges, beams, j))
-    };
-    let (mut m, mut sx, mut sy) = (0u32, 0.0f32, 0.0f32);
-    for (x, y) in points() {
-        m += 1;
-        sx += x;
-        sy += y;
-    }
+    let points = || valid_points(bearings, ranges, beams, piece);
+    let (m, cx, cy) = centroid(points());
     if m >= 3 {
         let mf = m as f32;
-        let (cx, cy) = (sx / mf, sy / mf);
         let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
         for (x, y) in points() {
             let (u, v) = (x - cx, y - cy);
@@ -107,6 +97,32 @@ fn point(bearings: &Bearings<'_>, ranges: &[f32], beams: &[Beam], j: usize) -> O
     }
 }
 
+/// The valid points of `piece` (m), in beam order.
+fn valid_points<'a>(
+    bearings: Bearings<'a>,
+    ranges: &'a [f32],
+    beams: &'a [Beam],
+    piece: Segment,
+) -> impl Iterator<Item = (f32, f32)> + 'a {
+    (usize::from(piece.first)..=usize::from(piece.last))
+        .filter_map(move |j| point(&bearings, ranges, beams, j))
+}
+
+/// How many `points` there are and their centroid (m); `(0, 0, 0)` for none.
+fn centroid(points: impl Iterator<Item = (f32, f32)>) -> (u32, f32, f32) {
+    let (mut m, mut sx, mut sy) = (0u32, 0.0f32, 0.0f32);
+    for (x, y) in points {
+        m += 1;
+        sx += x;
+        sy += y;
+    }
+    if m == 0 {
+        return (0, 0.0, 0.0);
+    }
+    let mf = m as f32;
+    (m, sx / mf, sy / mf)
+}
+
 /// Whether a circle explains the valid points of `piece` within the noise
 /// `sigma` (m): the algebraic (Kåsa) fit of `x² + y² + D·x + E·y + F = 0`
 /// on centred, scaled points, then `Σ(‖p − c‖ − R)²/σ²` against
@@ -118,23 +134,13 @@ pub fn circle_explains(
     piece: Segment,
     sigma: f32,
 ) -> bool {
-    let span = usize::from(piece.first)..=usize::from(piece.last);
-    let points = || {
-        span.clone()
-            .filter_map(|j| point(&bearings, ranges, beams, j))
-    };
+    let points = || valid_points(bearings, ranges, beams, piece);
     // Centroid and RMS spread: the fit runs on O(1) coordinates.
-    let (mut m, mut sx, mut sy) = (0u32, 0.0f32, 0.0f32);
-    for (x, y) in points() {
-        m += 1;
-        sx += x;
-        sy += y;
-    }
+    let (m, cx, cy) = centroid(points());
     if m < 5 {
         return false;
     }
     let mf = m as f32;
-    let (cx, cy) = (sx / mf, sy / mf);
     let mut spread = 0.0f32;
     for (x, y) in points() {
         spread += (x - cx) * (x - cx) + (y - cy) * (y - cy);
