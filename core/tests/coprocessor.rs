@@ -23,17 +23,7 @@ fn room_scan(seed: &mut u64, variant: Variant, units: Units, out: &mut [u16]) ->
     let g = variant.geometry();
     for (j, v) in out.iter_mut().enumerate() {
         let phi = g.first_bearing as f64 + j as f64 * g.step as f64;
-        let (c, s) = (phi.cos(), phi.sin());
-        let mut d = f64::INFINITY;
-        if c > 1e-6 {
-            d = d.min(3.0 / c);
-        }
-        if s.abs() > 1e-6 {
-            d = d.min(2.0 / s.abs());
-        }
-        if (-0.2..0.1).contains(&phi) {
-            d = d.min(1.5 / c);
-        }
+        let d = common::room_distance_m(phi);
         *seed = seed
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);

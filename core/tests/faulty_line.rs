@@ -259,17 +259,7 @@ fn room(k: u32, out: &mut [u16]) -> usize {
     let mut seed = u64::from(k).wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
     for (j, v) in out.iter_mut().enumerate() {
         let phi = f64::from(g.bearing(j));
-        let (c, s) = (phi.cos(), phi.sin());
-        let mut d = f64::INFINITY;
-        if c > 1e-6 {
-            d = d.min(3.0 / c);
-        }
-        if s.abs() > 1e-6 {
-            d = d.min(2.0 / s.abs());
-        }
-        if (-0.2..0.1).contains(&phi) {
-            d = d.min(1.5 / c);
-        }
+        let d = common::room_distance_m(phi);
         seed ^= seed << 13;
         seed ^= seed >> 7;
         seed ^= seed << 17;

@@ -30,6 +30,8 @@ use lms_core::telegram::features::{Assembled, FeatureAssembler};
 use lms_core::telegram::{Direction, Event, Framer, Request, Units};
 use lms_core::{Params, Variant};
 
+mod common;
+
 // ------------------------------------------------- the counting allocator --
 
 /// Counts allocations made on a thread while its `MEASURING` flag is set.
@@ -155,17 +157,7 @@ fn room(seed: &mut u64, out: &mut [u16]) -> usize {
     let g = Variant::Fov180Res50.geometry();
     for (j, v) in out.iter_mut().enumerate() {
         let phi = f64::from(g.bearing(j));
-        let (c, s) = (phi.cos(), phi.sin());
-        let mut d = f64::INFINITY;
-        if c > 1e-6 {
-            d = d.min(3.0 / c);
-        }
-        if s.abs() > 1e-6 {
-            d = d.min(2.0 / s.abs());
-        }
-        if (-0.2..0.1).contains(&phi) {
-            d = d.min(1.5 / c);
-        }
+        let d = common::room_distance_m(phi);
         *seed ^= *seed << 13;
         *seed ^= *seed >> 7;
         *seed ^= *seed << 17;
