@@ -68,18 +68,7 @@ fn main() {
         writeln!(out, "edges {:?}", f.edges).unwrap();
         writeln!(out, "segments {:?}", f.segments).unwrap();
         for l in &f.lines {
-            let v = [
-                l.alpha,
-                l.r,
-                l.cov.a,
-                l.cov.b,
-                l.cov.c,
-                l.chi2,
-                l.endpoints[0][0],
-                l.endpoints[0][1],
-                l.endpoints[1][0],
-                l.endpoints[1][1],
-            ];
+            let v = l.floats();
             writeln!(
                 out,
                 "line {} {} {} {:08x?}",

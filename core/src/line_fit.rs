@@ -49,6 +49,23 @@ pub struct Line {
 }
 
 impl Line {
+    /// Every `f32` of the line in the order of the `D1` record: α, r,
+    /// cov αα, αr, rr, chi2, x₀, y₀, x₁, y₁.
+    pub fn floats(&self) -> [f32; 10] {
+        [
+            self.alpha,
+            self.r,
+            self.cov.a,
+            self.cov.b,
+            self.cov.c,
+            self.chi2,
+            self.endpoints[0][0],
+            self.endpoints[0][1],
+            self.endpoints[1][0],
+            self.endpoints[1][1],
+        ]
+    }
+
     /// Distance between the endpoints (m).
     pub fn length(&self) -> f32 {
         let dx = self.endpoints[1][0] - self.endpoints[0][0];

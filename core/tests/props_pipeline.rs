@@ -339,18 +339,7 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
             .position(|s| s.first <= beam && beam <= s.last)
     };
     for l in &f.lines {
-        let values = [
-            l.alpha,
-            l.r,
-            l.cov.a,
-            l.cov.b,
-            l.cov.c,
-            l.chi2,
-            l.endpoints[0][0],
-            l.endpoints[0][1],
-            l.endpoints[1][0],
-            l.endpoints[1][1],
-        ];
+        let values = l.floats();
         prop_assert!(
             values.iter().all(|v| v.is_finite()),
             "line not finite: {:?}",

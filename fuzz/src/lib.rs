@@ -370,18 +370,7 @@ pub fn encode_features(out: &mut Output, counter: u32, beams: u16, f: &Features)
         out.u16(e);
     }
     for l in &f.lines {
-        for v in [
-            l.alpha,
-            l.r,
-            l.cov.a,
-            l.cov.b,
-            l.cov.c,
-            l.chi2,
-            l.endpoints[0][0],
-            l.endpoints[0][1],
-            l.endpoints[1][0],
-            l.endpoints[1][1],
-        ] {
+        for v in l.floats() {
             out.f32(v);
         }
         out.u16(l.first).u16(l.last).u16(l.points);

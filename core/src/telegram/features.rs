@@ -363,18 +363,7 @@ fn stats_from(v: [u16; 12]) -> Stats {
 /// Line record, 46 bytes: α, r, cov αα, αr, rr, chi2, x₀, y₀, x₁, y₁
 /// (10 × f32), first, last, points (3 × u16).
 fn encode_line(w: &mut Writer<'_>, l: &Line) {
-    for v in [
-        l.alpha,
-        l.r,
-        l.cov.a,
-        l.cov.b,
-        l.cov.c,
-        l.chi2,
-        l.endpoints[0][0],
-        l.endpoints[0][1],
-        l.endpoints[1][0],
-        l.endpoints[1][1],
-    ] {
+    for v in l.floats() {
         w.f32(v);
     }
     w.u16(l.first);
