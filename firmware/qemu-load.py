@@ -16,7 +16,6 @@ throughput and what 10 000 scans would take. Python 3 standard library.
 
 import importlib.util
 import os
-import socket
 import subprocess
 import sys
 import tempfile
@@ -56,20 +55,7 @@ def main():
         host = smoke.connect(base + 1, deadline)
         sensor = smoke.connect(base + 2, deadline)
         control = smoke.connect(base + 3, deadline)
-        first = None
-        while first is None and time.monotonic() < deadline:
-            control.sendall(b"s")
-            try:
-                first = smoke.read_line(control, timeout=0.2)
-            except socket.timeout:
-                pass
-        time.sleep(0.3)
-        control.settimeout(0.1)
-        try:
-            while control.recv(65536):
-                pass
-        except socket.timeout:
-            pass
+        first = smoke.wait_for_console(control, deadline)
         smoke.check("console answers", bool(first))
 
         lms = smoke.FakeSensor(sensor)

@@ -215,6 +215,28 @@ def read_exact(sock, n, timeout=5.0):
     return bytes(buf)
 
 
+def wait_for_console(control, deadline):
+    """Ask the console for its report until it answers (the receivers are
+    all on by then) or `deadline` (time.monotonic()) passes; returns the
+    first line or None. Every answer must be read (an unread port stalls
+    QEMU), so the answers to the retries are waited out and dropped."""
+    first = None
+    while first is None and time.monotonic() < deadline:
+        control.sendall(b"s")
+        try:
+            first = read_line(control, timeout=0.2)
+        except socket.timeout:
+            pass
+    time.sleep(0.3)
+    control.settimeout(0.1)
+    try:
+        while control.recv(65536):
+            pass
+    except socket.timeout:
+        pass
+    return first
+
+
 def read_line(sock, timeout=2.0):
     sock.settimeout(timeout)
     buf = bytearray()
@@ -376,23 +398,7 @@ def main():
         sensor = connect(base + 2, deadline)
         control = connect(base + 3, deadline)
 
-        # Ready when the console answers: the receivers are all on by then.
-        # Every answer must be read (an unread port stalls QEMU), so wait
-        # out the answers to the retries too.
-        first = None
-        while first is None and time.monotonic() < deadline:
-            control.sendall(b"s")
-            try:
-                first = read_line(control, timeout=0.2)
-            except socket.timeout:
-                pass
-        time.sleep(0.3)
-        control.settimeout(0.1)
-        try:
-            while control.recv(65536):
-                pass
-        except socket.timeout:
-            pass
+        first = wait_for_console(control, deadline)
         check("console answers", bool(first), (first or "").strip()[:60] + " ...")
 
         if STANDIN:
