@@ -4,8 +4,8 @@
 //! features that are bit-identical to running the extractor on the scan the
 //! client received.
 
-use lms_core::coprocessor::{CoProcessor, SensorSetup, Step};
-use lms_core::emulator::{Emulator, FnSource, Settings};
+use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
+use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{
     Assembled, Counters, FeatureAssembler, CMD_COUNTERS, REQ_COUNTERS,
 };
@@ -151,7 +151,7 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
                     assert_eq!(got.segments, want.segments);
                     assert_eq!(got.edges, want.edges);
                     assert_eq!(got.stats, want.stats);
-                    let bits = |l: &lms_core::line_fit::Line| {
+                    let bits = |l: &lms_core::Line| {
                         [
                             l.alpha,
                             l.r,

@@ -43,8 +43,8 @@
 
 use std::collections::{HashMap, HashSet};
 
-use lms_core::coprocessor::{CoProcessor, SensorSetup, Step};
-use lms_core::emulator::{Emulator, FnSource, Settings};
+use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
+use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{Assembled, FeatureAssembler, CMD_COUNTERS, REQ_COUNTERS};
 use lms_core::telegram::{
     emit_telegram, Direction, Event, Framer, FramerStats, Request, Units, ACK, NAK,

@@ -1,15 +1,15 @@
 //! Byte-exact vectors of the co-processor's feature telegrams: the worked
 //! example of `docs/PROTOCOL.md` §3, emitted and parsed back.
 
-use lms_core::corners::Corner;
-use lms_core::extractor::Features;
-use lms_core::line_fit::Line;
 use lms_core::maths::Sym2;
-use lms_core::segmentation::Segment;
 use lms_core::telegram::features::{
     emit_features, Assembled, Counters, EchoedParams, FeatureAssembler, REQ_COUNTERS,
 };
 use lms_core::telegram::{crc16, emit_telegram, Direction, Telegram};
+use lms_core::Corner;
+use lms_core::Features;
+use lms_core::Line;
+use lms_core::Segment;
 
 const SEGMENTS: &str = "02 80 0F 00 D4 2A 00 00 00 02 0A 00 3C 00 3C 00 78 00 10 4E 8C";
 const EDGES: &str = "02 80 0A 00 D3 2A 00 00 00 01 00 3C 00 10 62 F6";

@@ -26,11 +26,11 @@
 
 use std::f32::consts::PI;
 
-use lms_core::extractor::{MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 use lms_core::frame::MAX_BEAMS;
 use lms_core::maths::Sym2;
 use lms_core::telegram::RangeBits;
 use lms_core::{Extractor, Frame, Geometry, Invalid, Params, Variant};
+use lms_core::{MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 use proptest::prelude::*;
 
 /// Corners at least this far from parallel (degrees) have a positive

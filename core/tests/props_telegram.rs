@@ -284,10 +284,10 @@ proptest! {
         stats in any::<[u16; 12]>(),
         params in any::<(u16, u32, u32, u32)>(),
     ) {
-        use lms_core::corners::Corner;
-        use lms_core::line_fit::Line;
+        use lms_core::Corner;
+        use lms_core::Line;
         use lms_core::maths::Sym2;
-        use lms_core::segmentation::Segment;
+        use lms_core::Segment;
         let mut f = lms_core::Features::default();
         for (first, last) in segments {
             f.segments.push(Segment { first, last }).unwrap();

@@ -24,8 +24,8 @@ use std::convert::Infallible;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-use lms_core::coprocessor::{CoProcessor, SensorSetup, Step};
-use lms_core::emulator::{Emulator, FnSource, Settings};
+use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
+use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{Assembled, FeatureAssembler};
 use lms_core::telegram::{Direction, Event, Framer, Request, Units};
 use lms_core::{Params, Variant};

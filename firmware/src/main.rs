@@ -2,7 +2,7 @@
 //! `netduinoplus2` models it. Only glue: board bring-up ([`board`]), the
 //! UARTs as `embedded-io` streams ([`serial`]), the time base ([`clock`]),
 //! a control console ([`control`]) and the loop that feeds the core's
-//! [`CoProcessor`](lms_core::coprocessor::CoProcessor) (or, with the
+//! [`CoProcessor`](lms_core::device::coprocessor::CoProcessor) (or, with the
 //! `standin` feature, a plain forwarder, [`standin`]).
 //!
 //! Exit codes (semihosting, become QEMU's exit status): see [`EXIT_SUCCESS`]
@@ -23,7 +23,7 @@ use core::panic::PanicInfo;
 use cortex_m_rt::entry;
 use defmt_semihosting as _; // the global defmt logger
 
-use lms_core::coprocessor::PollError;
+use lms_core::device::coprocessor::PollError;
 
 use crate::control::{Command, Report};
 
@@ -42,7 +42,7 @@ pub const EXIT_UNEXPECTED_IRQ: i32 = 3;
 /// bring-up step for the log.
 #[cfg(not(feature = "standin"))]
 mod app {
-    use lms_core::coprocessor::{CoProcessor, SensorSetup, Step};
+    use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
     use lms_core::Params;
 
     pub type App = CoProcessor;
@@ -83,7 +83,7 @@ mod app {
 
     pub fn start(_app: &mut App, _now_us: u64) {}
 
-    pub fn step(_app: &App) -> Option<lms_core::coprocessor::Step> {
+    pub fn step(_app: &App) -> Option<lms_core::device::coprocessor::Step> {
         None
     }
 }

@@ -7,7 +7,7 @@
 //! every complete, checked telegram counts as a scan.
 
 use embedded_io::{Read, ReadReady, Write};
-use lms_core::coprocessor::{PollError, PollOutcome};
+use lms_core::device::coprocessor::{PollError, PollOutcome};
 use lms_core::telegram::features::Counters;
 use lms_core::telegram::{Direction, Event, Framer};
 

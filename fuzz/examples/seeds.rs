@@ -12,8 +12,8 @@
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
-use lms_core::coprocessor::{CoProcessor, SensorSetup};
-use lms_core::emulator::{Emulator, FnSource, Settings};
+use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
+use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{emit_features, EchoedParams};
 use lms_core::telegram::{MeasuredValues, RangeBits, Request, Units, ACK};
 use lms_core::{Extractor, Params, Variant};

@@ -13,7 +13,7 @@
 use std::collections::HashSet;
 
 use libfuzzer_sys::fuzz_target;
-use lms_core::coprocessor::{CoProcessor, SensorSetup};
+use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
 use lms_core::telegram::{Direction, Framer};
 use lms_core::Params;
 use lms_fuzz::{drain, op, Ev, Input, Port};

@@ -10,7 +10,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use lms_core::emulator::{Emulator, FnSource, Settings};
+use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::{Direction, Framer};
 use lms_core::Variant;
 use lms_fuzz::{drain, op, pattern_words, Input};

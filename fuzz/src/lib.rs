@@ -9,10 +9,10 @@
 use std::collections::VecDeque;
 use std::convert::Infallible;
 
-use lms_core::extractor::{Features, Stats, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 use lms_core::frame::MAX_BEAMS;
 use lms_core::maths::Sym2;
 use lms_core::telegram::{Direction, Event, Framer, RangeBits, Units};
+use lms_core::{Features, Stats, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 use lms_core::{Frame, Geometry, Invalid, Params, Variant};
 
 /// A reader over the fuzzer's bytes; zeros once they run out.
@@ -286,7 +286,7 @@ pub fn decode_features(input: &mut Input<'_>) -> (u32, u16, Features) {
         ..Stats::default()
     };
     for _ in 0..segments {
-        let s = lms_core::segmentation::Segment {
+        let s = lms_core::Segment {
             first: input.u16(),
             last: input.u16(),
         };
@@ -300,7 +300,7 @@ pub fn decode_features(input: &mut Input<'_>) -> (u32, u16, Features) {
         for x in v.iter_mut() {
             *x = input.f32();
         }
-        let l = lms_core::line_fit::Line {
+        let l = lms_core::Line {
             alpha: v[0],
             r: v[1],
             cov: Sym2 {
@@ -321,7 +321,7 @@ pub fn decode_features(input: &mut Input<'_>) -> (u32, u16, Features) {
         for x in v.iter_mut() {
             *x = input.f32();
         }
-        let c = lms_core::corners::Corner {
+        let c = lms_core::Corner {
             x: v[0],
             y: v[1],
             cov: Sym2 {

@@ -13,7 +13,7 @@ use std::io::{self, Write};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
-use lms_core::extractor::Stats;
+use lms_core::Stats;
 use lms_core::{Extractor, Frame, Params};
 use serde::{Deserialize, Serialize};
 

@@ -11,7 +11,7 @@
 //!
 //! It opens a pseudo-terminal ([`crate::pty`]), prints the slave device
 //! (e.g. `/dev/pts/7`) as one line on stdout, optionally links `--link` to
-//! it, and runs [`lms_core::emulator::Emulator`] behind it: the client's
+//! it, and runs [`lms_core::device::emulator::Emulator`] behind it: the client's
 //! bytes are fed in with the monotonic clock, the sensor's bytes are written
 //! paced at the sensor's current line rate (10 bits per byte). An unmodified
 //! LMS 2xx client opens the device like a serial port.
@@ -89,7 +89,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, ensure, Context, Result};
 use clap::{Args, ValueEnum};
-use lms_core::emulator::{Emulator, Event, Handled, ScanSource, Settings};
+use lms_core::device::emulator::{Emulator, Event, Handled, ScanSource, Settings};
 use lms_core::telegram::{Baud, MeasuredValues, RangeBits, Units};
 use lms_core::{Invalid, Variant};
 use lms_scene::{seeded_rng, Bearings, NoiseModel, Pose, RangeUnit, Scene};

@@ -16,7 +16,7 @@
 //! # What it plays
 //!
 //! * **The sensor** on the co-processor's sensor line: a simulated LMS 2xx
-//!   ([`lms_core::emulator::Emulator`]) that the co-processor brings up
+//!   ([`lms_core::device::emulator::Emulator`]) that the co-processor brings up
 //!   itself (variant, mm, 500 kBd, continuous output). Its scans come from a
 //!   [`PlaySource`]: the synthetic scene (default; the frames of
 //!   `host-bridge extract` with the same scene options) or the `FLASER`
@@ -111,8 +111,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, ensure, Context, Result};
 use clap::Args;
-use lms_core::coprocessor::{CoProcessor, PollError, SensorSetup};
-use lms_core::emulator::{Emulator, Event as EmuEvent, ScanSource, Settings};
+use lms_core::device::coprocessor::{CoProcessor, PollError, SensorSetup};
+use lms_core::device::emulator::{Emulator, Event as EmuEvent, ScanSource, Settings};
 use lms_core::telegram::features::{
     Assembled, Counters, EchoedParams, FeatureAssembler, Summary, CMD_CORNERS, CMD_COUNTERS,
     CMD_EDGES, CMD_LINES, CMD_SEGMENTS, CMD_SUMMARY, REQ_COUNTERS,
@@ -500,7 +500,7 @@ impl fmt::Display for Difference {
 }
 
 /// The fields of a line, in the order of the `D1` record.
-fn line_fields(l: &lms_core::line_fit::Line) -> [(&'static str, Value); 13] {
+fn line_fields(l: &lms_core::Line) -> [(&'static str, Value); 13] {
     use Value::{Float as F, Int as I};
     [
         ("alpha", F(l.alpha)),
@@ -520,7 +520,7 @@ fn line_fields(l: &lms_core::line_fit::Line) -> [(&'static str, Value); 13] {
 }
 
 /// The fields of a corner, in the order of the `D2` record.
-fn corner_fields(c: &lms_core::corners::Corner) -> [(&'static str, Value); 9] {
+fn corner_fields(c: &lms_core::Corner) -> [(&'static str, Value); 9] {
     use Value::{Flag, Float as F, Int as I};
     [
         ("x", F(c.x)),
@@ -536,7 +536,7 @@ fn corner_fields(c: &lms_core::corners::Corner) -> [(&'static str, Value); 9] {
 }
 
 /// The statistics, in the order of the `D0` summary.
-fn stats_fields(s: &lms_core::extractor::Stats) -> [(&'static str, Value); 12] {
+fn stats_fields(s: &lms_core::Stats) -> [(&'static str, Value); 12] {
     let i = |v: u16| Value::Int(v.into());
     [
         ("valid_beams", i(s.valid_beams)),
@@ -1924,7 +1924,7 @@ pub fn run(args: &VerifyArgs) -> Result<()> {
             let sensor = TtyLine::open(sensor_pty.slave_path(), Baud::B9600)?;
             let host = TtyLine::open(host_pty.slave_path(), Baud::B9600)?;
             let how = format!(
-                "lms_core::coprocessor::CoProcessor in a thread, host line {}, sensor line {}",
+                "lms_core::device::coprocessor::CoProcessor in a thread, host line {}, sensor line {}",
                 host_pty.slave_path().display(),
                 sensor_pty.slave_path().display()
             );
@@ -2074,11 +2074,11 @@ mod tests {
     fn features() -> Features {
         let mut f = Features::default();
         f.segments
-            .push(lms_core::segmentation::Segment { first: 3, last: 40 })
+            .push(lms_core::Segment { first: 3, last: 40 })
             .unwrap();
         f.edges.push(40).unwrap();
         f.lines
-            .push(lms_core::line_fit::Line {
+            .push(lms_core::Line {
                 alpha: 0.5,
                 r: 2.0,
                 cov: Sym2 {

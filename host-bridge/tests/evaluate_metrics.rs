@@ -8,9 +8,10 @@ use host_bridge::evaluate::metrics::{
     crb, scan_truth, score_corners, score_lines, CornerTruth, Gates, ScanTruth, Tally, TruePiece,
 };
 use host_bridge::evaluate::variants::chi2_quantile_999;
-use lms_core::corners::Corner;
-use lms_core::line_fit::{fit_line, Line};
 use lms_core::maths::Sym2;
+use lms_core::pipeline::line_fit::fit_line;
+use lms_core::Corner;
+use lms_core::Line;
 use lms_core::{Beam, Frame, Params, Variant};
 use lms_scene::{Bearings, Pose, Scene};
 use rand::Rng;

@@ -24,7 +24,7 @@ use host_bridge::fake_sensor::{FakeSensor, StreamFault};
 use host_bridge::scan::{run_session, Plan};
 use host_bridge::simulate::SceneSource;
 use host_bridge::synthetic::SceneArgs;
-use lms_core::emulator::{Emulator, Event as EmuEvent, FnSource, ScanSource, Settings};
+use lms_core::device::emulator::{Emulator, Event as EmuEvent, FnSource, ScanSource, Settings};
 use lms_core::telegram::{Baud, MeasuredValues, Units};
 use lms_core::Variant;
 

@@ -2,9 +2,9 @@
 //! an honest covariance; a shallow bend is reported, but flagged
 //! ill-conditioned.
 
-use lms_core::corners::intersect;
 use lms_core::frame::{Frame, Variant};
-use lms_core::line_fit::{fit_line, Bearings};
+use lms_core::pipeline::corners::intersect;
+use lms_core::pipeline::line_fit::{fit_line, Bearings};
 use lms_core::{Extractor, Params};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -198,7 +198,7 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
 /// fails `chi2`, so the frame has no line there at all (printed). The end to
 /// end check runs at sigma = 0.5 mm (five seeds). The conditioning flag is then checked at 5 mm on the
 /// two walls' lines fitted on their true beams and intersected by
-/// `lms_core::corners::intersect`.
+/// `lms_core::pipeline::corners::intersect`.
 #[test]
 fn a_ten_degree_bend_is_an_ill_conditioned_corner() {
     let bend = 10f64.to_radians();

@@ -350,7 +350,7 @@ fn gaussian_smooth(ranges: &[f32], valid: &[bool], s: f64) -> Vec<f32> {
 ///   ranges still intersect within 3 mm of the vertex (RMS; measured 1.3 mm).
 #[test]
 fn the_line_model_keeps_a_corner_that_a_gaussian_mask_moves() {
-    use lms_core::line_fit::{fit_line, Bearings as CoreBearings};
+    use lms_core::pipeline::line_fit::{fit_line, Bearings as CoreBearings};
     let variant = Variant::Fov180Res50;
     let scene = Scene::two_walls_corner(90.0);
     let truth = scene.cast(&Bearings::lms_180_half_deg(), Pose::IDENTITY);
@@ -450,7 +450,8 @@ fn the_line_model_keeps_a_corner_that_a_gaussian_mask_moves() {
                     .expect("a wall fits")
                 };
                 let (l1, l2) = (fit(&truth.lines[0]), fit(&truth.lines[1]));
-                let c = lms_core::corners::intersect(0, &l1, 1, &l2, 30.0).expect("a corner");
+                let c =
+                    lms_core::pipeline::corners::intersect(0, &l1, 1, &l2, 30.0).expect("a corner");
                 (c.x as f64 - vertex.point.x).hypot(c.y as f64 - vertex.point.y)
             })
             .collect();

@@ -26,13 +26,11 @@
 //!
 //! Nothing here panics or allocates; encoders measure their buffer first.
 
-use crate::corners::Corner;
-use crate::extractor::{Features, Stats, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
+use crate::features::{Corner, Line, Segment};
+use crate::features::{Features, Stats, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 use crate::frame::MAX_BEAMS;
-use crate::line_fit::Line;
 use crate::maths::Sym2;
 use crate::params::Params;
-use crate::segmentation::Segment;
 
 use super::packet::{emit_telegram_with, EmitError, Telegram};
 use super::{DEFAULT_STATUS, MAX_TELEGRAM_LEN, REPLY_ADDRESS_BIT};

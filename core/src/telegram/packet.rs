@@ -46,7 +46,7 @@ pub enum TelegramError {
         /// The `LEN` field.
         len: u16,
     },
-    /// `LEN` exceeds [`MAX_LEN`](super::MAX_LEN).
+    /// `LEN` exceeds [`MAX_LEN`].
     TooLong {
         /// The `LEN` field.
         len: u16,
@@ -89,7 +89,7 @@ pub enum EmitError {
         /// Bytes the complete telegram needs.
         needed: usize,
     },
-    /// The payload would make `LEN` exceed [`MAX_LEN`](super::MAX_LEN).
+    /// The payload would make `LEN` exceed [`MAX_LEN`].
     TooLong {
         /// The `LEN` the telegram would have (saturated at `usize::MAX`).
         len: usize,
@@ -129,7 +129,7 @@ impl<T: AsRef<[u8]>> Telegram<T> {
     }
 
     /// Wrap bytes and check `STX`, `LEN` (at least the command (+ status),
-    /// at most [`MAX_LEN`](super::MAX_LEN), within the buffer) and the CRC.
+    /// at most [`MAX_LEN`], within the buffer) and the CRC.
     pub fn new_checked(buffer: T, direction: Direction) -> Result<Self, TelegramError> {
         let t = Self::new_unchecked(buffer, direction);
         t.check()?;

@@ -36,8 +36,8 @@ use core::panic::PanicInfo;
 use cortex_m_rt::entry;
 use embedded_io::{ErrorType, Read, ReadReady, Write};
 
-use lms_core::coprocessor::{CoProcessor, SensorSetup};
-use lms_core::emulator::{Emulator, FnSource, Settings};
+use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
+use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::frame::MAX_BEAMS;
 use lms_core::telegram::features::{emit_features, EchoedParams, FeatureAssembler};
 use lms_core::telegram::{

@@ -5,7 +5,7 @@
 //! ALGORITHM.md §7–8 stage (`Extractor::run` after segmentation: the fit
 //! span of `fit_shared_points`, `fit_line` on the **raw** ranges, the
 //! `max_chi2` gate, the §7.6 merge, `min_length` after merging, corners by
-//! `lms_core::corners::intersect` within `corner_gap`, the same capacities).
+//! `lms_core::pipeline::corners::intersect` within `corner_gap`, the same capacities).
 //! A test checks that it gives the core's lines and corners bit for bit on
 //! the core's own segments. So the baselines differ from the core only in
 //! how a scan is cut into segments:
@@ -26,14 +26,18 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use heapless::Vec as HVec;
-use lms_core::corners::{intersect, Corner};
-use lms_core::ekf::WindowFilter;
-use lms_core::extractor::{fit_span, try_merge, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 use lms_core::frame::MAX_BEAMS;
-use lms_core::line_fit::{fit_line, Bearings, Line};
 use lms_core::maths::Vec3;
-use lms_core::segmentation::{segment, Segment};
+use lms_core::pipeline::corners::intersect;
+use lms_core::pipeline::ekf::WindowFilter;
+use lms_core::pipeline::line_fit::{fit_line, Bearings};
+use lms_core::pipeline::segmentation::segment;
+use lms_core::unstable::{fit_span, try_merge};
+use lms_core::Corner;
+use lms_core::Line;
+use lms_core::Segment;
 use lms_core::{Extractor, Frame, Params};
+use lms_core::{MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 
 /// The bearing tables of a frame, computed as the extractor does (`libm`).
 #[derive(Clone, Debug, PartialEq)]

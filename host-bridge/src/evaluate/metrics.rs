@@ -41,8 +41,8 @@
 //! (30°). An extracted corner (any) within 0.10 m matches, one-to-one by
 //! distance. Corner FalsePos counts unmatched well-conditioned corners.
 
-use lms_core::corners::Corner;
-use lms_core::line_fit::Line;
+use lms_core::Corner;
+use lms_core::Line;
 use lms_core::{Beam, Params};
 use lms_scene::{wrap_angle, PolarLine, Scene, Surface, TrueScan};
 
@@ -277,7 +277,8 @@ pub fn corner_evidence(
     frame: &lms_core::Frame,
     sigma: f64,
 ) -> Vec<f64> {
-    let filter = lms_core::ekf::WindowFilter::new(frame.geometry().step, sigma as f32, 0.0);
+    let filter =
+        lms_core::pipeline::ekf::WindowFilter::new(frame.geometry().step, sigma as f32, 0.0);
     let r: Vec<Option<f32>> = truth
         .hits
         .iter()

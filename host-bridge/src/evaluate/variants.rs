@@ -11,13 +11,13 @@
 // `!(x < limit)` is deliberate, as in the core: NaN fails the test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use lms_core::ekf::WindowFilter;
 use lms_core::maths::Vec3;
-use lms_core::smoothing::weight;
+use lms_core::pipeline::ekf::WindowFilter;
+use lms_core::pipeline::smoothing::weight;
 use lms_core::{Frame, Params};
 
-use lms_core::line_fit::fit_line;
-use lms_core::segmentation::Segment;
+use lms_core::pipeline::line_fit::fit_line;
+use lms_core::Segment;
 
 use super::baselines::{features_from_segments, segments_of, Extraction, Tables};
 
@@ -306,11 +306,7 @@ pub fn smooth(frame: &Frame, params: &Params, opts: &Options) -> (Vec<f32>, Vec<
 
 /// Segments of a stride-`k` `D` (§6 generalised: a run of non-breaking
 /// windows `i..=m` covers beams `i..=m+2k`).
-pub fn segments_strided(
-    d: &[f32],
-    params: &Params,
-    k: usize,
-) -> Vec<lms_core::segmentation::Segment> {
+pub fn segments_strided(d: &[f32], params: &Params, k: usize) -> Vec<lms_core::Segment> {
     // `segments_of` covers i..=m+2: judge min_points on the widened run.
     let extra = 2 * (k.max(1) - 1);
     let loose = Params {

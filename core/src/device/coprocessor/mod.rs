@@ -19,9 +19,10 @@ pub mod sensor_link;
 
 use embedded_io::{Read, ReadReady, Write};
 
-use crate::emulator::{Emulator, Event as HostEvent, Handled, ScanSource, Settings};
-use crate::extractor::{Extractor, Features};
+use crate::device::emulator::{Emulator, Event as HostEvent, Handled, ScanSource, Settings};
+use crate::features::Features;
 use crate::params::Params;
+use crate::pipeline::extractor::Extractor;
 use crate::telegram::features::{emit_features, Counters, EchoedParams, REQ_COUNTERS};
 use crate::telegram::{
     Baud, Direction, MeasuredView, RangeBits, Telegram, Units, MAX_TELEGRAM_LEN, MAX_VALUES,

@@ -14,28 +14,8 @@
 //! The angle between the lines is folded into [0°, 90°]; a corner below
 //! `min_corner_angle_deg` is reported with `well_conditioned = false`.
 
-use crate::line_fit::Line;
+use crate::features::{Corner, Line};
 use crate::maths::{wrap_angle, Sym2};
-
-/// A corner feature.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Corner {
-    /// Position in the sensor frame (m), x forward.
-    pub x: f32,
-    /// Position in the sensor frame (m), y left.
-    pub y: f32,
-    /// Covariance of (x, y) in m².
-    pub cov: Sym2,
-    /// Angle between the two lines, folded into [0°, 90°].
-    pub angle_deg: f32,
-    /// `angle_deg >= min_corner_angle_deg`.
-    pub well_conditioned: bool,
-    /// Index of the first line (in the frame's line list).
-    pub line_a: u8,
-    /// Index of the second line.
-    pub line_b: u8,
-}
 
 /// Intersect lines number `a` and `b` of a frame. `None` if they are parallel
 /// or the point is not finite; the caller counts such a pair.

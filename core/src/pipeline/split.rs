@@ -26,11 +26,10 @@
 
 use heapless::Vec;
 
-use crate::extractor::{Stats, MAX_SEGMENTS};
+use crate::features::{Segment, Stats, MAX_SEGMENTS};
 use crate::frame::Beam;
-use crate::line_fit::{fit_line, Bearings};
 use crate::params::{Params, MAX_SPLIT_DEPTH};
-use crate::segmentation::Segment;
+use crate::pipeline::line_fit::{fit_line, Bearings};
 
 /// Upper 0.1 % quantile of χ² with `nu` degrees of freedom (Wilson–Hilferty:
 /// 1.8 % above the exact value at ν = 3, 0.6 % at ν = 10, 0.04 % at ν = 100).

@@ -7,23 +7,7 @@
 
 use heapless::Vec;
 
-/// A run of points `first..=last` (beam indices) explained by one line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Segment {
-    /// First beam index.
-    pub first: u16,
-    /// Last beam index (inclusive).
-    pub last: u16,
-}
-
-impl Segment {
-    /// Number of points covered.
-    #[inline]
-    pub fn points(&self) -> usize {
-        (self.last as usize + 1).saturating_sub(self.first as usize)
-    }
-}
+use crate::features::Segment;
 
 /// What segmentation dropped or could not store.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -9,77 +9,16 @@
 
 use heapless::Vec;
 
-use crate::corners::{intersect, Corner};
-use crate::ekf::WindowFilter;
-use crate::frame::{Beam, Frame, Geometry, MAX_BEAMS};
-use crate::line_fit::{fit_line, parameter_distance, Bearings, Line};
+use crate::features::{Features, Stats, MAX_WINDOWS};
+use crate::frame::{Frame, Geometry, MAX_BEAMS};
 use crate::params::{ParamError, Params};
-use crate::segmentation::{segment, Segment};
-use crate::smoothing::{smoothing_pass, valid_windows};
-use crate::split::split_before_reject;
-
-/// Most windows in a frame (`MAX_BEAMS − 2`).
-pub const MAX_WINDOWS: usize = MAX_BEAMS - 2;
-/// Most segments kept per frame.
-pub const MAX_SEGMENTS: usize = 64;
-/// Most lines kept per frame.
-pub const MAX_LINES: usize = 64;
-/// Most corners kept per frame.
-pub const MAX_CORNERS: usize = 63;
-
-/// What a frame's run dropped, rejected or could not store. Nothing is lost
-/// silently: every item that is not in [`Features`] is counted here.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Stats {
-    /// Valid beams in the frame.
-    pub valid_beams: u16,
-    /// Windows that are invalid (an invalid beam or a prediction behind the sensor).
-    pub invalid_windows: u16,
-    /// Segments shorter than `min_points`.
-    pub short_segments: u16,
-    /// Segments beyond [`MAX_SEGMENTS`].
-    pub segment_overflow: u16,
-    /// Edge points beyond capacity (cannot happen with [`MAX_BEAMS`] slots; counted anyway).
-    pub edge_overflow: u16,
-    /// Segments whose fit failed (grazing incidence, singular).
-    pub degenerate_fits: u16,
-    /// Lines rejected for `chi2 > max_chi2`.
-    pub rejected_chi2: u16,
-    /// Lines rejected for `length < min_length`.
-    pub rejected_short: u16,
-    /// Pairs of lines merged into one.
-    pub merges: u16,
-    /// Lines beyond [`MAX_LINES`].
-    pub line_overflow: u16,
-    /// Close line pairs that are parallel (no finite intersection).
-    pub degenerate_corners: u16,
-    /// Corners beyond [`MAX_CORNERS`].
-    pub corner_overflow: u16,
-    /// Split before reject ([`crate::split`], off by default): segments
-    /// split in two. Not carried by the `D0` telegram.
-    pub splits: u16,
-    /// Split before reject: halves dropped for fewer than `min_points` beams.
-    pub split_short: u16,
-    /// Split before reject: pieces dropped because they are still not one
-    /// straight line (a circle explains them, or the depth is reached).
-    pub split_rejected: u16,
-}
-
-/// The features of one frame.
-#[derive(Clone, Debug, Default)]
-pub struct Features {
-    /// Segments that passed `min_points`, in scan order.
-    pub segments: Vec<Segment, MAX_SEGMENTS>,
-    /// Edge points: middle beams of breaking valid windows, ascending.
-    pub edges: Vec<u16, MAX_BEAMS>,
-    /// Accepted lines, in scan order.
-    pub lines: Vec<Line, MAX_LINES>,
-    /// Corners between consecutive lines, in scan order.
-    pub corners: Vec<Corner, MAX_CORNERS>,
-    /// Counters of everything dropped or rejected.
-    pub stats: Stats,
-}
+use crate::pipeline::corners::intersect;
+use crate::pipeline::ekf::WindowFilter;
+use crate::pipeline::line_fit::{fit_line, Bearings};
+use crate::pipeline::merge::{fit_span, try_merge};
+use crate::pipeline::segmentation::segment;
+use crate::pipeline::smoothing::{smoothing_pass, valid_windows};
+use crate::pipeline::split::split_before_reject;
 
 /// All working memory of the pipeline, reused frame after frame.
 pub struct Extractor {
@@ -296,53 +235,5 @@ impl Extractor {
         }
         let _ = n;
         self.geometry = Some(geometry);
-    }
-}
-
-/// The beams fitted for segment `k`: the whole segment (§7), or, with
-/// `fit_shared_points == false`, without a first/last point it shares with
-/// the neighbouring segment (a corner point lies on neither line exactly).
-pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16, u16) {
-    let Some(seg) = segments.get(k) else {
-        return (0, 0);
-    };
-    if fit_shared_points {
-        return (seg.first, seg.last);
-    }
-    let shares_first = k > 0 && segments.get(k - 1).is_some_and(|p| p.last == seg.first);
-    let shares_last = segments.get(k + 1).is_some_and(|n| n.first == seg.last);
-    (
-        seg.first.saturating_add(u16::from(shares_first)),
-        seg.last.saturating_sub(u16::from(shares_last)),
-    )
-}
-
-/// §7.6: merge `prev` and `next` if only invalid beams (or at most
-/// `merge_gap_beams` valid ones) lie between them, their parameters agree
-/// within `merge_gate`, and the refit of the union passes `max_chi2`.
-pub fn try_merge(
-    bearings: Bearings<'_>,
-    raw: &[f32],
-    beams: &[Beam],
-    prev: &Line,
-    next: &Line,
-    params: &Params,
-) -> Option<Line> {
-    let gap_start = prev.last as usize + 1;
-    let gap_end = next.first as usize; // exclusive
-    let valid_between = beams
-        .get(gap_start..gap_end.max(gap_start))
-        .map_or(0, |b| b.iter().filter(|b| b.is_valid()).count());
-    if valid_between > params.merge_gap_beams as usize {
-        return None;
-    }
-    if !(parameter_distance(prev, next)? < params.merge_gate) {
-        return None;
-    }
-    let merged = fit_line(bearings, raw, beams, prev.first, next.last, params.sigma).ok()?;
-    if merged.chi2 <= params.max_chi2 {
-        Some(merged)
-    } else {
-        None
     }
 }

@@ -1,6 +1,6 @@
 //! Smoothing passes in the modified scale space (ALGORITHM.md §4–5, paper eq. 11–12).
 //!
-//! One pass runs the window filter of [`crate::ekf`] on every window
+//! One pass runs the window filter of [`crate::pipeline::ekf`] on every window
 //! `i = 0 … n−3` (beams `i, i+1, i+2`) of the current ranges, weighs each
 //! estimate by `w_i = exp(−D_i/2)`, and moves every valid point `j` to
 //!
@@ -13,9 +13,9 @@
 //! is done, and no later window reads it. Only the three most recent window
 //! estimates are kept, so a pass needs no storage beyond the ranges and `D`.
 
-use crate::ekf::WindowFilter;
 use crate::frame::Beam;
 use crate::maths::Vec3;
+use crate::pipeline::ekf::WindowFilter;
 
 /// The smoothing weight `w = exp(−D/2)` of eq. 11 (0 for `D = +inf`).
 #[inline]

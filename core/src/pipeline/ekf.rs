@@ -13,8 +13,8 @@
 //! evaluated as `x⁺ = z − sigma²·u`, which equals `x̂ + K·v`:
 //! `K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·u` and `x̂ + v = z`.
 
-use crate::line_model::{predict_unchecked, Prediction};
 use crate::maths::{Sym3, Vec3};
+use crate::pipeline::line_model::{predict_unchecked, Prediction};
 
 /// Result of the filter on one valid window.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,7 +113,7 @@ impl WindowFilter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::line_model::predict;
+    use crate::pipeline::line_model::predict;
 
     const GAMMA: f32 = 0.5 * core::f32::consts::PI / 180.0;
 

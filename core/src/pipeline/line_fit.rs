@@ -15,6 +15,7 @@
 //! the only transcendentals per fit are one `atan2`, and one `cos`/`sin` of
 //! `α` per Gauss–Newton step.
 
+use crate::features::Line;
 use crate::frame::Beam;
 use crate::maths::{wrap_angle, Sym2};
 
@@ -25,54 +26,6 @@ pub const GN_STEP_TOLERANCE: f32 = 1e-6;
 /// Lines whose every beam must satisfy `cos(phi_j − α) > MIN_INCIDENCE_COS`
 /// (the line must be seen from the front, not grazing); otherwise the fit fails.
 pub const MIN_INCIDENCE_COS: f32 = 1e-3;
-
-/// A fitted line with its uncertainty.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Line {
-    /// Normal direction α (rad), in (−π, π].
-    pub alpha: f32,
-    /// Distance from the sensor r (m), ≥ 0.
-    pub r: f32,
-    /// Covariance of (α, r): `[[αα, αr], [αr, rr]]` in rad², rad·m, m².
-    pub cov: Sym2,
-    /// First beam index of the fitted segment.
-    pub first: u16,
-    /// Last beam index of the fitted segment (inclusive).
-    pub last: u16,
-    /// Number of valid points used in the fit.
-    pub points: u16,
-    /// Fit quality `Σ e² / (sigma²·(m − 2))`; ≈ 1 for a true line.
-    pub chi2: f32,
-    /// First and last points projected onto the line, `[[x, y], [x, y]]` (m).
-    pub endpoints: [[f32; 2]; 2],
-}
-
-impl Line {
-    /// Every `f32` of the line in the order of the `D1` record: α, r,
-    /// cov αα, αr, rr, chi2, x₀, y₀, x₁, y₁.
-    pub fn floats(&self) -> [f32; 10] {
-        [
-            self.alpha,
-            self.r,
-            self.cov.a,
-            self.cov.b,
-            self.cov.c,
-            self.chi2,
-            self.endpoints[0][0],
-            self.endpoints[0][1],
-            self.endpoints[1][0],
-            self.endpoints[1][1],
-        ]
-    }
-
-    /// Distance between the endpoints (m).
-    pub fn length(&self) -> f32 {
-        let dx = self.endpoints[1][0] - self.endpoints[0][0];
-        let dy = self.endpoints[1][1] - self.endpoints[0][1];
-        libm::sqrtf(dx * dx + dy * dy)
-    }
-}
 
 /// Why a segment gave no line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

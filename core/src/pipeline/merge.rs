@@ -1,0 +1,57 @@
+//! Which beams a segment's fit uses, and the merge of neighbouring lines
+//! (ALGORITHM.md §7, §7.6). Private to the pipeline; the evaluation's
+//! baselines reach it through the `unstable-lab` feature
+//! (`lms_core::unstable`), which carries no stability promise.
+
+use crate::features::{Line, Segment};
+use crate::frame::Beam;
+use crate::params::Params;
+use crate::pipeline::line_fit::{fit_line, parameter_distance, Bearings};
+
+/// The beams fitted for segment `k`: the whole segment (§7), or, with
+/// `fit_shared_points == false`, without a first/last point it shares with
+/// the neighbouring segment (a corner point lies on neither line exactly).
+pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16, u16) {
+    let Some(seg) = segments.get(k) else {
+        return (0, 0);
+    };
+    if fit_shared_points {
+        return (seg.first, seg.last);
+    }
+    let shares_first = k > 0 && segments.get(k - 1).is_some_and(|p| p.last == seg.first);
+    let shares_last = segments.get(k + 1).is_some_and(|n| n.first == seg.last);
+    (
+        seg.first.saturating_add(u16::from(shares_first)),
+        seg.last.saturating_sub(u16::from(shares_last)),
+    )
+}
+
+/// §7.6: merge `prev` and `next` if only invalid beams (or at most
+/// `merge_gap_beams` valid ones) lie between them, their parameters agree
+/// within `merge_gate`, and the refit of the union passes `max_chi2`.
+pub fn try_merge(
+    bearings: Bearings<'_>,
+    raw: &[f32],
+    beams: &[Beam],
+    prev: &Line,
+    next: &Line,
+    params: &Params,
+) -> Option<Line> {
+    let gap_start = prev.last as usize + 1;
+    let gap_end = next.first as usize; // exclusive
+    let valid_between = beams
+        .get(gap_start..gap_end.max(gap_start))
+        .map_or(0, |b| b.iter().filter(|b| b.is_valid()).count());
+    if valid_between > params.merge_gap_beams as usize {
+        return None;
+    }
+    if !(parameter_distance(prev, next)? < params.merge_gate) {
+        return None;
+    }
+    let merged = fit_line(bearings, raw, beams, prev.first, next.last, params.sigma).ok()?;
+    if merged.chi2 <= params.max_chi2 {
+        Some(merged)
+    } else {
+        None
+    }
+}
