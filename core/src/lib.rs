@@ -7,7 +7,8 @@
 //!    [`frame`] (one scan: ranges in metres with a status per beam, §1),
 //!    [`features`] (segments, edges, lines, corners and the counters of what
 //!    was dropped, [`Stats`]), [`params`] (the tuning of §9) and [`maths`]
-//!    (small fixed-size vectors and symmetric matrices).
+//!    (small fixed-size vectors and symmetric matrices), [`units`] (the
+//!    sensor's range unit, [`Unit`]).
 //! 2. **The pipeline** ([`pipeline`]): frame → [`pipeline::line_model`] →
 //!    [`pipeline::ekf`] → [`pipeline::smoothing`] →
 //!    [`pipeline::segmentation`] → [`pipeline::line_fit`] →
@@ -36,6 +37,7 @@ pub mod maths;
 pub mod params;
 pub mod pipeline;
 pub mod telegram;
+pub mod units;
 
 /// Pipeline internals for the evaluation package (`lab/`): no stability
 /// promise, may change in any release. Off unless feature `unstable-lab`.
@@ -53,3 +55,4 @@ pub use frame::{Beam, Frame, Geometry, Invalid, Variant};
 pub use params::{ParamError, Params};
 pub use pipeline::extractor::Extractor;
 pub use pipeline::line_fit::FitError;
+pub use units::Unit;

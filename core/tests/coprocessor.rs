@@ -10,8 +10,9 @@ use lms_core::telegram::features::{
     Assembled, Counters, FeatureAssembler, CMD_COUNTERS, REQ_COUNTERS,
 };
 use lms_core::telegram::{
-    emit_telegram, Direction, Event, Framer, MeasuredView, RangeBits, Request, Units,
+    emit_telegram, Direction, Event, Framer, MeasuredView, RangeBits, Request,
 };
+use lms_core::Unit;
 use lms_core::{Extractor, Params, Variant};
 
 mod common;
@@ -19,7 +20,7 @@ use common::Port;
 
 /// A room: a wall 3 m ahead, side walls 2 m away, a box; mm values with a
 /// little deterministic noise and some no-echo beams.
-fn room_scan(seed: &mut u64, variant: Variant, units: Units, out: &mut [u16]) -> usize {
+fn room_scan(seed: &mut u64, variant: Variant, units: Unit, out: &mut [u16]) -> usize {
     let g = variant.geometry();
     for (j, v) in out.iter_mut().enumerate() {
         let phi = g.first_bearing as f64 + j as f64 * g.step as f64;
@@ -28,7 +29,7 @@ fn room_scan(seed: &mut u64, variant: Variant, units: Units, out: &mut [u16]) ->
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
         let noise = ((*seed >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 0.01;
-        let scale = if units == Units::Millimetre {
+        let scale = if units == Unit::Millimetre {
             1000.0
         } else {
             100.0
@@ -43,7 +44,7 @@ fn room_scan(seed: &mut u64, variant: Variant, units: Units, out: &mut [u16]) ->
 }
 
 /// The simulated sensor's scan source.
-type RoomSource = Box<dyn FnMut(Variant, Units, &mut [u16]) -> usize>;
+type RoomSource = Box<dyn FnMut(Variant, Unit, &mut [u16]) -> usize>;
 
 struct Bench {
     lms: Emulator<FnSource<RoomSource>>,

@@ -46,9 +46,8 @@ use std::collections::{HashMap, HashSet};
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{Assembled, FeatureAssembler, CMD_COUNTERS, REQ_COUNTERS};
-use lms_core::telegram::{
-    emit_telegram, Direction, Event, Framer, FramerStats, Request, Units, ACK, NAK,
-};
+use lms_core::telegram::{emit_telegram, Direction, Event, Framer, FramerStats, Request, ACK, NAK};
+use lms_core::Unit;
 use lms_core::{Params, Variant};
 
 mod common;
@@ -304,7 +303,7 @@ struct Outcome {
     expected_false: f64,
 }
 
-type Source = Box<dyn FnMut(Variant, Units, &mut [u16]) -> usize>;
+type Source = Box<dyn FnMut(Variant, Unit, &mut [u16]) -> usize>;
 
 /// What happens to a telegram on its way: `(now_us, telegram or handshake
 /// byte, bytes the receiver gets)`.

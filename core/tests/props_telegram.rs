@@ -16,9 +16,10 @@
 use lms_core::telegram::features::{emit_features, Assembled, EchoedParams, FeatureAssembler};
 use lms_core::telegram::{
     emit_telegram, Baud, Config, Direction, Event, Framer, MeasuredValues, MeasuredView,
-    ModeResult, RangeBits, Reply, Request, StatusBlock, Telegram, Units, VariantReply, ACK,
+    ModeResult, RangeBits, Reply, Request, StatusBlock, Telegram, VariantReply, ACK,
     MAX_TELEGRAM_LEN, NAK,
 };
+use lms_core::Unit;
 use lms_core::{Beam, Variant};
 use proptest::prelude::*;
 
@@ -227,7 +228,7 @@ proptest! {
     #[test]
     fn b0_decodes_to_its_words(
         variant in (0usize..5).prop_map(|i| Variant::ALL[i]),
-        units in prop_oneof![Just(Units::Centimetre), Just(Units::Millimetre), Just(Units::Decimetre)],
+        units in prop_oneof![Just(Unit::Centimetre), Just(Unit::Millimetre), Just(Unit::Decimetre)],
         bits in prop_oneof![Just(RangeBits::Bits13), Just(RangeBits::Bits14), Just(RangeBits::Bits15)],
         words in prop::collection::vec(
             prop_oneof![

@@ -27,7 +27,8 @@ use std::time::{Duration, Instant};
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{Assembled, FeatureAssembler};
-use lms_core::telegram::{Direction, Event, Framer, Request, Units};
+use lms_core::telegram::{Direction, Event, Framer, Request};
+use lms_core::Unit;
 use lms_core::{Params, Variant};
 
 mod common;
@@ -186,7 +187,7 @@ struct Report {
 fn sustained(scans: u32) -> Report {
     const STEP_US: u64 = 500;
     let mut seed = 0x1234_5678_9ABC_DEF1u64;
-    let source = FnSource::new(move |_: Variant, _: Units, out: &mut [u16]| room(&mut seed, out));
+    let source = FnSource::new(move |_: Variant, _: Unit, out: &mut [u16]| room(&mut seed, out));
     let mut lms = Emulator::new(source, Settings::default(), 0);
     let mut cop = Box::new(CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT));
     cop.start(0);

@@ -3,9 +3,9 @@
 //! skipped and counted and what follows is still found.
 
 use lms_core::telegram::{
-    Direction, Event, Framer, FramerStats, MeasuredValues, Reply, Request, Telegram, Units, ACK,
-    NAK,
+    Direction, Event, Framer, FramerStats, MeasuredValues, Reply, Request, Telegram, ACK, NAK,
 };
+use lms_core::Unit;
 
 /// What the framer handed out, owned.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -142,7 +142,7 @@ fn emit_request(request: Request<'_>) -> Vec<u8> {
 
 /// A 361-value B0 whose value bytes contain no STX/ACK/NAK (values
 /// 0x07x1, low byte ≡ 1 mod 8), so a re-scan through it is predictable.
-fn b0(units: Units) -> Vec<u8> {
+fn b0(units: Unit) -> Vec<u8> {
     let raw: Vec<u16> = (0..361).map(|j| 0x0701 + (j % 32) * 8).collect();
     let v = MeasuredValues::from_raw(&raw, units, 0x10).unwrap();
     let mut buf = vec![0u8; v.buffer_len()];
@@ -195,8 +195,8 @@ fn telegram_framer_clean_host_stream() {
 fn telegram_framer_clean_sensor_stream() {
     // A start-up exchange as the host sees it, then two streamed scans.
     let b1 = emit_reply(Reply::Status(lms_core::telegram::StatusBlock::default()));
-    let cm = b0(Units::Centimetre);
-    let mm = b0(Units::Millimetre);
+    let cm = b0(Unit::Centimetre);
+    let mm = b0(Unit::Millimetre);
     let parts: Vec<(bool, Vec<u8>)> = vec![
         (true, A0.to_vec()),
         (true, b1.clone()),
@@ -232,8 +232,8 @@ fn telegram_framer_clean_sensor_stream() {
 fn telegram_framer_garbage_corruption_truncation() {
     let mut bb_bad = BB;
     bb_bad[6] = 0xB5; // one data byte changed: CRC no longer matches
-    let cm = b0(Units::Centimetre);
-    let mm = b0(Units::Millimetre);
+    let cm = b0(Unit::Centimetre);
+    let mm = b0(Unit::Millimetre);
 
     let mut stream = Vec::new();
     // Garbage, then an oversize header `02 80 FF FF`.
@@ -294,12 +294,12 @@ fn telegram_framer_false_stx_inside_corrupted_scan() {
     let raw: Vec<u16> = (0..361)
         .map(|j| if j % 2 == 0 { 0x8002 } else { 0x0010 })
         .collect();
-    let v = MeasuredValues::from_raw(&raw, Units::Centimetre, 0x10).unwrap();
+    let v = MeasuredValues::from_raw(&raw, Unit::Centimetre, 0x10).unwrap();
     let mut bad = vec![0u8; v.buffer_len()];
     v.emit(0, &mut bad).unwrap();
     let last = bad.len() - 1;
     bad[last] ^= 0xFF;
-    let good = b0(Units::Millimetre);
+    let good = b0(Unit::Millimetre);
     let mut stream = Vec::new();
     stream.extend_from_slice(&bad);
     stream.extend_from_slice(&A0);
@@ -334,7 +334,7 @@ fn telegram_framer_random_damage_never_panics() {
     let mut clean = Vec::new();
     clean.push(ACK);
     clean.extend_from_slice(&A0);
-    clean.extend_from_slice(&b0(Units::Centimetre));
+    clean.extend_from_slice(&b0(Unit::Centimetre));
     clean.extend_from_slice(&BB);
     let tail = R92;
     let mut rng = Rng(42);

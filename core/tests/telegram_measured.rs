@@ -3,8 +3,9 @@
 
 use lms_core::telegram::{
     Direction, MeasuredError, MeasuredValues, MeasuredView, RangeBits, Reply, ReplyError, Telegram,
-    Units, MAX_VALUES,
+    MAX_VALUES,
 };
+use lms_core::Unit;
 use lms_core::{Beam, Invalid, Variant};
 
 /// The value pattern the CRCs below were computed for (independently, with
@@ -24,8 +25,8 @@ fn emit(values: &MeasuredValues) -> Vec<u8> {
 fn telegram_b0_361_cm_and_mm_bytes() {
     let raw = pattern(361);
     for (units, count_word, crc) in [
-        (Units::Centimetre, [0x69, 0x01], [0x3F, 0xA8]),
-        (Units::Millimetre, [0x69, 0x41], [0x46, 0xFF]),
+        (Unit::Centimetre, [0x69, 0x01], [0x3F, 0xA8]),
+        (Unit::Millimetre, [0x69, 0x41], [0x46, 0xFF]),
     ] {
         let v = MeasuredValues::from_raw(&raw, units, 0x10).unwrap();
         assert_eq!(v.buffer_len(), 732);
@@ -70,7 +71,7 @@ fn telegram_b0_361_to_frame() {
     raw[3] = 8183; // above max
     raw[4] = 8184; // unnamed code, offset 7
     raw[5] = 8182 | 0xE000; // largest range, all flags
-    for (units, scale) in [(Units::Centimetre, 100.0f32), (Units::Millimetre, 1000.0)] {
+    for (units, scale) in [(Unit::Centimetre, 100.0f32), (Unit::Millimetre, 1000.0)] {
         let v = MeasuredValues::from_raw(&raw, units, 0x10).unwrap();
         let bytes = emit(&v);
         let t = Telegram::new_checked(&bytes[..], Direction::SensorToHost).unwrap();
@@ -101,7 +102,7 @@ fn telegram_b0_all_variants() {
     for variant in Variant::ALL {
         let n = variant.beams();
         let raw = pattern(n);
-        let v = MeasuredValues::from_raw(&raw, Units::Centimetre, 0x10).unwrap();
+        let v = MeasuredValues::from_raw(&raw, Unit::Centimetre, 0x10).unwrap();
         assert_eq!(v.variant(), Some(variant));
         let bytes = emit(&v);
         assert_eq!(bytes.len(), 4 + 1 + 2 + 2 * n + 1 + 2);
@@ -114,7 +115,7 @@ fn telegram_b0_all_variants() {
         assert_eq!(frame.geometry(), variant.geometry());
     }
     // 401 values: LEN 806, still within MAX_LEN.
-    let v = MeasuredValues::from_raw(&pattern(MAX_VALUES), Units::Millimetre, 0).unwrap();
+    let v = MeasuredValues::from_raw(&pattern(MAX_VALUES), Unit::Millimetre, 0).unwrap();
     assert_eq!(&emit(&v)[2..4], &806u16.to_le_bytes());
 }
 
@@ -124,7 +125,7 @@ fn telegram_b0_range_bits_modes() {
     raw[0] = 0x3FFF; // 14-bit "not valid", 13-bit: 8191 with flag bit 13
     raw[1] = 0x2000 | 100; // 13-bit: 100 + flag; 14-bit: 8292
     raw[2] = 0x7FF7; // 15-bit: above max
-    let v = MeasuredValues::from_raw(&raw, Units::Millimetre, 0).unwrap();
+    let v = MeasuredValues::from_raw(&raw, Unit::Millimetre, 0).unwrap();
     let f13 = v.to_frame(RangeBits::Bits13).unwrap();
     let f14 = v.to_frame(RangeBits::Bits14).unwrap();
     let f15 = v.to_frame(RangeBits::Bits15).unwrap();
@@ -141,11 +142,11 @@ fn telegram_b0_range_bits_modes() {
 fn telegram_b0_errors() {
     // Too many values for the buffer.
     assert_eq!(
-        MeasuredValues::from_raw(&[1; 402], Units::Centimetre, 0),
+        MeasuredValues::from_raw(&[1; 402], Unit::Centimetre, 0),
         Err(MeasuredError::TooManyValues { count: 402 })
     );
     // A count no variant sends.
-    let v = MeasuredValues::from_raw(&[1; 360], Units::Centimetre, 0).unwrap();
+    let v = MeasuredValues::from_raw(&[1; 360], Unit::Centimetre, 0).unwrap();
     assert_eq!(
         v.to_frame(RangeBits::Bits13).err(),
         Some(MeasuredError::UnsupportedCount { count: 360 })
@@ -189,7 +190,7 @@ fn telegram_b0_from_frame_for_simulator() {
     let ranges: Vec<f32> = (0..361).map(|j| 0.5 + j as f32 * 0.0123).collect();
     let mut frame = lms_core::Frame::from_metres(variant.geometry(), &ranges).unwrap();
     frame.set_invalid(10, Invalid::Dazzle);
-    let v = MeasuredValues::from_frame(&frame, Units::Millimetre, RangeBits::Bits13, 0x10);
+    let v = MeasuredValues::from_frame(&frame, Unit::Millimetre, RangeBits::Bits13, 0x10);
     assert_eq!(v.count(), 361);
     assert_eq!(v.values()[0], 500);
     assert_eq!(v.values()[10], 8190);

@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{emit_features, EchoedParams};
-use lms_core::telegram::{MeasuredValues, RangeBits, Request, Units, ACK};
+use lms_core::telegram::{MeasuredValues, RangeBits, Request, ACK};
+use lms_core::Unit;
 use lms_core::{Extractor, Params, Variant};
 use lms_fuzz::{
     encode_features, encode_pipeline_words, units_byte, FramerInput, Ops, Output, Port,
@@ -57,7 +58,7 @@ fn hex(s: &str) -> Vec<u8> {
 /// One scan of a log as value words in `units`, padded to a variant.
 struct Scan {
     variant: Variant,
-    units: Units,
+    units: Unit,
     bits: RangeBits,
     words: Vec<u16>,
 }
@@ -82,9 +83,9 @@ fn log_scans(path: &Path, mm: bool, step: usize, max: usize) -> Vec<Scan> {
         let ranges: Vec<f64> = fields.take(n).map(|s| s.parse().unwrap()).collect();
         // Örebro: mm in the 32 m mode (15 range bits); the others: cm.
         let (units, bits, scale, first_code) = if mm {
-            (Units::Millimetre, RangeBits::Bits15, 1000.0, 32759)
+            (Unit::Millimetre, RangeBits::Bits15, 1000.0, 32759)
         } else {
-            (Units::Centimetre, RangeBits::Bits13, 100.0, 8183)
+            (Unit::Centimetre, RangeBits::Bits13, 100.0, 8183)
         };
         let mut words: Vec<u16> = ranges
             .iter()
@@ -165,7 +166,7 @@ fn feature_telegrams(scan: &Scan, counter: u32) -> (Vec<Vec<u8>>, lms_core::Feat
     let v = MeasuredValues::from_raw(&scan.words, scan.units, 0x10).unwrap();
     let frame = v.to_frame(scan.bits).unwrap();
     let params = Params {
-        sigma: if scan.units == Units::Millimetre {
+        sigma: if scan.units == Unit::Millimetre {
             0.005
         } else {
             0.01
@@ -421,7 +422,7 @@ fn main() {
             // 15-bit mm words do not fit the 13-bit mode: clip to 8.182 m.
             s.words.iter().map(|&w| w.min(8182)).collect()
         };
-        let units = if bits_ok { s.units } else { Units::Millimetre };
+        let units = if bits_ok { s.units } else { Unit::Millimetre };
         c.put(
             "pipeline",
             &format!("scan-{i:02}-{iterations}"),

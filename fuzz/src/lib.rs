@@ -11,7 +11,8 @@ use std::convert::Infallible;
 
 use lms_core::frame::MAX_BEAMS;
 use lms_core::maths::Sym2;
-use lms_core::telegram::{Direction, Event, Framer, RangeBits, Units};
+use lms_core::telegram::{Direction, Event, Framer, RangeBits};
+use lms_core::Unit;
 use lms_core::{Features, Stats, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 use lms_core::{Frame, Geometry, Invalid, Params, Variant};
 
@@ -227,20 +228,20 @@ pub fn drain(framer: &mut Framer, chunk: &[u8], out: &mut Vec<Ev>) {
 // --------------------------------------------------------------- b0 frame --
 
 /// The units selected by a byte.
-pub fn units_of(b: u8) -> Units {
+pub fn units_of(b: u8) -> Unit {
     match b % 3 {
-        0 => Units::Centimetre,
-        1 => Units::Millimetre,
-        _ => Units::Decimetre,
+        0 => Unit::Centimetre,
+        1 => Unit::Millimetre,
+        _ => Unit::Decimetre,
     }
 }
 
 /// The byte that selects `units` in [`units_of`].
-pub fn units_byte(u: Units) -> u8 {
+pub fn units_byte(u: Unit) -> u8 {
     match u {
-        Units::Centimetre => 0,
-        Units::Millimetre => 1,
-        Units::Decimetre => 2,
+        Unit::Centimetre => 0,
+        Unit::Millimetre => 1,
+        Unit::Decimetre => 2,
     }
 }
 
@@ -596,7 +597,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
 pub fn encode_pipeline_words(
     variant: Variant,
     iterations: u16,
-    units: Units,
+    units: Unit,
     words: &[u16],
 ) -> Vec<u8> {
     let mut out = Output::default();

@@ -623,13 +623,13 @@ pub fn input_frames(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use lms_core::telegram::Units;
+    use lms_core::Unit;
 
     const A0: [u8; 9] = [0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A];
 
     fn b0(seed: u16) -> Vec<u8> {
         let words: Vec<u16> = (0..181).map(|j| (j * 7 + seed) % 8000 + 1).collect();
-        let v = MeasuredValues::from_raw(&words, Units::Millimetre, 0x10).unwrap();
+        let v = MeasuredValues::from_raw(&words, Unit::Millimetre, 0x10).unwrap();
         let mut buf = vec![0u8; v.buffer_len()];
         let n = v.emit(0, &mut buf).unwrap();
         buf.truncate(n);
@@ -781,7 +781,7 @@ mod tests {
         assert_eq!(frames[1].0, 26_700);
         assert_eq!(frames[0].1.len(), 181);
         assert_eq!(frames[0].1.ranges()[0], 0.006);
-        assert_eq!(frames[1].2.units(), Units::Millimetre);
+        assert_eq!(frames[1].2.units(), Unit::Millimetre);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -50,8 +50,9 @@ use std::time::{Duration, Instant};
 
 use lms_core::telegram::{
     Baud, Config, Direction, Event, Framer, FramerStats, MeasuredError, MeasuredValues, ModeResult,
-    Reply, Request, Telegram, Units, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
+    Reply, Request, Telegram, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
 };
+use lms_core::Unit;
 use lms_core::Variant;
 
 /// Bits on the line per byte: start bit, 8 data bits, stop bit (8N1).
@@ -1062,7 +1063,7 @@ impl<L: Link> Client<L> {
     /// byte differs, enter installation mode (`20 00 SICK_LMS`), write the
     /// configuration with the units byte changed (`77`, answered `F7 01`),
     /// and go back to values on request (`20 25`).
-    pub fn set_units(&mut self, units: Units) -> Result<(), ClientError> {
+    pub fn set_units(&mut self, units: Unit) -> Result<(), ClientError> {
         let code = units.code().ok_or_else(|| ClientError::Unsupported {
             detail: format!("{units:?} cannot be configured (only cm and mm)"),
         })?;

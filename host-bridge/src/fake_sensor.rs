@@ -33,9 +33,9 @@ use std::time::Duration;
 
 use lms_core::telegram::{
     Baud, Config, Direction, Event, Framer, MeasuredValues, ModeResult, Reply, Request,
-    StatusBlock, StatusFields, Units, ACK, DEFAULT_PASSWORD, DEFAULT_STATUS, NAK,
-    SENSOR_TYPE_LMS200,
+    StatusBlock, StatusFields, ACK, DEFAULT_PASSWORD, DEFAULT_STATUS, NAK, SENSOR_TYPE_LMS200,
 };
+use lms_core::Unit;
 use lms_core::Variant;
 
 use crate::client::{line_time, Link};
@@ -60,7 +60,7 @@ pub enum StreamFault {
 }
 
 /// Makes the value words of scan `index` for a variant and units.
-pub type ScanSource = Box<dyn FnMut(usize, Variant, Units) -> MeasuredValues + Send>;
+pub type ScanSource = Box<dyn FnMut(usize, Variant, Unit) -> MeasuredValues + Send>;
 
 /// Bytes on their way to the host.
 #[derive(Debug)]
@@ -81,7 +81,7 @@ fn scramble(b: u8) -> u8 {
 
 /// The default scan source: a deterministic pattern of ranges (1..=8000
 /// in the sensor's units) with a few error codes.
-pub fn pattern_scan(index: usize, variant: Variant, units: Units) -> MeasuredValues {
+pub fn pattern_scan(index: usize, variant: Variant, units: Unit) -> MeasuredValues {
     let words: Vec<u16> = (0..variant.beams())
         .map(|j| {
             if (j + index).is_multiple_of(97) {
@@ -213,7 +213,7 @@ impl FakeSensor {
     }
 
     /// The units in the sensor's configuration.
-    pub fn units(&self) -> Option<Units> {
+    pub fn units(&self) -> Option<Unit> {
         self.config.units()
     }
 
@@ -256,7 +256,7 @@ impl FakeSensor {
     }
 
     fn next_values(&mut self) -> MeasuredValues {
-        let units = self.config.units().unwrap_or(Units::Centimetre);
+        let units = self.config.units().unwrap_or(Unit::Centimetre);
         let v = (self.source)(self.scans_made, self.variant, units);
         self.scans_made += 1;
         v

@@ -31,7 +31,8 @@ use std::time::Duration;
 
 use anyhow::{bail, ensure, Context, Result};
 use clap::{Args, ValueEnum};
-use lms_core::telegram::{Baud, FramerStats, Units};
+use lms_core::telegram::{Baud, FramerStats};
+use lms_core::Unit;
 use lms_core::Variant;
 
 use crate::capture::CaptureFile;
@@ -131,10 +132,10 @@ pub enum UnitsChoice {
 
 impl UnitsChoice {
     /// The sensor's units.
-    pub fn units(self) -> Units {
+    pub fn units(self) -> Unit {
         match self {
-            UnitsChoice::Mm => Units::Millimetre,
-            UnitsChoice::Cm => Units::Centimetre,
+            UnitsChoice::Mm => Unit::Millimetre,
+            UnitsChoice::Cm => Unit::Centimetre,
         }
     }
 }
@@ -185,7 +186,7 @@ pub struct Plan {
     /// Scan variant.
     pub variant: Variant,
     /// Range units.
-    pub units: Units,
+    pub units: Unit,
     /// Scans to read (at least 1).
     pub scans: usize,
     /// `30 01` per scan instead of streaming.
@@ -200,7 +201,7 @@ impl Default for Plan {
             probe: Baud::ALL.to_vec(),
             target: Some(Baud::B500000),
             variant: Variant::Fov180Res50,
-            units: Units::Millimetre,
+            units: Unit::Millimetre,
             scans: 10,
             single: false,
             restore_9600: true,
@@ -466,9 +467,9 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         variant_name(plan.variant),
         plan.variant.beams(),
         match plan.units {
-            Units::Millimetre => "mm",
-            Units::Centimetre => "cm",
-            Units::Decimetre => "10 cm",
+            Unit::Millimetre => "mm",
+            Unit::Centimetre => "cm",
+            Unit::Decimetre => "10 cm",
         },
         summary.baud.bits_per_second(),
         summary.found_baud.bits_per_second(),

@@ -90,7 +90,8 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, ensure, Context, Result};
 use clap::{Args, ValueEnum};
 use lms_core::device::emulator::{Emulator, Event, Handled, ScanSource, Settings};
-use lms_core::telegram::{Baud, MeasuredValues, RangeBits, Units};
+use lms_core::telegram::{Baud, MeasuredValues, RangeBits};
+use lms_core::Unit;
 use lms_core::{Invalid, Variant};
 use lms_scene::{seeded_rng, Bearings, NoiseModel, Pose, RangeUnit, Scene};
 
@@ -150,10 +151,10 @@ pub struct SimulateArgs {
 // Scan sources
 
 /// The lms-scene unit for a sensor unit (10 cm is drawn in cm, then scaled).
-fn range_unit(units: Units) -> RangeUnit {
+fn range_unit(units: Unit) -> RangeUnit {
     match units {
-        Units::Millimetre => RangeUnit::Millimetre,
-        Units::Centimetre | Units::Decimetre => RangeUnit::Centimetre,
+        Unit::Millimetre => RangeUnit::Millimetre,
+        Unit::Centimetre | Unit::Decimetre => RangeUnit::Centimetre,
     }
 }
 
@@ -183,7 +184,7 @@ pub struct SceneSource {
     args: SceneArgs,
     scene: Scene,
     /// Per variant and units: `count` scans of raw values.
-    draws: HashMap<(Variant, Units), Vec<Vec<u16>>>,
+    draws: HashMap<(Variant, Unit), Vec<Vec<u16>>>,
     /// Scans handed out so far.
     sent: usize,
 }
@@ -223,7 +224,7 @@ impl SceneSource {
 
     /// The `count` noisy scans of a variant in these units (drawn on first
     /// use).
-    fn draws(&mut self, variant: Variant, units: Units) -> &[Vec<u16>] {
+    fn draws(&mut self, variant: Variant, units: Unit) -> &[Vec<u16>] {
         let (args, scene) = (&self.args, &self.scene);
         self.draws.entry((variant, units)).or_insert_with(|| {
             let (_, mut rng) = Self::scene_and_rng(args);
@@ -235,7 +236,7 @@ impl SceneSource {
             (0..args.count)
                 .map(|_| {
                     let raw = lms_scene::to_raw(&truth.noisy(&noise, &mut rng), unit);
-                    if units == Units::Decimetre {
+                    if units == Unit::Decimetre {
                         raw.into_iter()
                             .map(|v| if v < 8183 { (v + 5) / 10 } else { v })
                             .collect()
@@ -264,7 +265,7 @@ impl SceneSource {
 }
 
 impl ScanSource for SceneSource {
-    fn next_scan(&mut self, variant: Variant, units: Units, out: &mut [u16]) -> usize {
+    fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize {
         let k = self.sent;
         self.sent = self.sent.wrapping_add(1);
         let draws = self.draws(variant, units);
@@ -409,7 +410,7 @@ impl ReplaySource {
 }
 
 impl ScanSource for ReplaySource {
-    fn next_scan(&mut self, variant: Variant, units: Units, out: &mut [u16]) -> usize {
+    fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize {
         self.announce(variant);
         if self.scans.is_empty() {
             return 0;
@@ -474,7 +475,7 @@ impl Source {
 }
 
 impl ScanSource for Source {
-    fn next_scan(&mut self, variant: Variant, units: Units, out: &mut [u16]) -> usize {
+    fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize {
         match self {
             Source::Scene(s) => s.next_scan(variant, units, out),
             Source::Replay(r) => r.next_scan(variant, units, out),
@@ -1025,7 +1026,7 @@ mod tests {
         let frames = crate::synthetic::frames(&args).unwrap();
         let mut out = [0u16; 401];
         for k in 0..4 {
-            let n = src.next_scan(Variant::Fov180Res50, Units::Millimetre, &mut out[..361]);
+            let n = src.next_scan(Variant::Fov180Res50, Unit::Millimetre, &mut out[..361]);
             assert_eq!(n, 361);
             let f = &frames[k % 3].frame;
             for (j, (&v, &r)) in out.iter().zip(f.ranges()).enumerate() {
@@ -1037,17 +1038,13 @@ mod tests {
             }
         }
         for v in Variant::ALL {
-            for units in [Units::Centimetre, Units::Millimetre] {
+            for units in [Unit::Centimetre, Unit::Millimetre] {
                 let n = src.next_scan(v, units, &mut out[..v.beams()]);
                 assert_eq!(n, v.beams());
                 let valid: Vec<_> = out[..n].iter().filter(|&&x| x < 8183).collect();
                 assert!(valid.len() > n * 9 / 10, "{v:?} {units:?}");
                 // The room is within 8 m: < 800 cm, < 8000 mm.
-                let limit = if units == Units::Millimetre {
-                    8000
-                } else {
-                    800
-                };
+                let limit = if units == Unit::Millimetre { 8000 } else { 800 };
                 assert!(valid.iter().all(|&&x| x > 0 && x < limit));
             }
         }
@@ -1060,8 +1057,8 @@ mod tests {
             ..args
         };
         let mut src = SceneSource::new(&quiet).unwrap();
-        src.next_scan(Variant::Fov180Res100, Units::Centimetre, &mut a);
-        src.next_scan(Variant::Fov100Res100, Units::Centimetre, &mut b);
+        src.next_scan(Variant::Fov180Res100, Unit::Centimetre, &mut a);
+        src.next_scan(Variant::Fov100Res100, Unit::Centimetre, &mut b);
         assert_eq!(a[90], b[50]);
         assert_eq!(&a[40..=140], &b[..]);
     }
@@ -1079,29 +1076,29 @@ mod tests {
         assert_eq!(src.variant, Variant::Fov180Res100);
         assert!(Variant::ALL.iter().all(|&v| src.supports(v)));
         let mut cm = [0u16; 181];
-        src.next_scan(Variant::Fov180Res100, Units::Centimetre, &mut cm);
+        src.next_scan(Variant::Fov180Res100, Unit::Centimetre, &mut cm);
         assert_eq!(cm[180], 8191);
         // Second scan at 0.5°: even beams are the log's, odd ones repeat
         // the next.
         src.next = 0;
         let mut half = [0u16; 361];
-        src.next_scan(Variant::Fov180Res50, Units::Centimetre, &mut half);
+        src.next_scan(Variant::Fov180Res50, Unit::Centimetre, &mut half);
         for j in 0..180 {
             assert_eq!(half[2 * j], cm[j]);
             assert_eq!(half[2 * j + 1], cm[j + 1]);
         }
         src.next = 0;
         let mut narrow = [0u16; 101];
-        src.next_scan(Variant::Fov100Res100, Units::Centimetre, &mut narrow);
+        src.next_scan(Variant::Fov100Res100, Unit::Centimetre, &mut narrow);
         assert_eq!(&narrow[..], &cm[40..=140]);
 
         // CSAIL: 361 beams; 1° takes every 2nd.
         let mut src = ReplaySource::open(&log_path("csail-corrected.log.gz")).unwrap();
         let mut full = [0u16; 361];
-        src.next_scan(Variant::Fov180Res50, Units::Millimetre, &mut full);
+        src.next_scan(Variant::Fov180Res50, Unit::Millimetre, &mut full);
         src.next = 0;
         let mut coarse = [0u16; 181];
-        src.next_scan(Variant::Fov180Res100, Units::Millimetre, &mut coarse);
+        src.next_scan(Variant::Fov180Res100, Unit::Millimetre, &mut coarse);
         for j in 0..181 {
             assert_eq!(coarse[j], full[2 * j]);
         }

@@ -119,8 +119,9 @@ use lms_core::telegram::features::{
 };
 use lms_core::telegram::{
     emit_telegram, Baud, Direction, Event, Framer, MeasuredValues, MeasuredView, RangeBits,
-    Request, Telegram, Units,
+    Request, Telegram,
 };
+use lms_core::Unit;
 use lms_core::{Extractor, Features, Frame, Invalid, Params, Variant};
 
 use crate::carmen::{self, UnitMode};
@@ -215,8 +216,8 @@ pub enum Tag {
 pub struct Drawn {
     /// Why it was drawn.
     pub tag: Tag,
-    /// Units of its values.
-    pub units: Units,
+    /// Unit of its values.
+    pub units: Unit,
     /// Its value words, as in the `B0`.
     pub words: Vec<u16>,
 }
@@ -309,7 +310,7 @@ impl PlaySource {
 
     /// The value words of frame `k` resampled to `target` (nearest beam, as
     /// `simulate --replay`), in `units`.
-    fn words(&self, k: usize, target: Variant, units: Units, out: &mut [u16]) {
+    fn words(&self, k: usize, target: Variant, units: Unit, out: &mut [u16]) {
         let frame = &self.frames[k];
         let values = MeasuredValues::from_frame(frame, units, RangeBits::Bits13, 0);
         let values = values.values();
@@ -328,7 +329,7 @@ impl PlaySource {
 }
 
 impl ScanSource for PlaySource {
-    fn next_scan(&mut self, variant: Variant, units: Units, out: &mut [u16]) -> usize {
+    fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize {
         let (tag, k) = if self.armed && self.next < self.frames.len() {
             self.next += 1;
             (Tag::Play(self.next - 1), self.next - 1)
@@ -2139,10 +2140,10 @@ mod tests {
             PlaySource::new(frames.iter().map(|f| f.frame.clone()).collect(), labels).unwrap();
         let mut out = [0u16; 361];
         let v = Variant::Fov180Res50;
-        src.next_scan(v, Units::Millimetre, &mut out);
+        src.next_scan(v, Unit::Millimetre, &mut out);
         src.arm();
         for _ in 0..4 {
-            src.next_scan(v, Units::Millimetre, &mut out);
+            src.next_scan(v, Unit::Millimetre, &mut out);
         }
         let tags: Vec<Tag> = src.draws().iter().map(|d| d.tag).collect();
         assert_eq!(
@@ -2158,7 +2159,7 @@ mod tests {
         assert_eq!(src.label(2), 12);
         // Play(k) is frame k in whole mm, as `extract` reads it.
         let want =
-            MeasuredValues::from_frame(&frames[1].frame, Units::Millimetre, RangeBits::Bits13, 0);
+            MeasuredValues::from_frame(&frames[1].frame, Unit::Millimetre, RangeBits::Bits13, 0);
         assert_eq!(src.draws()[2].words, want.values());
     }
 
@@ -2178,7 +2179,7 @@ mod tests {
         let mut src = PlaySource::new(vec![coarse], vec![0]).unwrap();
         src.arm();
         let mut out = [0u16; 361];
-        src.next_scan(Variant::Fov180Res50, Units::Millimetre, &mut out);
+        src.next_scan(Variant::Fov180Res50, Unit::Millimetre, &mut out);
         assert_eq!(&out[..4], &[1000, 1010, 1010, 1020]);
         assert_eq!(out[360], 2800);
         // 100° scans cannot give 180°.

@@ -25,7 +25,8 @@ use host_bridge::scan::{run_session, Plan};
 use host_bridge::simulate::SceneSource;
 use host_bridge::synthetic::SceneArgs;
 use lms_core::device::emulator::{Emulator, Event as EmuEvent, FnSource, ScanSource, Settings};
-use lms_core::telegram::{Baud, MeasuredValues, Units};
+use lms_core::telegram::{Baud, MeasuredValues};
+use lms_core::Unit;
 use lms_core::Variant;
 
 const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
@@ -72,7 +73,7 @@ fn values(scans: &[Scan]) -> Vec<MeasuredValues> {
 fn fake_every_rate_variant_and_units() {
     for target in [Baud::B9600, Baud::B38400, Baud::B500000] {
         for variant in [Variant::Fov180Res50, Variant::Fov100Res25] {
-            for units in [Units::Millimetre, Units::Centimetre] {
+            for units in [Unit::Millimetre, Unit::Centimetre] {
                 for single in [false, true] {
                     let what = format!("{target:?} {variant:?} {units:?} single={single}");
                     let mut client = fake_client(FakeSensor::new(Baud::B9600));
@@ -283,7 +284,7 @@ fn fake_scans_recorded_into_a_capture_read_back_bit_exact() {
     let mut client = fake_client(FakeSensor::new(Baud::B9600));
     let plan = Plan {
         variant: Variant::Fov100Res25,
-        units: Units::Centimetre,
+        units: Unit::Centimetre,
         scans: 4,
         ..Plan::default()
     };
@@ -414,7 +415,7 @@ type Sent = Arc<Mutex<Vec<Vec<u16>>>>;
 
 /// A deterministic source that records what it produced.
 fn recording_source(sent: Sent) -> impl ScanSource {
-    FnSource(move |_variant: Variant, _units: Units, out: &mut [u16]| {
+    FnSource(move |_variant: Variant, _units: Unit, out: &mut [u16]| {
         let mut sent = sent.lock().unwrap();
         let k = sent.len();
         for (j, w) in out.iter_mut().enumerate() {
@@ -515,7 +516,7 @@ impl<S: ScanSource> Link for EmulatorLink<S> {
 fn emulator_every_rate_variant_and_units() {
     for target in [Baud::B9600, Baud::B38400, Baud::B500000] {
         for variant in [Variant::Fov180Res50, Variant::Fov100Res25] {
-            for units in [Units::Millimetre, Units::Centimetre] {
+            for units in [Unit::Millimetre, Unit::Centimetre] {
                 for single in [false, true] {
                     let what = format!("{target:?} {variant:?} {units:?} single={single}");
                     let sent: Sent = Arc::default();
@@ -686,7 +687,7 @@ impl Drop for Simulator {
 }
 
 /// The first `n` scans the simulator's source gives for a variant and units.
-fn scene_scans(variant: Variant, units: Units, n: usize) -> Vec<Vec<u16>> {
+fn scene_scans(variant: Variant, units: Unit, n: usize) -> Vec<Vec<u16>> {
     let args = SceneArgs {
         seed: SEED,
         count: COUNT,
@@ -711,7 +712,7 @@ fn pty_client(sim: &Simulator) -> Client<SerialLink> {
 
 /// Stream (or request) `scans` scans over the pty and compare them with the
 /// scene.
-fn pty_case(name: &str, target: Baud, variant: Variant, units: Units, scans: usize, single: bool) {
+fn pty_case(name: &str, target: Baud, variant: Variant, units: Unit, scans: usize, single: bool) {
     let started = std::time::Instant::now();
     let sim = Simulator::start(name);
     let mut client = pty_client(&sim);
@@ -758,7 +759,7 @@ fn pty_9600_180_half_mm() {
         "9600",
         Baud::B9600,
         Variant::Fov180Res50,
-        Units::Millimetre,
+        Unit::Millimetre,
         2,
         false,
     );
@@ -770,7 +771,7 @@ fn pty_38400_100_quarter_cm() {
         "38400",
         Baud::B38400,
         Variant::Fov100Res25,
-        Units::Centimetre,
+        Unit::Centimetre,
         4,
         false,
     );
@@ -782,7 +783,7 @@ fn pty_500000_180_half_cm() {
         "500k-180",
         Baud::B500000,
         Variant::Fov180Res50,
-        Units::Centimetre,
+        Unit::Centimetre,
         30,
         false,
     );
@@ -794,7 +795,7 @@ fn pty_500000_100_quarter_mm() {
         "500k-100",
         Baud::B500000,
         Variant::Fov100Res25,
-        Units::Millimetre,
+        Unit::Millimetre,
         15,
         false,
     );
@@ -806,7 +807,7 @@ fn pty_single_scans_at_38400() {
         "single",
         Baud::B38400,
         Variant::Fov180Res50,
-        Units::Millimetre,
+        Unit::Millimetre,
         3,
         true,
     );
@@ -857,7 +858,7 @@ fn pty_noisy_line_damaged_scans_are_counted_never_recorded() {
     let plan = Plan {
         target: Some(Baud::B500000),
         variant: Variant::Fov180Res50,
-        units: Units::Millimetre,
+        units: Unit::Millimetre,
         scans,
         restore_9600: false,
         ..Plan::default()
@@ -875,7 +876,7 @@ fn pty_noisy_line_damaged_scans_are_counted_never_recorded() {
         "damage went unnoticed: {:?}",
         summary.line
     );
-    let sent = scene_scans(Variant::Fov180Res50, Units::Millimetre, COUNT);
+    let sent = scene_scans(Variant::Fov180Res50, Unit::Millimetre, COUNT);
     for (i, v) in got.iter().enumerate() {
         assert!(
             sent.iter().any(|s| v.values() == &s[..]),
@@ -923,7 +924,7 @@ fn pty_cli_scan_writes_a_capture_that_extract_reads() {
     assert!(err.contains("scans.lmscap (2 scans, 1652 bytes)"), "{err}");
     assert!(!capture::CaptureFile::partial_path(&capture_path).exists());
     // The capture holds what the scene sent.
-    let expected = scene_scans(Variant::Fov100Res25, Units::Centimetre, 2);
+    let expected = scene_scans(Variant::Fov100Res25, Unit::Centimetre, 2);
     let back: Vec<_> = capture::read_values(&capture_path)
         .unwrap()
         .collect::<anyhow::Result<_>>()
@@ -931,7 +932,7 @@ fn pty_cli_scan_writes_a_capture_that_extract_reads() {
     assert_eq!(back.len(), 2);
     for (b, e) in back.iter().zip(&expected) {
         assert_eq!(b.values.values(), &e[..]);
-        assert_eq!(b.values.units(), Units::Centimetre);
+        assert_eq!(b.values.units(), Unit::Centimetre);
     }
     // 401 values = 812 bytes = 0.85 s per scan at 9600 Bd.
     assert!(back[1].time_us - back[0].time_us >= 800_000);

@@ -100,10 +100,11 @@ use crate::frame::{Invalid, Variant};
 use crate::telegram::reply::POWER_ON_LEN;
 use crate::telegram::{
     copy_into, emit_telegram, Baud, Config, Direction, Event as FramerEvent, Framer, FramerStats,
-    MeasuredValues, ModeResult, RangeBits, Reply, Request, StatusBlock, StatusFields, Units,
-    VariantReply, ACK, DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, MAX_TELEGRAM_LEN,
-    MAX_VALUES, NAK, REPLY_ADDRESS_BIT, SENSOR_TYPE_LMS200,
+    MeasuredValues, ModeResult, RangeBits, Reply, Request, StatusBlock, StatusFields, VariantReply,
+    ACK, DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, MAX_TELEGRAM_LEN, MAX_VALUES, NAK,
+    REPLY_ADDRESS_BIT, SENSOR_TYPE_LMS200,
 };
+use crate::Unit;
 
 /// Data bytes of the `90` power-on telegram: the type string and a space
 /// (the content is ours; PROTOCOL.md fixes only the length, 21 bytes).
@@ -163,7 +164,7 @@ pub trait ScanSource {
     /// above; error codes 8183…8191, PROTOCOL.md §3) in `units` into `out`,
     /// which is exactly `variant.beams()` long; return how many were
     /// written. Values not written are sent as "not valid" (8191).
-    fn next_scan(&mut self, variant: Variant, units: Units, out: &mut [u16]) -> usize;
+    fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize;
 
     /// `false` if this source cannot produce `variant` (the sensor then
     /// refuses a `3B` for it with `BB 00`). Every variant by default.
@@ -191,7 +192,7 @@ pub const EXTRA_REPLY_CAPACITY: usize = 64;
 #[derive(Clone, Copy, Debug)]
 pub struct FnSource<F>(pub F);
 
-impl<F: FnMut(Variant, Units, &mut [u16]) -> usize> FnSource<F> {
+impl<F: FnMut(Variant, Unit, &mut [u16]) -> usize> FnSource<F> {
     /// Wrap a closure (this constructor lets the compiler infer the
     /// closure's argument types).
     pub const fn new(f: F) -> Self {
@@ -199,8 +200,8 @@ impl<F: FnMut(Variant, Units, &mut [u16]) -> usize> FnSource<F> {
     }
 }
 
-impl<F: FnMut(Variant, Units, &mut [u16]) -> usize> ScanSource for FnSource<F> {
-    fn next_scan(&mut self, variant: Variant, units: Units, out: &mut [u16]) -> usize {
+impl<F: FnMut(Variant, Unit, &mut [u16]) -> usize> ScanSource for FnSource<F> {
+    fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize {
         (self.0)(variant, units, out)
     }
 }
@@ -1200,10 +1201,10 @@ impl<S: ScanSource> Emulator<S> {
         &self.config
     }
 
-    /// Units of the range values (from the configuration; cm unless it says
+    /// Unit of the range values (from the configuration; cm unless it says
     /// mm).
-    pub fn units(&self) -> Units {
-        self.config.units().unwrap_or(Units::Centimetre)
+    pub fn units(&self) -> Unit {
+        self.config.units().unwrap_or(Unit::Centimetre)
     }
 
     /// `true` while the continuous stream runs.
@@ -1260,7 +1261,7 @@ mod tests {
     }
 
     impl ScanSource for Ramp {
-        fn next_scan(&mut self, _: Variant, _: Units, out: &mut [u16]) -> usize {
+        fn next_scan(&mut self, _: Variant, _: Unit, out: &mut [u16]) -> usize {
             self.drawn += 1;
             for (j, v) in out.iter_mut().enumerate() {
                 *v = 1000 + j as u16;
@@ -1482,7 +1483,7 @@ mod tests {
         assert_eq!(&p[109..=110], &[25, 0]);
         assert_eq!(&p[116..=117], &[1, 0]);
         assert_eq!(p[122], 1);
-        assert_eq!(e.units(), Units::Millimetre);
+        assert_eq!(e.units(), Unit::Millimetre);
     }
 
     #[test]
@@ -1510,7 +1511,7 @@ mod tests {
         assert_eq!(parts[1], A0_OK);
         assert_eq!(&parts[3][4..6], &[0xF7, 0x00]);
         assert_eq!(&parts[5][4..6], &[0xF7, 0x01]);
-        assert_eq!(e.units(), Units::Millimetre);
+        assert_eq!(e.units(), Unit::Millimetre);
         // 30 01: ACK and 181 values in mm: count word B5 40.
         e.receive(5_000_000, &ONE_SCAN);
         let parts = split(&drain(&mut e, 6_000_000));
@@ -1536,7 +1537,7 @@ mod tests {
         // A source that cannot do 0.25° refuses 100°/0.25°.
         struct Coarse;
         impl ScanSource for Coarse {
-            fn next_scan(&mut self, _: Variant, _: Units, out: &mut [u16]) -> usize {
+            fn next_scan(&mut self, _: Variant, _: Unit, out: &mut [u16]) -> usize {
                 out.len()
             }
             fn supports(&self, v: Variant) -> bool {

@@ -11,8 +11,8 @@
 //! The other bytes are kept as they are and exposed through
 //! [`Config::as_bytes`].
 
-use super::measured::Units;
 use super::{le_u16, put_le_u16};
+use crate::units::Unit;
 
 /// Bytes in a configuration block.
 pub const CONFIG_LEN: usize = 34;
@@ -106,16 +106,16 @@ impl Config {
         self.bytes[Self::MEASURING_MODE] = value;
     }
 
-    /// Units code, `[6]` (0 cm, 1 mm).
+    /// Unit code, `[6]` (0 cm, 1 mm).
     #[inline]
     pub const fn units_code(&self) -> u8 {
         self.bytes[Self::UNITS]
     }
 
-    /// Units, if the code is 0 (cm) or 1 (mm).
+    /// Unit, if the code is 0 (cm) or 1 (mm).
     #[inline]
-    pub const fn units(&self) -> Option<Units> {
-        Units::from_code(self.units_code())
+    pub const fn units(&self) -> Option<Unit> {
+        Unit::from_code(self.units_code())
     }
 
     /// Set the units code (0 cm, 1 mm).
@@ -142,7 +142,7 @@ mod tests {
         assert_eq!(c.blanking(), 0x0102);
         assert_eq!(c.availability(), 2);
         assert_eq!(c.measuring_mode(), 6);
-        assert_eq!(c.units(), Some(Units::Millimetre));
+        assert_eq!(c.units(), Some(Unit::Millimetre));
         assert_eq!(Config::from_slice(&expected), Some(c));
         assert_eq!(Config::from_slice(&expected[..33]), None);
     }

@@ -25,6 +25,7 @@ use core::fmt;
 use super::packet::{buffer_len, emit_telegram_with, EmitError, Telegram};
 use super::{le_u16, put_le_u16, Direction};
 use crate::frame::{Beam, Frame, Invalid, Variant};
+use crate::units::Unit;
 
 /// Command code of the measured-values reply.
 pub const MEASURED_COMMAND: u8 = 0xB0;
@@ -37,67 +38,6 @@ const COUNT_MASK: u16 = 0x03FF;
 const SCAN_FLAGS_MASK: u16 = 0x3C00;
 /// Count-word bits 14–15: units.
 const UNITS_MASK: u16 = 0xC000;
-
-/// Unit of the range values, from bits 14–15 of the count word.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Units {
-    /// Centimetres (`00`, the default; largest range 81.82 m).
-    Centimetre,
-    /// Millimetres (`01`; largest range 8.182 m).
-    Millimetre,
-    /// Decimetres, 10 cm (`10`).
-    Decimetre,
-}
-
-impl Units {
-    /// The units in a count word; `None` for the undefined `11`.
-    pub const fn from_count_word(w: u16) -> Option<Self> {
-        match w >> 14 {
-            0 => Some(Units::Centimetre),
-            1 => Some(Units::Millimetre),
-            2 => Some(Units::Decimetre),
-            _ => None,
-        }
-    }
-
-    /// Bits 14–15 of the count word for these units.
-    pub const fn count_word_bits(self) -> u16 {
-        match self {
-            Units::Centimetre => 0x0000,
-            Units::Millimetre => 0x4000,
-            Units::Decimetre => 0x8000,
-        }
-    }
-
-    /// Units from the code in the `B1` status block and the configuration
-    /// block (0 cm, 1 mm).
-    pub const fn from_code(code: u8) -> Option<Self> {
-        match code {
-            0 => Some(Units::Centimetre),
-            1 => Some(Units::Millimetre),
-            _ => None,
-        }
-    }
-
-    /// The code in `B1` and the configuration (0 cm, 1 mm; 10 cm has none).
-    pub const fn code(self) -> Option<u8> {
-        match self {
-            Units::Centimetre => Some(0),
-            Units::Millimetre => Some(1),
-            Units::Decimetre => None,
-        }
-    }
-
-    /// Units in one metre: 100 (cm), 1000 (mm), 10 (10 cm).
-    pub const fn per_metre(self) -> f32 {
-        match self {
-            Units::Centimetre => 100.0,
-            Units::Millimetre => 1000.0,
-            Units::Decimetre => 10.0,
-        }
-    }
-}
 
 /// How many low bits of a value word are range (the measuring mode decides;
 /// PROTOCOL.md §3). The default measuring mode uses 13.
@@ -183,7 +123,7 @@ pub enum MeasuredError {
     },
     /// Fewer than the two bytes of the count word.
     MissingCount,
-    /// Units bits 14–15 are `11`.
+    /// Unit bits 14–15 are `11`.
     BadUnits {
         /// The count word.
         count_word: u16,
@@ -242,7 +182,7 @@ fn check_data(data: &[u8]) -> Result<(u16, usize), MeasuredError> {
         return Err(MeasuredError::MissingCount);
     }
     let w = le_u16(data, 0);
-    if Units::from_count_word(w).is_none() {
+    if Unit::from_count_word(w).is_none() {
         return Err(MeasuredError::BadUnits { count_word: w });
     }
     let count = usize::from(w & COUNT_MASK);
@@ -262,7 +202,7 @@ fn check_data(data: &[u8]) -> Result<(u16, usize), MeasuredError> {
 fn words_to_frame(
     count: usize,
     words: impl Iterator<Item = u16>,
-    units: Units,
+    units: Unit,
     bits: RangeBits,
 ) -> Result<Frame, MeasuredError> {
     let mut frame = Frame::empty();
@@ -274,7 +214,7 @@ fn words_to_frame(
 fn words_into_frame(
     count: usize,
     words: impl Iterator<Item = u16>,
-    units: Units,
+    units: Unit,
     bits: RangeBits,
     frame: &mut Frame,
 ) -> Result<(), MeasuredError> {
@@ -335,10 +275,10 @@ impl<'a> MeasuredView<'a> {
         usize::from(self.count_word() & COUNT_MASK)
     }
 
-    /// Units of the ranges.
+    /// Unit of the ranges.
     #[inline]
-    pub fn units(&self) -> Units {
-        Units::from_count_word(self.count_word()).unwrap_or(Units::Centimetre)
+    pub fn units(&self) -> Unit {
+        Unit::from_count_word(self.count_word()).unwrap_or(Unit::Centimetre)
     }
 
     /// Count-word bits 10–13 in place (bit 13 partial scan, 11–12 its offset).
@@ -395,14 +335,14 @@ impl<'a> MeasuredView<'a> {
 pub struct MeasuredValues {
     values: [u16; MAX_VALUES],
     count: usize,
-    units: Units,
+    units: Unit,
     scan_flags: u16,
     status: u8,
 }
 
 impl MeasuredValues {
     /// No values yet.
-    pub const fn empty(units: Units, status: u8) -> Self {
+    pub const fn empty(units: Unit, status: u8) -> Self {
         MeasuredValues {
             values: [0; MAX_VALUES],
             count: 0,
@@ -413,7 +353,7 @@ impl MeasuredValues {
     }
 
     /// A scan from raw value words (range + flags), e.g. for a simulator.
-    pub fn from_raw(values: &[u16], units: Units, status: u8) -> Result<Self, MeasuredError> {
+    pub fn from_raw(values: &[u16], units: Unit, status: u8) -> Result<Self, MeasuredError> {
         if values.len() > MAX_VALUES {
             return Err(MeasuredError::TooManyValues {
                 count: values.len(),
@@ -431,7 +371,7 @@ impl MeasuredValues {
     /// (ranges at or above the first error code become "above the maximum
     /// range"), invalid beams as their error code
     /// ([`RangeBits::encode_invalid`]); flags 0.
-    pub fn from_frame(frame: &Frame, units: Units, bits: RangeBits, status: u8) -> Self {
+    pub fn from_frame(frame: &Frame, units: Unit, bits: RangeBits, status: u8) -> Self {
         let mut v = MeasuredValues::empty(units, status);
         let first_code = bits.first_error_code();
         let beams = frame.ranges().iter().zip(frame.beams());
@@ -477,9 +417,9 @@ impl MeasuredValues {
         self.count
     }
 
-    /// Units of the ranges.
+    /// Unit of the ranges.
     #[inline]
-    pub fn units(&self) -> Units {
+    pub fn units(&self) -> Unit {
         self.units
     }
 
@@ -609,12 +549,12 @@ mod tests {
 
     #[test]
     fn telegram_units_bits() {
-        assert_eq!(Units::from_count_word(0x0169), Some(Units::Centimetre));
-        assert_eq!(Units::from_count_word(0x4169), Some(Units::Millimetre));
-        assert_eq!(Units::from_count_word(0x8169), Some(Units::Decimetre));
-        assert_eq!(Units::from_count_word(0xC169), None);
-        for u in [Units::Centimetre, Units::Millimetre, Units::Decimetre] {
-            assert_eq!(Units::from_count_word(u.count_word_bits()), Some(u));
+        assert_eq!(Unit::from_count_word(0x0169), Some(Unit::Centimetre));
+        assert_eq!(Unit::from_count_word(0x4169), Some(Unit::Millimetre));
+        assert_eq!(Unit::from_count_word(0x8169), Some(Unit::Decimetre));
+        assert_eq!(Unit::from_count_word(0xC169), None);
+        for u in [Unit::Centimetre, Unit::Millimetre, Unit::Decimetre] {
+            assert_eq!(Unit::from_count_word(u.count_word_bits()), Some(u));
         }
     }
 
@@ -638,7 +578,7 @@ mod tests {
         );
         let v = MeasuredView::new(&[0x02, 0x24, 0x34, 0x12, 0xFF, 0xFF]).unwrap();
         assert_eq!(v.count(), 2);
-        assert_eq!(v.units(), Units::Centimetre);
+        assert_eq!(v.units(), Unit::Centimetre);
         assert_eq!(v.scan_flags(), 0x2400);
         assert_eq!(v.word(0), Some(0x1234));
         assert_eq!(v.word(1), Some(0xFFFF));
@@ -665,9 +605,9 @@ mod tests {
         words[4] = 8182 | 0xE000;
         words[180] = 1;
         for (units, m0, m4) in [
-            (Units::Centimetre, 12.34f32, 81.82f32),
-            (Units::Millimetre, 1.234, 8.182),
-            (Units::Decimetre, 123.4, 818.2),
+            (Unit::Centimetre, 12.34f32, 81.82f32),
+            (Unit::Millimetre, 1.234, 8.182),
+            (Unit::Decimetre, 123.4, 818.2),
         ] {
             let v = MeasuredValues::from_raw(&words, units, 0x10).unwrap();
             let f = v.to_frame(RangeBits::Bits13).unwrap();
@@ -696,18 +636,18 @@ mod tests {
                     _ => (j as u16 * 13) % 8183 + 1,
                 };
             }
-            let v = MeasuredValues::from_raw(&words[..n], Units::Millimetre, 0x10).unwrap();
+            let v = MeasuredValues::from_raw(&words[..n], Unit::Millimetre, 0x10).unwrap();
             assert_eq!(v.variant(), Some(variant));
             let f = v.to_frame(RangeBits::Bits13).unwrap();
             assert_eq!(f.len(), n);
-            let back = MeasuredValues::from_frame(&f, Units::Millimetre, RangeBits::Bits13, 0x10);
+            let back = MeasuredValues::from_frame(&f, Unit::Millimetre, RangeBits::Bits13, 0x10);
             assert_eq!(back.values(), v.values(), "{variant:?}");
         }
         // A range beyond the largest encodable becomes "above the maximum".
         let mut f = Frame::for_variant(Variant::Fov100Res100);
         f.set_metres(0, 8.19);
         f.set_metres(1, 8.1824);
-        let v = MeasuredValues::from_frame(&f, Units::Millimetre, RangeBits::Bits13, 0);
+        let v = MeasuredValues::from_frame(&f, Unit::Millimetre, RangeBits::Bits13, 0);
         assert_eq!(&v.values()[..3], &[8183, 8182, 8191]);
     }
 }

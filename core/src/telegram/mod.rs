@@ -81,7 +81,7 @@ pub mod status;
 pub use config::Config;
 pub use crc::{crc16, Crc};
 pub use framer::{Event, Feed, Framer, FramerStats};
-pub use measured::{MeasuredError, MeasuredValues, MeasuredView, RangeBits, Units, MAX_VALUES};
+pub use measured::{MeasuredError, MeasuredValues, MeasuredView, RangeBits, MAX_VALUES};
 pub use packet::{
     buffer_len, emit_telegram, emit_telegram_with, EmitError, Telegram, TelegramError,
 };

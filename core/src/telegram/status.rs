@@ -14,10 +14,10 @@
 //! | `[120]` | sensor address |
 //! | `[122]` | units (0 cm, 1 mm) |
 
-use super::measured::Units;
 use super::request::Baud;
 use super::{le_u16, put_le_u16};
 use crate::frame::Variant;
+use crate::units::Unit;
 
 /// Bytes of `B1` data (without the command and the status byte).
 pub const STATUS_BLOCK_LEN: usize = 152;
@@ -85,7 +85,7 @@ pub struct StatusFields {
     pub baud: Baud,
     /// Sensor address (0..=0x7F).
     pub address: u8,
-    /// Units code (0 cm, 1 mm).
+    /// Unit code (0 cm, 1 mm).
     pub units_code: u8,
 }
 
@@ -228,16 +228,16 @@ impl StatusBlock {
         self.bytes[Self::ADDRESS]
     }
 
-    /// Units code (payload `[122]`: 0 cm, 1 mm).
+    /// Unit code (payload `[122]`: 0 cm, 1 mm).
     #[inline]
     pub const fn units_code(&self) -> u8 {
         self.bytes[Self::UNITS]
     }
 
-    /// Units, if the code is 0 (cm) or 1 (mm).
+    /// Unit, if the code is 0 (cm) or 1 (mm).
     #[inline]
-    pub const fn units(&self) -> Option<Units> {
-        Units::from_code(self.units_code())
+    pub const fn units(&self) -> Option<Unit> {
+        Unit::from_code(self.units_code())
     }
 }
 
@@ -281,7 +281,7 @@ mod tests {
         assert_eq!(nonzero, 6);
         assert_eq!(b.fields(), Some(f));
         assert_eq!(b.variant(), Some(Variant::Fov180Res50));
-        assert_eq!(b.units(), Some(Units::Millimetre));
+        assert_eq!(b.units(), Some(Unit::Millimetre));
         let d = StatusBlock::from_fields(&StatusFields::default());
         assert_eq!(d.baud_word(), 103);
         assert_eq!(d.baud(), Some(Baud::B9600));

@@ -42,8 +42,9 @@ use lms_core::frame::MAX_BEAMS;
 use lms_core::telegram::features::{emit_features, EchoedParams, FeatureAssembler};
 use lms_core::telegram::{
     Config, Direction, Event, Framer, MeasuredValues, MeasuredView, RangeBits, Reply, Request,
-    StatusBlock, Telegram, Units, MAX_TELEGRAM_LEN,
+    StatusBlock, Telegram, MAX_TELEGRAM_LEN,
 };
+use lms_core::Unit;
 use lms_core::{Extractor, Frame, Geometry, Invalid, Params, Variant};
 // The device's interrupt vector table, as in the firmware.
 use stm32f4 as _;
@@ -130,7 +131,7 @@ fn main() -> ! {
     let mut host_framer = Framer::new(Direction::HostToSensor, black_box(false));
     let mut assembler = FeatureAssembler::new();
     let mut emulator = Emulator::new(
-        FnSource::new(|_: Variant, _: Units, out: &mut [u16]| {
+        FnSource::new(|_: Variant, _: Unit, out: &mut [u16]| {
             black_box(&mut *out);
             black_box(out.len())
         }),
@@ -254,7 +255,7 @@ fn main() -> ! {
                 }
                 black_box(MeasuredValues::from_frame(
                     &frame,
-                    Units::Millimetre,
+                    Unit::Millimetre,
                     RangeBits::Bits14,
                     black_box(0x10),
                 ));

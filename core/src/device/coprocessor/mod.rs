@@ -25,8 +25,9 @@ use crate::params::Params;
 use crate::pipeline::extractor::Extractor;
 use crate::telegram::features::{emit_features, Counters, EchoedParams, REQ_COUNTERS};
 use crate::telegram::{
-    Baud, Direction, MeasuredView, RangeBits, Telegram, Units, MAX_TELEGRAM_LEN, MAX_VALUES,
+    Baud, Direction, MeasuredView, RangeBits, Telegram, MAX_TELEGRAM_LEN, MAX_VALUES,
 };
+use crate::Unit;
 use crate::{Frame, Variant};
 
 pub use sensor_link::{LinkEvent, SensorLink, SensorSetup, Step};
@@ -65,7 +66,7 @@ impl LatestScan {
 }
 
 impl ScanSource for LatestScan {
-    fn next_scan(&mut self, variant: Variant, _units: Units, out: &mut [u16]) -> usize {
+    fn next_scan(&mut self, variant: Variant, _units: Unit, out: &mut [u16]) -> usize {
         if variant != self.variant {
             return 0; // all "not valid": the sensor runs another variant
         }

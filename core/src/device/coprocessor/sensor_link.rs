@@ -14,9 +14,10 @@
 //! 7. `20 24` — continuous output; from then on every `B0` is a scan.
 
 use crate::telegram::{
-    Baud, Config, Direction, Event, Framer, FramerStats, ModeResult, Reply, Request, Units,
+    Baud, Config, Direction, Event, Framer, FramerStats, ModeResult, Reply, Request,
     DEFAULT_ADDRESS, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
 };
+use crate::Unit;
 use crate::Variant;
 
 /// How long to wait for a reply before sending the request again (µs).
@@ -29,7 +30,7 @@ pub struct SensorSetup {
     /// Scan variant (default 180°/0.5°).
     pub variant: Variant,
     /// Range units (default mm).
-    pub units: Units,
+    pub units: Unit,
     /// Serial speed to switch to (default 500000 Bd).
     pub baud: Baud,
 }
@@ -44,7 +45,7 @@ impl SensorSetup {
     /// 180°/0.5°, mm, 500000 Bd (`const`).
     pub const DEFAULT: SensorSetup = SensorSetup {
         variant: Variant::Fov180Res50,
-        units: Units::Millimetre,
+        units: Unit::Millimetre,
         baud: Baud::B500000,
     };
 }
@@ -165,7 +166,7 @@ impl SensorLink {
             Step::WriteConfig => {
                 let mut config = self.config?;
                 config.set_units_code(match self.setup.units {
-                    Units::Millimetre => 1,
+                    Unit::Millimetre => 1,
                     _ => 0,
                 });
                 Request::WriteConfig(config)
