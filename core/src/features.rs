@@ -20,43 +20,82 @@ pub const MAX_LINES: usize = 64;
 /// Most corners kept per frame.
 pub const MAX_CORNERS: usize = 63;
 
-/// What a frame's run dropped, rejected or could not store. Nothing is lost
-/// silently: every item that is not in [`Features`] is counted here.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Stats {
+/// Declares [`Stats`] and its table of fields [`Stats::FIELDS`] from one list,
+/// so that no encoder, report or comparison names the fields again.
+macro_rules! declare_stats {
+    ($($(#[doc = $doc:literal])+ $field:ident,)+) => {
+        /// What a frame's run dropped, rejected or could not store. Nothing is
+        /// lost silently: every item that is not in [`Features`] is counted here.
+        ///
+        /// Every counter is listed, in declaration order, in [`Stats::FIELDS`];
+        /// the first [`Stats::D0_FIELDS`] are the words of the `D0` telegram.
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        #[non_exhaustive]
+        pub struct Stats {
+            $($(#[doc = $doc])+ pub $field: u16,)+
+        }
+
+        impl Stats {
+            /// Every counter as (name, getter), in declaration order. The names
+            /// are the field names (and the JSON keys of `host-bridge extract`).
+            pub const FIELDS: [(&'static str, fn(&Stats) -> u16); declare_stats!(@count $($field)+)] =
+                [$((stringify!($field), |s: &Stats| s.$field),)+];
+
+            /// All counters zero (`const`, for statics).
+            pub const ZERO: Stats = Stats { $($field: 0,)+ };
+
+            /// Counters from `values` in [`Stats::FIELDS`] order; missing
+            /// values are 0, extra values are ignored.
+            pub fn from_fields(values: &[u16]) -> Stats {
+                let mut it = values.iter().copied();
+                Stats { $($field: it.next().unwrap_or(0),)+ }
+            }
+        }
+    };
+    (@count $($field:ident)+) => { 0 $(+ declare_stats!(@one $field))+ };
+    (@one $field:ident) => { 1 };
+}
+
+declare_stats! {
     /// Valid beams in the frame.
-    pub valid_beams: u16,
+    valid_beams,
     /// Windows that are invalid (an invalid beam or a prediction behind the sensor).
-    pub invalid_windows: u16,
+    invalid_windows,
     /// Segments shorter than `min_points`.
-    pub short_segments: u16,
+    short_segments,
     /// Segments beyond [`MAX_SEGMENTS`].
-    pub segment_overflow: u16,
+    segment_overflow,
     /// Edge points beyond capacity (cannot happen with [`MAX_BEAMS`] slots; counted anyway).
-    pub edge_overflow: u16,
+    edge_overflow,
     /// Segments whose fit failed (grazing incidence, singular).
-    pub degenerate_fits: u16,
+    degenerate_fits,
     /// Lines rejected for `chi2 > max_chi2`.
-    pub rejected_chi2: u16,
+    rejected_chi2,
     /// Lines rejected for `length < min_length`.
-    pub rejected_short: u16,
+    rejected_short,
     /// Pairs of lines merged into one.
-    pub merges: u16,
+    merges,
     /// Lines beyond [`MAX_LINES`].
-    pub line_overflow: u16,
+    line_overflow,
     /// Close line pairs that are parallel (no finite intersection).
-    pub degenerate_corners: u16,
+    degenerate_corners,
     /// Corners beyond [`MAX_CORNERS`].
-    pub corner_overflow: u16,
+    corner_overflow,
     /// Split before reject ([`crate::pipeline::split`], off by default): segments
     /// split in two. Not carried by the `D0` telegram.
-    pub splits: u16,
+    splits,
     /// Split before reject: halves dropped for fewer than `min_points` beams.
-    pub split_short: u16,
+    split_short,
     /// Split before reject: pieces dropped because they are still not one
     /// straight line (a circle explains them, or the depth is reached).
-    pub split_rejected: u16,
+    split_rejected,
+}
+
+impl Stats {
+    /// How many of [`Stats::FIELDS`] (the first) the `D0` telegram carries:
+    /// `valid_beams` … `corner_overflow`; the split counters are not sent.
+    pub const D0_FIELDS: usize = 12;
 }
 
 /// The features of one frame.

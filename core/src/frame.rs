@@ -191,6 +191,7 @@ impl Geometry {
 /// Why a frame could not be built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum FrameError {
     /// More than [`MAX_BEAMS`] or fewer than [`MIN_BEAMS`] beams.
     BeamCount {

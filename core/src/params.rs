@@ -85,6 +85,7 @@ pub const MAX_SPLIT_DEPTH: u8 = 16;
 /// A parameter that makes no sense; names the field.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum ParamError {
     /// `sigma` must be finite and > 0.
     Sigma,

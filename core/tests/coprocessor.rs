@@ -10,7 +10,7 @@ use lms_core::telegram::features::{
     Assembled, Counters, FeatureAssembler, CMD_COUNTERS, REQ_COUNTERS,
 };
 use lms_core::telegram::{
-    emit_telegram, Direction, Event, Framer, MeasuredView, RangeBits, Request,
+    emit_telegram, Direction, Event, Framer, Handshake, MeasuredView, RangeBits, Request,
 };
 use lms_core::Unit;
 use lms_core::{Extractor, Params, Variant};
@@ -126,7 +126,7 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
     bench.run(1_000_000);
     let wire = std::mem::take(&mut bench.host.tx);
 
-    let mut framer = Framer::new(Direction::SensorToHost, true);
+    let mut framer = Framer::new(Direction::SensorToHost, Handshake::Expected);
     let mut asm = FeatureAssembler::new();
     let mut extractor = Extractor::new();
     let (mut scans, mut checked, mut acks, mut a0) = (0, 0, 0, 0);

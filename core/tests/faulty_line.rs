@@ -46,7 +46,9 @@ use std::collections::{HashMap, HashSet};
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{Assembled, FeatureAssembler, CMD_COUNTERS, REQ_COUNTERS};
-use lms_core::telegram::{emit_telegram, Direction, Event, Framer, FramerStats, Request, ACK, NAK};
+use lms_core::telegram::{
+    emit_telegram, Direction, Event, Framer, FramerStats, Handshake, Request, ACK, NAK,
+};
 use lms_core::Unit;
 use lms_core::{Params, Variant};
 
@@ -342,8 +344,8 @@ impl Bench {
             sensor: Port::default(),
             host: Port::default(),
             now: 0,
-            sensor_framer: Framer::new(Direction::SensorToHost, true),
-            host_framer: Framer::new(Direction::SensorToHost, true),
+            sensor_framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
+            host_framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
         }
     }
 
@@ -498,7 +500,7 @@ fn run(side: Side, fault: Fault, seed: u64) -> Outcome {
     let after = bench.cop.counters();
 
     // The client's view (its line is clean when the fault is on the sensor side).
-    let mut client = Framer::new(Direction::SensorToHost, true);
+    let mut client = Framer::new(Direction::SensorToHost, Handshake::Expected);
     let mut asm = FeatureAssembler::new();
     let mut got: Vec<Vec<u8>> = Vec::new();
     let (mut groups, mut feature_errors) = (0, 0);

@@ -15,7 +15,7 @@
 
 use lms_core::telegram::features::{emit_features, Assembled, EchoedParams, FeatureAssembler};
 use lms_core::telegram::{
-    emit_telegram, Baud, Config, Direction, Event, Framer, MeasuredValues, MeasuredView,
+    emit_telegram, Baud, Config, Direction, Event, Framer, Handshake, MeasuredValues, MeasuredView,
     ModeResult, RangeBits, Reply, Request, StatusBlock, Telegram, VariantReply, ACK,
     MAX_TELEGRAM_LEN, NAK,
 };
@@ -142,7 +142,10 @@ proptest! {
         cuts.push(stream.len());
         cuts.sort_unstable();
         let chunks: Vec<&[u8]> = cuts.windows(2).map(|w| &stream[w[0]..w[1]]).collect();
-        let mut framer = Framer::new(Direction::SensorToHost, handshake);
+        let mut framer = Framer::new(
+            Direction::SensorToHost,
+            if handshake { Handshake::Expected } else { Handshake::Ignored },
+        );
         let (got, handshakes) = run_framer(&mut framer, &chunks);
         prop_assert_eq!(&got, &intact, "the intact telegrams, in order, and nothing else");
         let s = *framer.stats();
@@ -186,7 +189,7 @@ proptest! {
         let t = Telegram::new_checked(&buf[..n], Direction::HostToSensor).unwrap();
         prop_assert_eq!(Request::parse(&t).unwrap(), request);
         // And through the framer.
-        let mut framer = Framer::new(Direction::HostToSensor, false);
+        let mut framer = Framer::new(Direction::HostToSensor, Handshake::Ignored);
         let (got, _) = run_framer(&mut framer, &[&buf[..n]]);
         prop_assert_eq!(got, vec![buf[..n].to_vec()]);
     }

@@ -27,7 +27,7 @@ use std::time::{Duration, Instant};
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{Assembled, FeatureAssembler};
-use lms_core::telegram::{Direction, Event, Framer, Request};
+use lms_core::telegram::{Direction, Event, Framer, Handshake, Request};
 use lms_core::Unit;
 use lms_core::{Params, Variant};
 
@@ -192,7 +192,7 @@ fn sustained(scans: u32) -> Report {
     let mut cop = Box::new(CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT));
     cop.start(0);
     let (mut sensor, mut host) = (Port::new(), Port::new());
-    let mut client = Framer::new(Direction::SensorToHost, true);
+    let mut client = Framer::new(Direction::SensorToHost, Handshake::Expected);
     let mut asm = FeatureAssembler::new();
     let mut line = [0u8; 4096];
     let mut chunk = [0u8; 4096];

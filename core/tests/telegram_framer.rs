@@ -3,7 +3,8 @@
 //! skipped and counted and what follows is still found.
 
 use lms_core::telegram::{
-    Direction, Event, Framer, FramerStats, MeasuredValues, Reply, Request, Telegram, ACK, NAK,
+    Direction, Event, Framer, FramerStats, Handshake, MeasuredValues, Reply, Request, Telegram,
+    ACK, NAK,
 };
 use lms_core::Unit;
 
@@ -59,7 +60,7 @@ fn feed_chunk(framer: &mut Framer, chunk: &[u8], seen: &mut Vec<Seen>) {
 /// after checking that every byte is accounted for.
 fn run(
     direction: Direction,
-    handshake: bool,
+    handshake: Handshake,
     stream: &[u8],
     cuts: &[usize],
     idle: bool,
@@ -102,7 +103,7 @@ fn run(
 /// Every chunk size 1..=len, then random split points: all runs must agree.
 fn all_chunkings(
     direction: Direction,
-    handshake: bool,
+    handshake: Handshake,
     stream: &[u8],
 ) -> (Vec<Seen>, FramerStats, usize) {
     let whole = run(direction, handshake, stream, &[], false);
@@ -173,7 +174,8 @@ fn telegram_framer_clean_host_stream() {
     ];
     let telegrams: Vec<Vec<u8>> = requests.iter().map(|r| emit_request(*r)).collect();
     let stream = telegrams.concat();
-    let (seen, stats, buffered) = all_chunkings(Direction::HostToSensor, false, &stream);
+    let (seen, stats, buffered) =
+        all_chunkings(Direction::HostToSensor, Handshake::Ignored, &stream);
     let expected: Vec<Seen> = telegrams.iter().cloned().map(Seen::Telegram).collect();
     assert_eq!(seen, expected);
     assert_eq!(buffered, 0);
@@ -215,7 +217,8 @@ fn telegram_framer_clean_sensor_stream() {
         stream.extend_from_slice(t);
         expected.push(Seen::Telegram(t.clone()));
     }
-    let (seen, stats, buffered) = all_chunkings(Direction::SensorToHost, true, &stream);
+    let (seen, stats, buffered) =
+        all_chunkings(Direction::SensorToHost, Handshake::Expected, &stream);
     assert_eq!(seen, expected);
     assert_eq!(buffered, 0);
     assert_eq!(
@@ -253,7 +256,8 @@ fn telegram_framer_garbage_corruption_truncation() {
     // The start of a telegram that has not arrived yet.
     stream.extend_from_slice(&[0x02, 0x80]);
 
-    let (seen, stats, buffered) = all_chunkings(Direction::SensorToHost, true, &stream);
+    let (seen, stats, buffered) =
+        all_chunkings(Direction::SensorToHost, Handshake::Expected, &stream);
     assert_eq!(
         seen,
         vec![
@@ -306,7 +310,8 @@ fn telegram_framer_false_stx_inside_corrupted_scan() {
     stream.extend_from_slice(&good);
     stream.push(ACK);
     stream.extend_from_slice(&R92);
-    let (seen, stats, buffered) = all_chunkings(Direction::SensorToHost, true, &stream);
+    let (seen, stats, buffered) =
+        all_chunkings(Direction::SensorToHost, Handshake::Expected, &stream);
     assert_eq!(
         seen,
         vec![
@@ -355,7 +360,7 @@ fn telegram_framer_random_damage_never_panics() {
         let k = rng.below(20);
         let mut cuts: Vec<usize> = (0..k).map(|_| rng.below(s.len() + 1)).collect();
         cuts.sort_unstable();
-        for handshake in [false, true] {
+        for handshake in [Handshake::Ignored, Handshake::Expected] {
             for direction in [Direction::SensorToHost, Direction::HostToSensor] {
                 let (seen, _, _) = run(direction, handshake, &s, &cuts, true);
                 if direction == Direction::SensorToHost {
@@ -371,7 +376,13 @@ fn telegram_framer_random_damage_never_panics() {
     // Pure noise.
     let noise: Vec<u8> = (0..5000).map(|_| rng.next() as u8).collect();
     for direction in [Direction::SensorToHost, Direction::HostToSensor] {
-        run(direction, true, &noise, &[17, 900, 4000], true);
+        run(
+            direction,
+            Handshake::Expected,
+            &noise,
+            &[17, 900, 4000],
+            true,
+        );
     }
 }
 
@@ -381,7 +392,7 @@ fn telegram_framer_abandon_on_idle_line() {
     // behind it is held until the host's timeout gives the candidate up.
     let mut stream = vec![0x02, 0x80, 0xFF, 0x02, ACK];
     stream.extend_from_slice(&A0);
-    let mut framer = Framer::new(Direction::SensorToHost, true);
+    let mut framer = Framer::new(Direction::SensorToHost, Handshake::Expected);
     let mut seen = Vec::new();
     feed_chunk(&mut framer, &stream, &mut seen);
     assert!(seen.is_empty());
@@ -414,7 +425,7 @@ fn telegram_framer_sensor_side_nak_pattern() {
     let mut stream = vec![0x02, 0x00, 0x01, 0x00, 0x31, 0x15, 0x13];
     stream.extend_from_slice(&[0x02, 0x00, 0x01, 0x00, 0x31, 0x15, 0x12]);
     for chunk_len in 1..=stream.len() {
-        let mut framer = Framer::new(Direction::HostToSensor, false);
+        let mut framer = Framer::new(Direction::HostToSensor, Handshake::Ignored);
         let mut answers = Vec::new();
         for chunk in stream.chunks(chunk_len) {
             let mut input = chunk;

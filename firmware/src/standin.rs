@@ -9,7 +9,7 @@
 use embedded_io::{Read, ReadReady, Write};
 use lms_core::device::coprocessor::{PollError, PollOutcome};
 use lms_core::telegram::features::Counters;
-use lms_core::telegram::{Direction, Event, Framer};
+use lms_core::telegram::{Direction, Event, Framer, Handshake};
 
 /// Bytes moved per read.
 const CHUNK: usize = 64;
@@ -24,7 +24,7 @@ impl Forwarder {
     /// A forwarder with an empty framer.
     pub const fn new() -> Self {
         Forwarder {
-            framer: Framer::new(Direction::SensorToHost, true),
+            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
             counters: Counters {
                 scans_in: 0,
                 feature_scans_out: 0,

@@ -14,7 +14,7 @@ use std::collections::HashSet;
 
 use libfuzzer_sys::fuzz_target;
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
-use lms_core::telegram::{Direction, Framer};
+use lms_core::telegram::{Direction, Framer, Handshake};
 use lms_core::Params;
 use lms_fuzz::{drain, op, Ev, Input, Port};
 
@@ -28,8 +28,8 @@ fuzz_target!(|data: &[u8]| {
     let mut now = 0u64;
     cop.start(now);
     let (mut sensor, mut host) = (Port::default(), Port::default());
-    let mut client = Framer::new(Direction::SensorToHost, true);
-    let mut sensor_side = Framer::new(Direction::SensorToHost, true);
+    let mut client = Framer::new(Direction::SensorToHost, Handshake::Expected);
+    let mut sensor_side = Framer::new(Direction::SensorToHost, Handshake::Expected);
     let mut sent_b0 = HashSet::new();
     let mut events = Vec::new();
     while !input.is_empty() {

@@ -11,7 +11,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
-use lms_core::telegram::{Direction, Framer};
+use lms_core::telegram::{Direction, Framer, Handshake};
 use lms_core::Variant;
 use lms_fuzz::{drain, op, pattern_words, Input};
 
@@ -32,7 +32,7 @@ fuzz_target!(|data: &[u8]| {
     };
     let mut now = u64::from(input.u16());
     let mut lms = Emulator::new(source, settings, now);
-    let mut host = Framer::new(Direction::SensorToHost, true);
+    let mut host = Framer::new(Direction::SensorToHost, Handshake::Expected);
     let mut events = Vec::new();
     let mut cut = false;
     while !input.is_empty() {

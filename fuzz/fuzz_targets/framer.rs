@@ -10,13 +10,17 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use lms_core::telegram::{Framer, Telegram};
+use lms_core::telegram::{Framer, Handshake, Telegram};
 use lms_fuzz::{drain, Ev, FramerInput, FRAMER_ABANDON, FRAMER_DISCARD, FRAMER_HANDSHAKE};
 
 fuzz_target!(|data: &[u8]| {
     let input = FramerInput::decode(data);
     let direction = input.direction();
-    let handshake = input.flags & FRAMER_HANDSHAKE != 0;
+    let handshake = if input.flags & FRAMER_HANDSHAKE != 0 {
+        Handshake::Expected
+    } else {
+        Handshake::Ignored
+    };
     let timeouts = input.flags & (FRAMER_ABANDON | FRAMER_DISCARD) != 0;
 
     let mut framer = Framer::new(direction, handshake);

@@ -266,26 +266,13 @@ pub fn decode_features(input: &mut Input<'_>) -> (u32, u16, Features) {
     let edges = usize::from(input.u16()) % (MAX_BEAMS + 1);
     let lines = usize::from(input.u8()) % (MAX_LINES + 1);
     let corners = usize::from(input.u8()) % (MAX_CORNERS + 1);
-    let mut st = [0u16; 12];
+    let mut st = [0u16; Stats::D0_FIELDS];
     for v in st.iter_mut() {
         *v = input.u16();
     }
-    f.stats = Stats {
-        valid_beams: st[0],
-        invalid_windows: st[1],
-        short_segments: st[2],
-        segment_overflow: st[3],
-        edge_overflow: st[4],
-        degenerate_fits: st[5],
-        rejected_chi2: st[6],
-        rejected_short: st[7],
-        merges: st[8],
-        line_overflow: st[9],
-        degenerate_corners: st[10],
-        corner_overflow: st[11],
-        // Not carried by D0 (split before reject is off on the co-processor).
-        ..Stats::default()
-    };
+    // The split counters are not carried by D0 (split before reject is off
+    // on the co-processor): they stay 0.
+    f.stats = Stats::from_fields(&st);
     for _ in 0..segments {
         let s = lms_core::Segment {
             first: input.u16(),
@@ -347,22 +334,8 @@ pub fn encode_features(out: &mut Output, counter: u32, beams: u16, f: &Features)
         .u16(f.edges.len() as u16)
         .u8(f.lines.len() as u8)
         .u8(f.corners.len() as u8);
-    let s = &f.stats;
-    for v in [
-        s.valid_beams,
-        s.invalid_windows,
-        s.short_segments,
-        s.segment_overflow,
-        s.edge_overflow,
-        s.degenerate_fits,
-        s.rejected_chi2,
-        s.rejected_short,
-        s.merges,
-        s.line_overflow,
-        s.degenerate_corners,
-        s.corner_overflow,
-    ] {
-        out.u16(v);
+    for (_, get) in Stats::FIELDS.iter().take(Stats::D0_FIELDS) {
+        out.u16(get(&f.stats));
     }
     for s in &f.segments {
         out.u16(s.first).u16(s.last);
@@ -423,23 +396,11 @@ pub fn feature_bits(f: &Features) -> Vec<u32> {
         ]);
     }
     v.push(u32::MAX);
-    let s = &f.stats;
     v.extend(
-        [
-            s.valid_beams,
-            s.invalid_windows,
-            s.short_segments,
-            s.segment_overflow,
-            s.edge_overflow,
-            s.degenerate_fits,
-            s.rejected_chi2,
-            s.rejected_short,
-            s.merges,
-            s.line_overflow,
-            s.degenerate_corners,
-            s.corner_overflow,
-        ]
-        .map(u32::from),
+        Stats::FIELDS
+            .iter()
+            .take(Stats::D0_FIELDS)
+            .map(|(_, get)| u32::from(get(&f.stats))),
     );
     v
 }

@@ -49,8 +49,8 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use lms_core::telegram::{
-    Baud, Config, Direction, Event, Framer, FramerStats, MeasuredError, MeasuredValues, ModeResult,
-    Reply, Request, Telegram, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
+    Baud, Config, Direction, Event, Framer, FramerStats, Handshake, MeasuredError, MeasuredValues,
+    ModeResult, Reply, Request, Telegram, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
 };
 use lms_core::Unit;
 use lms_core::Variant;
@@ -607,7 +607,7 @@ impl<L: Link> Client<L> {
     pub fn new(link: L, baud: Baud, timeouts: Timeouts) -> Self {
         Client {
             link,
-            framer: Framer::new(Direction::SensorToHost, true),
+            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
             pending: Vec::with_capacity(CHUNK),
             pending_at: 0,
             chunk: vec![0; CHUNK],
@@ -922,7 +922,7 @@ impl<L: Link> Client<L> {
     /// The first rate answered is kept and returned. Sensors power up at
     /// 9600 Bd, so put it first.
     pub fn find_baud(&mut self, rates: &[Baud]) -> Result<Baud, ClientError> {
-        self.framer.set_handshake(true);
+        self.framer.set_handshake(Handshake::Expected);
         let retries = self.retries;
         // A wrong rate can look like NAKs: don't insist.
         self.retries = retries.min(1);
@@ -936,7 +936,7 @@ impl<L: Link> Client<L> {
             match self.mode_change(&Request::OnRequest, self.timeouts.probe) {
                 Ok(()) => {
                     self.streaming = false;
-                    self.framer.set_handshake(true);
+                    self.framer.set_handshake(Handshake::Expected);
                     result = Some(Ok(rate));
                     break;
                 }
@@ -969,7 +969,7 @@ impl<L: Link> Client<L> {
     /// scans still arriving before the `A0` are dropped (counted in
     /// [`ClientStats::ignored`]).
     pub fn stop_stream(&mut self) -> Result<(), ClientError> {
-        self.framer.set_handshake(true);
+        self.framer.set_handshake(Handshake::Expected);
         let ack = self.timeouts.ack;
         self.mode_change(&Request::OnRequest, ack)?;
         self.streaming = false;
@@ -983,7 +983,7 @@ impl<L: Link> Client<L> {
         self.mode_change(&Request::Continuous, ack)?;
         self.streaming = true;
         // Streamed telegrams come without ACK: a 06 or 15 between them is noise.
-        self.framer.set_handshake(false);
+        self.framer.set_handshake(Handshake::Ignored);
         Ok(())
     }
 

@@ -32,7 +32,7 @@ use std::io;
 use std::time::Duration;
 
 use lms_core::telegram::{
-    Baud, Config, Direction, Event, Framer, MeasuredValues, ModeResult, Reply, Request,
+    Baud, Config, Direction, Event, Framer, Handshake, MeasuredValues, ModeResult, Reply, Request,
     StatusBlock, StatusFields, ACK, DEFAULT_PASSWORD, DEFAULT_STATUS, NAK, SENSOR_TYPE_LMS200,
 };
 use lms_core::Unit;
@@ -165,7 +165,7 @@ impl FakeSensor {
             config: Config::default(),
             installation: false,
             streaming: false,
-            framer: Framer::new(Direction::HostToSensor, false),
+            framer: Framer::new(Direction::HostToSensor, Handshake::Ignored),
             out: VecDeque::new(),
             line_free_at: Duration::ZERO,
             next_scan_at: Duration::ZERO,

@@ -118,8 +118,8 @@ use lms_core::telegram::features::{
     CMD_EDGES, CMD_LINES, CMD_SEGMENTS, CMD_SUMMARY, REQ_COUNTERS,
 };
 use lms_core::telegram::{
-    emit_telegram, Baud, Direction, Event, Framer, MeasuredValues, MeasuredView, RangeBits,
-    Request, Telegram,
+    emit_telegram, Baud, Direction, Event, Framer, Handshake, MeasuredValues, MeasuredView,
+    RangeBits, Request, Telegram,
 };
 use lms_core::Unit;
 use lms_core::{Extractor, Features, Frame, Invalid, Params, Variant};
@@ -1963,7 +1963,7 @@ pub fn run(args: &VerifyArgs) -> Result<()> {
         wanted,
         max_in_flight,
         finished: false,
-        framer: Framer::new(Direction::SensorToHost, true),
+        framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
         assembler: FeatureAssembler::new(),
         pending_b0: None,
         replies: VecDeque::new(),

@@ -52,7 +52,7 @@
 //! # Driving it
 //!
 //! ```
-//! use lms_core::emulator::{Emulator, Event, FnSource, Settings};
+//! use lms_core::device::emulator::{Emulator, Event, FnSource, Settings};
 //! use lms_core::telegram::Baud;
 //!
 //! // A sensor that sees a wall 2 m (200 cm) away on every beam.
@@ -100,9 +100,9 @@ use crate::frame::{Invalid, Variant};
 use crate::telegram::reply::POWER_ON_LEN;
 use crate::telegram::{
     copy_into, emit_telegram, Baud, Config, Direction, Event as FramerEvent, Framer, FramerStats,
-    MeasuredValues, ModeResult, RangeBits, Reply, Request, StatusBlock, StatusFields, VariantReply,
-    ACK, DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, MAX_TELEGRAM_LEN, MAX_VALUES, NAK,
-    REPLY_ADDRESS_BIT, SENSOR_TYPE_LMS200,
+    Handshake, MeasuredValues, ModeResult, RangeBits, Reply, Request, StatusBlock, StatusFields,
+    VariantReply, ACK, DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, MAX_TELEGRAM_LEN,
+    MAX_VALUES, NAK, REPLY_ADDRESS_BIT, SENSOR_TYPE_LMS200,
 };
 use crate::Unit;
 
@@ -584,7 +584,7 @@ impl<S: ScanSource> Emulator<S> {
             mode: OperatingMode::OnRequest,
             variant: settings.variant,
             config: settings.config,
-            framer: Framer::new(Direction::HostToSensor, false),
+            framer: Framer::new(Direction::HostToSensor, Handshake::Ignored),
             last_rx_us: 0,
             resetting: false,
             restart_at_us: None,

@@ -30,12 +30,25 @@ pub const MIN_INCIDENCE_COS: f32 = 1e-3;
 /// Why a segment gave no line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum FitError {
     /// Fewer than three valid points.
     TooFewPoints,
     /// The line is seen edge-on from some beam or the normal equations are singular.
     Degenerate,
 }
+
+impl core::fmt::Display for FitError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            FitError::TooFewPoints => "fewer than three valid points",
+            FitError::Degenerate => "line seen edge-on or normal equations singular",
+        })
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for FitError {}
 
 /// The bearing tables of a frame: `cos phi_j`, `sin phi_j`.
 #[derive(Clone, Copy, Debug)]

@@ -307,8 +307,8 @@ where
             w.u8(lines.len() as u8);
             w.u8(corners.len() as u8);
             w.u16(edges.len() as u16);
-            for v in stats_fields(&features.stats) {
-                w.u16(v);
+            for (_, get) in Stats::FIELDS.iter().take(Stats::D0_FIELDS) {
+                w.u16(get(&features.stats));
             }
             w.u16(params.iterations);
             w.f32(params.sigma);
@@ -318,44 +318,6 @@ where
     );
     out(n, &buf)?;
     Ok(sent)
-}
-
-fn stats_fields(s: &Stats) -> [u16; 12] {
-    [
-        s.valid_beams,
-        s.invalid_windows,
-        s.short_segments,
-        s.segment_overflow,
-        s.edge_overflow,
-        s.degenerate_fits,
-        s.rejected_chi2,
-        s.rejected_short,
-        s.merges,
-        s.line_overflow,
-        s.degenerate_corners,
-        s.corner_overflow,
-    ]
-}
-
-fn stats_from(v: [u16; 12]) -> Stats {
-    Stats {
-        valid_beams: v[0],
-        invalid_windows: v[1],
-        short_segments: v[2],
-        segment_overflow: v[3],
-        edge_overflow: v[4],
-        degenerate_fits: v[5],
-        rejected_chi2: v[6],
-        rejected_short: v[7],
-        merges: v[8],
-        line_overflow: v[9],
-        degenerate_corners: v[10],
-        corner_overflow: v[11],
-        // Split before reject is off on the co-processor: not carried.
-        splits: 0,
-        split_short: 0,
-        split_rejected: 0,
-    }
 }
 
 /// Line record, 46 bytes: α, r, cov αα, αr, rr, chi2, x₀, y₀, x₁, y₁
@@ -441,6 +403,7 @@ pub struct Summary {
 /// Why a feature telegram could not be taken.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum FeatureError {
     /// The data is shorter or longer than its counts say.
     Malformed {
@@ -563,7 +526,7 @@ impl FeatureAssembler {
                     u16::from(r.u8().ok_or(malformed)?),
                     r.u16().ok_or(malformed)?,
                 ];
-                let mut st = [0u16; 12];
+                let mut st = [0u16; Stats::D0_FIELDS];
                 for v in st.iter_mut() {
                     *v = r.u16().ok_or(malformed)?;
                 }
@@ -573,7 +536,7 @@ impl FeatureAssembler {
                     q: r.f32().ok_or(malformed)?,
                     tau: r.f32().ok_or(malformed)?,
                 };
-                f.stats = stats_from(st);
+                f.stats = Stats::from_fields(&st);
                 self.current = None;
                 let got = [
                     f.segments.len() as u16,

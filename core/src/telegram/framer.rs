@@ -8,8 +8,8 @@
 //! buffer — until it returns no event:
 //!
 //! ```
-//! use lms_core::telegram::{Direction, Event, Framer};
-//! let mut framer = Framer::new(Direction::HostToSensor, false);
+//! use lms_core::telegram::{Direction, Event, Framer, Handshake};
+//! let mut framer = Framer::new(Direction::HostToSensor, Handshake::Ignored);
 //! let chunk = [0xFF, 0x02, 0x00, 0x01, 0x00, 0x31, 0x15, 0x12, 0x02, 0x00];
 //! let mut input = &chunk[..];
 //! let mut commands = [0u8; 4];
@@ -146,6 +146,24 @@ enum FalseStart {
     BadHeader,
 }
 
+/// Whether `ACK`/`NAK` bytes between telegrams mean something to a framer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Handshake {
+    /// `ACK`/`NAK` bytes between telegrams are reported as events (the host
+    /// side reading a sensor).
+    Expected,
+    /// `ACK`/`NAK` bytes are skipped like any garbage (the sensor side
+    /// reading requests, or a stream without handshake).
+    Ignored,
+}
+
+impl Handshake {
+    const fn is_expected(self) -> bool {
+        matches!(self, Handshake::Expected)
+    }
+}
+
 /// The framer (see the [module docs](self)).
 #[derive(Clone, Debug)]
 pub struct Framer {
@@ -156,7 +174,7 @@ pub struct Framer {
     /// start of the next call.
     delivered: usize,
     direction: Direction,
-    handshake: bool,
+    handshake: Handshake,
     stats: FramerStats,
 }
 
@@ -164,10 +182,9 @@ impl Framer {
     /// Size of the internal buffer in bytes (the largest telegram).
     pub const CAPACITY: usize = MAX_TELEGRAM_LEN;
 
-    /// A framer for telegrams travelling in `direction`. With `handshake`,
-    /// `ACK`/`NAK` bytes between telegrams are reported as events (the host
-    /// side reading a sensor); without, they are skipped like any garbage.
-    pub const fn new(direction: Direction, handshake: bool) -> Self {
+    /// A framer for telegrams travelling in `direction`; `handshake` says
+    /// whether `ACK`/`NAK` bytes between telegrams are events.
+    pub const fn new(direction: Direction, handshake: Handshake) -> Self {
         Framer {
             buf: [0; MAX_TELEGRAM_LEN],
             len: 0,
@@ -194,17 +211,17 @@ impl Framer {
         self.direction
     }
 
-    /// `true` if `ACK`/`NAK` bytes are reported.
+    /// Whether `ACK`/`NAK` bytes are reported.
     #[inline]
-    pub fn handshake(&self) -> bool {
+    pub fn handshake(&self) -> Handshake {
         self.handshake
     }
 
     /// Report `ACK`/`NAK` bytes from now on (or stop, e.g. in continuous
     /// mode, where the sensor sends none).
     #[inline]
-    pub fn set_handshake(&mut self, on: bool) {
-        self.handshake = on;
+    pub fn set_handshake(&mut self, handshake: Handshake) {
+        self.handshake = handshake;
     }
 
     /// The counters so far.
@@ -356,12 +373,12 @@ impl Framer {
     /// handshake mode.
     #[inline]
     fn is_marker(&self, b: u8) -> bool {
-        b == STX || (self.handshake && (b == ACK || b == NAK))
+        b == STX || (self.handshake.is_expected() && (b == ACK || b == NAK))
     }
 
     /// A handshake byte (counted), `None` for `STX`.
     fn handshake_byte(&mut self, b: u8) -> Option<Found> {
-        if !self.handshake {
+        if !self.handshake.is_expected() {
             return None;
         }
         match b {
@@ -478,7 +495,7 @@ impl Framer {
 impl Default for Framer {
     /// A host-side framer: sensor → host with `ACK`/`NAK` events.
     fn default() -> Self {
-        Framer::new(Direction::SensorToHost, true)
+        Framer::new(Direction::SensorToHost, Handshake::Expected)
     }
 }
 
@@ -513,7 +530,7 @@ mod tests {
         let mut stream = std::vec::Vec::new();
         stream.extend_from_slice(&A0[..5]);
         stream.extend_from_slice(&R92);
-        let mut f = Framer::new(Direction::SensorToHost, true);
+        let mut f = Framer::new(Direction::SensorToHost, Handshake::Expected);
         let mut out = std::vec::Vec::new();
         run(&mut f, &stream, &mut out);
         assert_eq!(out, std::vec![R92.to_vec()]);
@@ -534,14 +551,14 @@ mod tests {
         stream.extend_from_slice(&A0[..4]);
         stream.push(ACK);
         stream.extend_from_slice(&A0);
-        let mut f = Framer::new(Direction::SensorToHost, true);
+        let mut f = Framer::new(Direction::SensorToHost, Handshake::Expected);
         let mut out = std::vec::Vec::new();
         run(&mut f, &stream, &mut out);
         assert_eq!(out, std::vec![std::vec![ACK], A0.to_vec()]);
         assert_eq!(f.stats().crc_errors, 1);
         assert_eq!(f.stats().bytes_skipped, 4);
         // Without handshake the ACK is garbage.
-        let mut f = Framer::new(Direction::SensorToHost, false);
+        let mut f = Framer::new(Direction::SensorToHost, Handshake::Ignored);
         let mut out = std::vec::Vec::new();
         run(&mut f, &stream, &mut out);
         assert_eq!(out, std::vec![A0.to_vec()]);
@@ -550,7 +567,7 @@ mod tests {
 
     #[test]
     fn telegram_framer_headers() {
-        let mut f = Framer::new(Direction::SensorToHost, false);
+        let mut f = Framer::new(Direction::SensorToHost, Handshake::Ignored);
         let mut out = std::vec::Vec::new();
         // Address without 0x80, LEN 1, LEN 813: each a false STX.
         run(&mut f, &[0x02, 0x00, 0x03, 0x00], &mut out);
@@ -574,7 +591,7 @@ mod tests {
             }
         );
         // Host side accepts address 0 and LEN 1.
-        let mut h = Framer::new(Direction::HostToSensor, false);
+        let mut h = Framer::new(Direction::HostToSensor, Handshake::Ignored);
         let mut out = std::vec::Vec::new();
         run(
             &mut h,

@@ -113,6 +113,7 @@ impl RangeBits {
 /// Why `B0` bytes or values are not a scan.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum MeasuredError {
     /// The telegram is not sensor → host.
     WrongDirection,

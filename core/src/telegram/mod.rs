@@ -34,7 +34,7 @@
 //! # Example: a request, its reply, and the framer in between
 //!
 //! ```
-//! use lms_core::telegram::{Direction, Event, Framer, Reply, Request, ModeResult};
+//! use lms_core::telegram::{Direction, Event, Framer, Handshake, Reply, Request, ModeResult};
 //!
 //! // Host side: the status request is `02 00 01 00 31 15 12`.
 //! let mut buf = [0u8; 16];
@@ -46,7 +46,7 @@
 //! let mut wire = [0u8; 16];
 //! wire[0] = lms_core::telegram::ACK;
 //! let n = Reply::ModeChanged(ModeResult::Ok).emit(0, 0x10, &mut wire[1..]).unwrap();
-//! let mut framer = Framer::new(Direction::SensorToHost, true);
+//! let mut framer = Framer::new(Direction::SensorToHost, Handshake::Expected);
 //! let mut seen = 0;
 //! for b in &wire[..1 + n] {
 //!     let mut input = core::slice::from_ref(b);
@@ -80,7 +80,7 @@ pub mod status;
 
 pub use config::Config;
 pub use crc::{crc16, Crc};
-pub use framer::{Event, Feed, Framer, FramerStats};
+pub use framer::{Event, Feed, Framer, FramerStats, Handshake};
 pub use measured::{MeasuredError, MeasuredValues, MeasuredView, RangeBits, MAX_VALUES};
 pub use packet::{
     buffer_len, emit_telegram, emit_telegram_with, EmitError, Telegram, TelegramError,

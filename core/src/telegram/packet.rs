@@ -30,6 +30,7 @@ mod field {
 /// Why bytes are not a telegram.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum TelegramError {
     /// The buffer holds fewer bytes than the telegram needs.
     Truncated {
@@ -83,6 +84,7 @@ impl std::error::Error for TelegramError {}
 /// Why a telegram could not be written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum EmitError {
     /// The output buffer is too small; nothing useful was written.
     BufferTooSmall {

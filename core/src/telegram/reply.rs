@@ -114,6 +114,7 @@ impl VariantReply {
 /// Why a telegram is not a reply.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum ReplyError {
     /// The telegram was read as host → sensor.
     WrongDirection,

@@ -134,6 +134,7 @@ impl Baud {
 /// Why a telegram is not a request.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum RequestError {
     /// The telegram was read as sensor → host.
     WrongDirection,

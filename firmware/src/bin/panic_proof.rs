@@ -41,8 +41,8 @@ use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::frame::MAX_BEAMS;
 use lms_core::telegram::features::{emit_features, EchoedParams, FeatureAssembler};
 use lms_core::telegram::{
-    Config, Direction, Event, Framer, MeasuredValues, MeasuredView, RangeBits, Reply, Request,
-    StatusBlock, Telegram, MAX_TELEGRAM_LEN,
+    Config, Direction, Event, Framer, Handshake, MeasuredValues, MeasuredView, RangeBits, Reply,
+    Request, StatusBlock, Telegram, MAX_TELEGRAM_LEN,
 };
 use lms_core::Unit;
 use lms_core::{Extractor, Frame, Geometry, Invalid, Params, Variant};
@@ -127,8 +127,8 @@ fn main() -> ! {
     let mut cop = CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT);
     cop.start(black_box(0));
     let mut extractor = Extractor::new();
-    let mut framer = Framer::new(Direction::SensorToHost, black_box(true));
-    let mut host_framer = Framer::new(Direction::HostToSensor, black_box(false));
+    let mut framer = Framer::new(Direction::SensorToHost, black_box(Handshake::Expected));
+    let mut host_framer = Framer::new(Direction::HostToSensor, black_box(Handshake::Ignored));
     let mut assembler = FeatureAssembler::new();
     let mut emulator = Emulator::new(
         FnSource::new(|_: Variant, _: Unit, out: &mut [u16]| {
@@ -166,7 +166,7 @@ fn main() -> ! {
                 } else {
                     &mut framer
                 };
-                f.set_handshake(black_box(true));
+                f.set_handshake(black_box(Handshake::Expected));
                 let mut rest = input;
                 loop {
                     let fed = f.feed(rest);

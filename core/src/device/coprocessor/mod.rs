@@ -115,6 +115,18 @@ pub enum PollError<S, H> {
     Host(H),
 }
 
+impl<S: core::fmt::Debug, H: core::fmt::Debug> core::fmt::Display for PollError<S, H> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            PollError::Sensor(e) => write!(f, "sensor port: {e:?}"),
+            PollError::Host(e) => write!(f, "host port: {e:?}"),
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl<S: core::fmt::Debug, H: core::fmt::Debug> std::error::Error for PollError<S, H> {}
+
 /// The co-processor: all its state in fixed buffers (about 20 KiB), so it
 /// can live in a `static`.
 pub struct CoProcessor {

@@ -14,7 +14,7 @@
 //! 7. `20 24` — continuous output; from then on every `B0` is a scan.
 
 use crate::telegram::{
-    Baud, Config, Direction, Event, Framer, FramerStats, ModeResult, Reply, Request,
+    Baud, Config, Direction, Event, Framer, FramerStats, Handshake, ModeResult, Reply, Request,
     DEFAULT_ADDRESS, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
 };
 use crate::Unit;
@@ -105,7 +105,7 @@ impl SensorLink {
     pub const fn new(setup: SensorSetup) -> Self {
         SensorLink {
             setup,
-            framer: Framer::new(Direction::SensorToHost, true),
+            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
             step: Step::StopStream,
             sent_at: None,
             config: None,
