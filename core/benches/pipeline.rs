@@ -69,7 +69,8 @@ fn pipeline(c: &mut Criterion) {
             b.iter(|| {
                 let mut lines = 0usize;
                 for frame in &frames {
-                    let features = ex.run(black_box(frame), params).expect("valid params");
+                    let features =
+                        ex.run(black_box(frame), &params.validate().expect("valid params"));
                     lines += features.lines.len();
                 }
                 black_box(lines)

@@ -54,7 +54,7 @@ fn main() {
                 frame.set_invalid(j, lms_core::Invalid::NoEcho);
             }
         }
-        extractor.run(&frame, &params).expect("params");
+        extractor.run(&frame, &params.validate().expect("params"));
         let f = extractor.features();
         write!(out, "frame {frame_index}").unwrap();
         for x in extractor.smoothed() {

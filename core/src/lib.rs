@@ -52,7 +52,7 @@ pub use features::{
 };
 pub use frame::MAX_BEAMS;
 pub use frame::{Beam, Frame, Geometry, Invalid, Variant};
-pub use params::{ParamError, Params};
+pub use params::{ParamError, Params, ValidParams};
 pub use pipeline::extractor::Extractor;
 pub use pipeline::line_fit::FitError;
 pub use units::Unit;

@@ -4,7 +4,8 @@
 use core::fmt;
 
 /// All tunable parameters. Build with [`Params::default`] and adjust the
-/// fields; [`Params::validate`] (called by the extractor) refuses nonsense.
+/// fields; [`Params::validate`] refuses nonsense and gives the
+/// [`ValidParams`] the pipeline runs with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Params {
@@ -132,13 +133,58 @@ impl fmt::Display for ParamError {
 #[cfg(feature = "std")]
 impl std::error::Error for ParamError {}
 
+/// Parameters that passed [`Params::validate`]: the only kind the pipeline
+/// takes, so it never checks them again. Read the fields through `Deref`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ValidParams(Params);
+
+impl ValidParams {
+    /// The defaults of ALGORITHM.md (valid by construction), `const`.
+    pub const DEFAULT: ValidParams = ValidParams(Params::DEFAULT);
+
+    /// The parameters.
+    #[inline]
+    pub const fn get(&self) -> &Params {
+        &self.0
+    }
+}
+
+impl Default for ValidParams {
+    fn default() -> Self {
+        ValidParams::DEFAULT
+    }
+}
+
+impl core::ops::Deref for ValidParams {
+    type Target = Params;
+    #[inline]
+    fn deref(&self) -> &Params {
+        &self.0
+    }
+}
+
+impl TryFrom<Params> for ValidParams {
+    type Error = ParamError;
+    fn try_from(params: Params) -> Result<Self, ParamError> {
+        params.validate()
+    }
+}
+
+impl From<ValidParams> for Params {
+    fn from(valid: ValidParams) -> Params {
+        valid.0
+    }
+}
+
 impl Params {
-    /// Check every field; the first nonsense found is returned.
-    pub fn validate(&self) -> Result<(), ParamError> {
-        fn pos(x: f32) -> bool {
+    /// Check every field; the first nonsense found is returned, else the
+    /// parameters as [`ValidParams`].
+    pub const fn validate(&self) -> Result<ValidParams, ParamError> {
+        const fn pos(x: f32) -> bool {
             x.is_finite() && x > 0.0
         }
-        fn non_neg(x: f32) -> bool {
+        const fn non_neg(x: f32) -> bool {
             x.is_finite() && x >= 0.0
         }
         if !pos(self.sigma) {
@@ -174,6 +220,6 @@ impl Params {
         if self.split_depth > MAX_SPLIT_DEPTH {
             return Err(ParamError::SplitDepth);
         }
-        Ok(())
+        Ok(ValidParams(*self))
     }
 }

@@ -13,7 +13,7 @@ use lms_core::telegram::{
     emit_telegram, Direction, Event, Framer, Handshake, MeasuredView, RangeBits, Request,
 };
 use lms_core::Unit;
-use lms_core::{Extractor, Params, Variant};
+use lms_core::{Extractor, Variant};
 
 mod common;
 use common::Port;
@@ -61,7 +61,8 @@ impl Bench {
         Bench {
             lms: Emulator::new(FnSource(source), Settings::default(), 0),
             cop: {
-                let mut cop = CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT);
+                let mut cop =
+                    CoProcessor::new(lms_core::ValidParams::DEFAULT, SensorSetup::DEFAULT);
                 cop.start(0);
                 cop
             },
@@ -142,7 +143,7 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
                     .unwrap()
                     .to_frame(RangeBits::Bits13)
                     .unwrap();
-                extractor.run(&frame, &Params::default()).unwrap();
+                extractor.run(&frame, &lms_core::ValidParams::DEFAULT);
                 scans += 1;
             }
             Some(Event::Telegram(t)) => {

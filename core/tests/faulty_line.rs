@@ -334,7 +334,9 @@ impl Bench {
             Params {
                 iterations: 2,
                 ..Params::DEFAULT
-            },
+            }
+            .validate()
+            .expect("2 passes are valid"),
             SensorSetup::DEFAULT,
         );
         cop.start(0);

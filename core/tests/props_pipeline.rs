@@ -263,8 +263,7 @@ fn count_runs(d: &[f32], tau: f32, min_points: u16) -> (usize, usize, usize) {
 fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
     let mut extractor = Extractor::new();
     let f = extractor
-        .run(frame, params)
-        .expect("valid parameters")
+        .run(frame, &params.validate().expect("valid parameters"))
         .clone();
     let n = frame.len();
     let smoothed = extractor.smoothed();
@@ -477,20 +476,10 @@ proptest! {
     }
 }
 
-/// Invalid parameters are refused with an error, never a panic, whatever
-/// the frame.
+/// Invalid parameters are refused with an error, never a panic (the
+/// pipeline only takes `ValidParams`, so no frame meets them).
 #[test]
 fn invalid_params_are_refused() {
-    let frame = build(
-        361,
-        Variant::Fov180Res50.geometry(),
-        &Content::Comb {
-            period: 5,
-            near: 1.0,
-            far: 4.0,
-        },
-    );
-    let mut extractor = Extractor::new();
     let bad = [f32::NAN, f32::INFINITY, -1.0, 0.0];
     for (field, value) in (0..8).flat_map(|f| bad.iter().map(move |&v| (f, v))) {
         let mut p = Params::default();
@@ -504,30 +493,27 @@ fn invalid_params_are_refused() {
             6 => p.corner_gap = if value == 0.0 { f32::NAN } else { value },
             _ => p.min_corner_angle_deg = if value == 0.0 { 91.0 } else { value },
         }
-        assert!(
-            extractor.run(&frame, &p).is_err(),
-            "field {field} = {value}"
-        );
+        assert!(p.validate().is_err(), "field {field} = {value}");
     }
     for iterations in [0, 1001, u16::MAX] {
         let p = Params {
             iterations,
             ..Params::default()
         };
-        assert!(extractor.run(&frame, &p).is_err());
+        assert!(p.validate().is_err());
     }
     for split_depth in [lms_core::params::MAX_SPLIT_DEPTH + 1, u8::MAX] {
         let p = Params {
             split_depth,
             ..Params::default()
         };
-        assert!(extractor.run(&frame, &p).is_err());
+        assert!(p.validate().is_err());
     }
     for min_points in [0, 1, 2] {
         let p = Params {
             min_points,
             ..Params::default()
         };
-        assert!(extractor.run(&frame, &p).is_err());
+        assert!(p.validate().is_err());
     }
 }

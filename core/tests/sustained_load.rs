@@ -29,7 +29,7 @@ use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{Assembled, FeatureAssembler};
 use lms_core::telegram::{Direction, Event, Framer, Handshake, Request};
 use lms_core::Unit;
-use lms_core::{Params, Variant};
+use lms_core::{ValidParams, Variant};
 
 mod common;
 
@@ -189,7 +189,7 @@ fn sustained(scans: u32) -> Report {
     let mut seed = 0x1234_5678_9ABC_DEF1u64;
     let source = FnSource::new(move |_: Variant, _: Unit, out: &mut [u16]| room(&mut seed, out));
     let mut lms = Emulator::new(source, Settings::default(), 0);
-    let mut cop = Box::new(CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT));
+    let mut cop = Box::new(CoProcessor::new(ValidParams::DEFAULT, SensorSetup::DEFAULT));
     cop.start(0);
     let (mut sensor, mut host) = (Port::new(), Port::new());
     let mut client = Framer::new(Direction::SensorToHost, Handshake::Expected);

@@ -43,7 +43,7 @@ pub const EXIT_UNEXPECTED_IRQ: i32 = 3;
 #[cfg(not(feature = "standin"))]
 mod app {
     use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
-    use lms_core::Params;
+    use lms_core::{Params, ValidParams};
 
     pub type App = CoProcessor;
 
@@ -51,22 +51,23 @@ mod app {
     /// (180°/0.5°, mm, 500 kBd), built at compile time into `.bss`/`.data`.
     pub const INITIAL: App = CoProcessor::new(PARAMS, SensorSetup::DEFAULT);
 
-    /// The defaults of ALGORITHM.md with the passes of this build.
-    const PARAMS: Params = {
+    /// The defaults of ALGORITHM.md with the passes of this build,
+    /// validated at compile time (an invalid setting fails the build).
+    const PARAMS: ValidParams = {
         let mut p = Params::DEFAULT;
         p.iterations = crate::ITERATIONS;
         if cfg!(feature = "split-before-reject") {
             p.split_depth = 8;
             p.fit_shared_points = false;
         }
-        p
+        match p.validate() {
+            Ok(valid) => valid,
+            Err(_) => panic!("the build's parameters are invalid (LMS_ITERATIONS?)"),
+        }
     };
 
     /// Switch it on: its host side sends the LMS power-on telegram.
     pub fn start(app: &mut App, now_us: u64) {
-        if let Err(e) = PARAMS.validate() {
-            defmt::error!("default parameters invalid: {}", e);
-        }
         app.start(now_us);
     }
 

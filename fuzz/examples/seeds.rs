@@ -174,7 +174,7 @@ fn feature_telegrams(scan: &Scan, counter: u32) -> (Vec<Vec<u8>>, lms_core::Feat
         ..Params::DEFAULT
     };
     let mut extractor = Extractor::new();
-    let features = extractor.run(&frame, &params).unwrap().clone();
+    let features = extractor.run(&frame, &params.validate().unwrap()).clone();
     let mut out = Vec::new();
     emit_features(
         counter,
@@ -225,7 +225,9 @@ fn cop_session(scans: &[Scan], host_at: &[(u64, Vec<u8>)], until: u64, step: u64
         Params {
             iterations: 2,
             ..Params::DEFAULT
-        },
+        }
+        .validate()
+        .expect("2 passes are valid"),
         SensorSetup::DEFAULT,
     );
     cop.start(0);

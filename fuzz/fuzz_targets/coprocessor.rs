@@ -24,6 +24,7 @@ fuzz_target!(|data: &[u8]| {
         iterations: 1 + u16::from(input.u8() % 4),
         ..Params::DEFAULT
     };
+    let params = params.validate().expect("1..=4 passes are valid");
     let mut cop = CoProcessor::new(params, SensorSetup::DEFAULT);
     let mut now = 0u64;
     cop.start(now);

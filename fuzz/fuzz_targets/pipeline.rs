@@ -25,10 +25,10 @@ fuzz_target!(|data: &[u8]| {
     let input = decode_pipeline(data);
     let (frame, params) = (&input.frame, &input.params);
     let mut extractor = Extractor::new();
-    let Ok(f) = extractor.run(frame, params) else {
-        assert!(params.validate().is_err());
+    let Ok(valid) = params.validate() else {
         return;
     };
+    let f = extractor.run(frame, &valid);
     let n = frame.len();
     // Structure.
     let mut prev_last = None;
@@ -70,12 +70,10 @@ fuzz_target!(|data: &[u8]| {
     // Deterministic, nothing carried over.
     let first = digest(&extractor);
     let mut again = Extractor::new();
-    again
-        .run(
-            &lms_core::Frame::for_variant(lms_core::Variant::Fov100Res25),
-            &lms_core::Params::DEFAULT,
-        )
-        .unwrap();
-    again.run(frame, params).unwrap();
+    again.run(
+        &lms_core::Frame::for_variant(lms_core::Variant::Fov100Res25),
+        &lms_core::ValidParams::DEFAULT,
+    );
+    again.run(frame, &valid);
     assert_eq!(digest(&again), first, "a previous frame changed the result");
 });

@@ -223,7 +223,7 @@ where
     I: IntoIterator<Item = Result<InputFrame>>,
     W: Write,
 {
-    params
+    let params = params
         .validate()
         .map_err(|e| anyhow::anyhow!("invalid parameters: {e}"))?;
     let mut out = io::BufWriter::new(out);
@@ -233,8 +233,7 @@ where
     for input in frames {
         let input = input?;
         let start = Instant::now();
-        ex.run(&input.frame, params)
-            .map_err(|e| anyhow::anyhow!("invalid parameters: {e}"))?;
+        ex.run(&input.frame, &params);
         summary.pipeline += start.elapsed();
         let mut record = FrameRecord::from_run(input.index, &input.frame, &ex);
         record.pose = input.pose;
@@ -307,7 +306,7 @@ mod tests {
         assert!(!text.contains("pose"));
         // Bit-exact round trip against a direct run.
         let mut ex = Extractor::new();
-        ex.run(&frame, &Params::default()).unwrap();
+        ex.run(&frame, &lms_core::ValidParams::DEFAULT);
         assert_eq!(rec, FrameRecord::from_run(7, &frame, &ex));
     }
 

@@ -248,15 +248,17 @@ impl FramePlot {
         }
         let mut ex = Extractor::new();
         let mut captured = Vec::with_capacity(passes.len());
-        ex.run_observed(&input.frame, params, |pass, d, _| {
+        let valid = params
+            .validate()
+            .map_err(|e| anyhow!("invalid parameters: {e}"))?;
+        ex.run_observed(&input.frame, &valid, |pass, d, _| {
             if passes.contains(&pass) {
                 captured.push(PassD {
                     pass,
                     d: d.to_vec(),
                 });
             }
-        })
-        .map_err(|e| anyhow!("invalid parameters: {e}"))?;
+        });
         let mut record = FrameRecord::from_run(input.index, &input.frame, &ex);
         record.pose = input.pose;
         let g = input.frame.geometry();

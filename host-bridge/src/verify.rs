@@ -122,7 +122,7 @@ use lms_core::telegram::{
     RangeBits, Request, Telegram,
 };
 use lms_core::Unit;
-use lms_core::{Extractor, Features, Frame, Invalid, Params, Variant};
+use lms_core::{Extractor, Features, Frame, Invalid, Params, ValidParams, Variant};
 
 use crate::carmen::{self, UnitMode};
 use crate::options::{FrameRange, ParamArgs};
@@ -798,8 +798,8 @@ impl Checker {
             return false;
         }
         let params = self.params(&summary.params);
-        let want = match self.extractor.run(&frame, &params) {
-            Ok(f) => f,
+        let want = match params.validate() {
+            Ok(valid) => self.extractor.run(&frame, &valid),
             Err(e) => {
                 self.problem(format_args!(
                     "{name}: the std build refuses the echoed parameters: {e}"
@@ -1081,7 +1081,7 @@ impl embedded_io::Write for PtyPort {
 /// Run a [`CoProcessor`] on two ports until `stop`: poll, then wait up to
 /// 1 ms for sensor bytes. Returns its counters.
 pub fn run_coprocessor(
-    params: Params,
+    params: ValidParams,
     mut sensor: PtyPort,
     mut host: PtyPort,
     stop: &AtomicBool,
@@ -1929,6 +1929,9 @@ pub fn run(args: &VerifyArgs) -> Result<()> {
                 host_pty.slave_path().display(),
                 sensor_pty.slave_path().display()
             );
+            let params = params
+                .validate()
+                .map_err(|e| anyhow::anyhow!("invalid parameters: {e}"))?;
             let thread_stop = Arc::new(AtomicBool::new(false));
             let flag = Arc::clone(&thread_stop);
             let handle = std::thread::Builder::new()

@@ -31,7 +31,7 @@ fn evaluate_back_end_and_smoothing_replicas_match_the_core_bit_for_bit() {
                     ..Params::default()
                 };
                 let tables = Tables::for_frame(&s.frame);
-                let f = ex.run(&s.frame, &params).unwrap().clone();
+                let f = ex.run(&s.frame, &params.validate().unwrap()).clone();
                 let (lines, corners) = features_from_segments(
                     &s.frame,
                     &tables,

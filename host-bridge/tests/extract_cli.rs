@@ -140,7 +140,7 @@ fn real_log_round_trips_bit_exactly() {
         assert_eq!(rec["frame"], index);
         assert_eq!(rec["n"], 361);
 
-        ex.run(frame, &params).unwrap();
+        ex.run(frame, &params.validate().unwrap());
         let beams = frame.beams();
         let ranges = rec["ranges"].as_array().unwrap();
         let smoothed = rec["smoothed"].as_array().unwrap();

@@ -131,7 +131,7 @@ fn verify_ports_mode_on_two_pseudo_terminals() {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
     let cop = std::thread::spawn(move || {
-        run_coprocessor(lms_core::Params::default(), sensor, host, &flag)
+        run_coprocessor(lms_core::ValidParams::default(), sensor, host, &flag)
     });
     let out = verify(&[
         "--ports",

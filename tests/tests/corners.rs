@@ -116,7 +116,7 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
         let turn = rng.random_range(-0.3..0.3);
         let (walls, truth) = right_corner(turn);
         let frame = scan(&walls, SIGMA, &mut rng);
-        let f = ex.run(&frame, &params).unwrap();
+        let f = ex.run(&frame, &params.validate().unwrap());
         let good: Vec<_> = f.corners.iter().filter(|c| c.well_conditioned).collect();
         assert_eq!(good.len(), 1, "draw {draw}: corners {:?}", f.corners);
         let c = *good[0];
@@ -148,7 +148,7 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
             fit_shared_points: false,
             ..params
         };
-        let f2 = ex_excluding.run(&frame, &excluding).unwrap();
+        let f2 = ex_excluding.run(&frame, &excluding.validate().unwrap());
         let good2: Vec<_> = f2.corners.iter().filter(|c| c.well_conditioned).collect();
         assert_eq!(good2.len(), 1, "draw {draw}: corners {:?}", f2.corners);
         refitted.push(nees(
@@ -224,7 +224,7 @@ fn a_ten_degree_bend_is_an_ill_conditioned_corner() {
     for seed in 0..5 {
         let mut rng = ChaCha8Rng::seed_from_u64(10 + seed);
         let frame = scan(&walls, 0.0005, &mut rng);
-        let f = ex.run(&frame, &params).unwrap();
+        let f = ex.run(&frame, &params.validate().unwrap());
         assert_eq!(
             f.corners.len(),
             1,
@@ -246,7 +246,7 @@ fn a_ten_degree_bend_is_an_ill_conditioned_corner() {
     // sigma = 5 mm, 0.5°: what the extractor makes of it (printed only).
     let mut rng = ChaCha8Rng::seed_from_u64(10);
     let frame = scan(&walls, SIGMA, &mut rng);
-    let f = ex.run(&frame, &Params::default()).unwrap();
+    let f = ex.run(&frame, &lms_core::ValidParams::DEFAULT);
     eprintln!(
         "10° bend, 0.5°, sigma 5 mm: segments {:?}, lines {}, rejected by chi2 {}, corners {}",
         f.segments,

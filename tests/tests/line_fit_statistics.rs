@@ -218,7 +218,7 @@ fn an_arc_is_not_accepted_as_a_line() {
         // The extractor accepts no line on it, and every segment it found
         // there fails chi2 when fitted on its own.
         let mut ex = Extractor::new();
-        let f = ex.run(&frame, &params).unwrap();
+        let f = ex.run(&frame, &params.validate().unwrap());
         let mut seg_chi2 = Vec::new();
         for s in f.segments.iter() {
             let line = fit_line(

@@ -1,7 +1,7 @@
 //! Parameter validation and degenerate frames (no panic, sensible output).
 
 use lms_core::frame::{Frame, FrameError, Geometry, Invalid, Variant, MAX_BEAMS};
-use lms_core::{Extractor, ParamError, Params};
+use lms_core::{Extractor, ParamError, Params, ValidParams};
 
 fn frame_with(n: usize, range: impl Fn(usize) -> f32) -> Frame {
     let g = Geometry {
@@ -87,10 +87,7 @@ fn nonsense_parameters_are_refused_with_the_right_error() {
     ];
     for (params, want) in cases {
         assert_eq!(params.validate(), Err(want), "{params:?}");
-        match ex.run(&frame, &params) {
-            Err(e) => assert_eq!(e, want, "{params:?}"),
-            Ok(_) => panic!("accepted {params:?}"),
-        }
+        assert_eq!(ValidParams::try_from(params), Err(want), "{params:?}");
     }
     // Several faults: one error, and the run refuses.
     let bad = Params {
@@ -99,7 +96,7 @@ fn nonsense_parameters_are_refused_with_the_right_error() {
         iterations: 0,
         ..d
     };
-    assert!(ex.run(&frame, &bad).is_err());
+    assert!(bad.validate().is_err());
     // The defaults and the edges of the valid ranges pass.
     for ok in [
         d,
@@ -110,8 +107,9 @@ fn nonsense_parameters_are_refused_with_the_right_error() {
             ..d
         },
     ] {
-        assert_eq!(ok.validate(), Ok(()));
-        assert!(ex.run(&frame, &ok).is_ok());
+        let valid = ok.validate().expect("valid");
+        assert_eq!(*valid.get(), ok);
+        ex.run(&frame, &valid);
     }
 }
 
@@ -162,7 +160,7 @@ fn a_frame_with_every_beam_invalid_gives_no_features() {
     }
     for frame in [&zeros, &odd, &codes] {
         assert_eq!(frame.valid_count(), 0);
-        ex.run(frame, &params).unwrap();
+        ex.run(frame, &params.validate().unwrap());
         let f = ex.features();
         assert!(
             f.segments.is_empty()
@@ -187,7 +185,7 @@ fn three_beams_and_the_largest_frame_run() {
     // 3 points is below min_points (5), so it is dropped and counted.
     let wall = |j: usize| 2.0 / ((-50f32 + 50.0 * j as f32).to_radians()).cos();
     let three = frame_with(3, wall);
-    ex.run(&three, &params).unwrap();
+    ex.run(&three, &params.validate().unwrap());
     let f = ex.features();
     assert_eq!(ex.mahalanobis().len(), 1);
     assert!(ex.mahalanobis()[0] < 1.0, "D = {}", ex.mahalanobis()[0]);
@@ -198,9 +196,10 @@ fn three_beams_and_the_largest_frame_run() {
         &Params {
             min_points: 3,
             ..params
-        },
-    )
-    .unwrap();
+        }
+        .validate()
+        .unwrap(),
+    );
     let f = ex.features();
     assert_eq!(f.segments.len(), 1);
 
@@ -208,7 +207,7 @@ fn three_beams_and_the_largest_frame_run() {
     let g = Variant::Fov100Res25.geometry();
     let ranges: Vec<f32> = (0..401).map(|j| 3.0 / g.bearing(j).cos()).collect();
     let big = Frame::from_metres(g, &ranges).unwrap();
-    ex.run(&big, &params).unwrap();
+    ex.run(&big, &params.validate().unwrap());
     let f = ex.features();
     assert_eq!(ex.smoothed().len(), 401);
     assert_eq!(ex.mahalanobis().len(), 399);
@@ -222,7 +221,7 @@ fn three_beams_and_the_largest_frame_run() {
         .map(|j| if j % 2 == 0 { 1.0 } else { 80.0 })
         .collect();
     let zz = Frame::from_metres(g, &zigzag).unwrap();
-    ex.run(&zz, &params).unwrap();
+    ex.run(&zz, &params.validate().unwrap());
     let f = ex.features();
     assert!(f.segments.is_empty() && f.lines.is_empty());
 
@@ -237,9 +236,10 @@ fn three_beams_and_the_largest_frame_run() {
         &Params {
             iterations: lms_core::params::MAX_ITERATIONS,
             ..params
-        },
-    )
-    .unwrap();
+        }
+        .validate()
+        .unwrap(),
+    );
     let f = ex.features();
     assert!(f.segments.is_empty());
     assert_eq!(ex.smoothed(), sparse.ranges());

@@ -138,7 +138,7 @@ fn compare(case: &Case, worst_by_pass: &mut [WorstAt; 2]) -> Vec<String> {
             ..case.params
         };
         let mut ex = Extractor::new();
-        ex.run(&frame, &params).expect("valid params");
+        ex.run(&frame, &params.validate().expect("valid params"));
         let (ref_ranges, ref_d) = &ref_passes[passes as usize - 1];
         let core_ranges = ex.smoothed();
         let core_d = ex.mahalanobis();

@@ -79,7 +79,7 @@ fn exact_scans(truth: &TrueScan, expected: &[u16], params: &Params, seeds: u64) 
     for seed in 0..seeds {
         let readings = truth.noisy(&NoiseModel::gaussian(SIGMA), &mut seeded_rng(seed));
         let frame = Frame::from_metres(geometry, &to_f32_metres(&readings, 0.0)).unwrap();
-        let features = extractor.run(&frame, params).unwrap();
+        let features = extractor.run(&frame, &params.validate().unwrap());
         let edges: Vec<u16> = features.edges.iter().copied().collect();
         exact += u64::from(edges == expected);
         false_edges += edges.iter().filter(|e| !expected.contains(e)).count();
@@ -108,7 +108,7 @@ fn noise_free_edge_points_lines_and_corners_are_exact() {
     let ranges: Vec<f32> = to_f32_metres(&truth.noise_free(), 0.0);
     let frame = Frame::from_metres(Variant::Fov180Res50.geometry(), &ranges).unwrap();
     let mut extractor = Extractor::new();
-    let features = extractor.run(&frame, &Params::default()).unwrap();
+    let features = extractor.run(&frame, &lms_core::ValidParams::DEFAULT);
     let edges: Vec<u16> = features.edges.iter().copied().collect();
     assert_eq!(edges, expected);
     // Six lines: right wall, front wall (right of the box), two box faces,

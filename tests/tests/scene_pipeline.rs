@@ -130,9 +130,10 @@ fn noise_free_edge_points_are_the_true_corners_and_jumps() {
                     &Params {
                         iterations,
                         ..Params::default()
-                    },
-                )
-                .unwrap();
+                    }
+                    .validate()
+                    .unwrap(),
+                );
                 let edges: Vec<usize> = ex.features().edges.iter().map(|&e| e as usize).collect();
                 let d = ex.mahalanobis();
                 let true_edges = truth.true_edge_points();
@@ -192,7 +193,7 @@ fn noisy_edge_points_find_every_corner_and_jump() {
         let (mut off_truth, mut at_nearest) = (0usize, 0usize);
         for seed in 0..SEEDS {
             let frame = frame_of(variant, &truth, &noise, seed);
-            ex.run(&frame, &Params::default()).unwrap();
+            ex.run(&frame, &lms_core::ValidParams::DEFAULT);
             let edges: Vec<usize> = ex.features().edges.iter().map(|&e| e as usize).collect();
             let d = ex.mahalanobis();
             let at = format!("{variant:?} seed {seed}: edges {edges:?}, truth {true_edges:?}");
@@ -280,7 +281,7 @@ fn smoothing_at_least_halves_the_range_error_on_walls() {
             let (mut raw_e, mut smooth_e) = (Vec::new(), Vec::new());
             for seed in 0..20 {
                 let frame = frame_of(variant, &truth, &noise, 100 + seed);
-                ex.run(&frame, &Params::default()).unwrap();
+                ex.run(&frame, &lms_core::ValidParams::DEFAULT);
                 raw_e.extend(errors(frame.ranges(), &truth, &beams));
                 smooth_e.extend(errors(ex.smoothed(), &truth, &beams));
             }
@@ -382,7 +383,7 @@ fn the_line_model_keeps_a_corner_that_a_gaussian_mask_moves() {
     let mut ex = Extractor::new();
     let mut line_model = Vec::new();
     for frame in &frames {
-        ex.run(frame, &Params::default()).unwrap();
+        ex.run(frame, &lms_core::ValidParams::DEFAULT);
         let edges = &ex.features().edges;
         assert!(
             edges.contains(&(j as u16)) || edges.contains(&(j as u16 + 1)),
@@ -391,7 +392,7 @@ fn the_line_model_keeps_a_corner_that_a_gaussian_mask_moves() {
         );
         line_model.push(ex.smoothed().to_vec());
     }
-    ex.run(&clean, &Params::default()).unwrap();
+    ex.run(&clean, &lms_core::ValidParams::DEFAULT);
     let line_clean = ex.smoothed().to_vec();
 
     let wall_rms = |sets: &[Vec<f32>]| {

@@ -11,7 +11,7 @@ use heapless::Vec;
 
 use crate::features::{Features, Stats, MAX_WINDOWS};
 use crate::frame::{Frame, Geometry, MAX_BEAMS};
-use crate::params::{ParamError, Params};
+use crate::params::{Params, ValidParams};
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
 use crate::pipeline::line_fit::{fit_line, Bearings};
@@ -60,7 +60,7 @@ impl Extractor {
     }
 
     /// Run the whole pipeline on `frame`; see [`Extractor::run_observed`].
-    pub fn run(&mut self, frame: &Frame, params: &Params) -> Result<&Features, ParamError> {
+    pub fn run(&mut self, frame: &Frame, params: &ValidParams) -> &Features {
         self.run_observed(frame, params, |_, _, _| {})
     }
 
@@ -71,13 +71,13 @@ impl Extractor {
     pub fn run_observed<F>(
         &mut self,
         frame: &Frame,
-        params: &Params,
+        params: &ValidParams,
         mut after_pass: F,
-    ) -> Result<&Features, ParamError>
+    ) -> &Features
     where
         F: FnMut(u16, &[f32], &[f32]),
     {
-        params.validate()?;
+        let params: &Params = params;
         // A frame never holds more than MAX_BEAMS beams; the `min`s make
         // that visible to the optimiser, so no slice below can panic.
         let n = frame.len().min(MAX_BEAMS);
@@ -187,7 +187,7 @@ impl Extractor {
             }
         }
         f.stats = stats;
-        Ok(&self.features)
+        &self.features
     }
 
     /// The features of the last run.

@@ -335,7 +335,7 @@ mod tests {
             ..Params::default()
         };
         let mut ex = Extractor::new();
-        let f = ex.run(&frame, &spec).unwrap().clone();
+        let f = ex.run(&frame, &spec.validate().unwrap()).clone();
         assert_eq!(f.segments.len(), 1, "{:?}", f.segments);
         assert!(f.lines.is_empty());
         // Split before reject: two walls and their corner.
@@ -343,7 +343,7 @@ mod tests {
             split_depth: 8,
             ..spec
         };
-        let f = ex.run(&frame, &split).unwrap();
+        let f = ex.run(&frame, &split.validate().unwrap());
         assert_eq!(f.stats.splits, 1, "{:?}", f.stats);
         assert_eq!(f.lines.len(), 2, "{:?}", f.lines);
         let c = f.corners.first().expect("a corner");
@@ -376,7 +376,7 @@ mod tests {
             ..Params::default()
         };
         let mut ex = Extractor::new();
-        let f = ex.run(&frame, &p).unwrap();
+        let f = ex.run(&frame, &p.validate().unwrap());
         assert!(f.lines.is_empty(), "{:?}", f.lines);
         assert_eq!(f.stats.splits, 0, "{:?}", f.stats);
         assert!(f.stats.split_rejected >= 1, "{:?}", f.stats);

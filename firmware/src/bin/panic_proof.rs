@@ -45,7 +45,7 @@ use lms_core::telegram::{
     Request, StatusBlock, Telegram, MAX_TELEGRAM_LEN,
 };
 use lms_core::Unit;
-use lms_core::{Extractor, Frame, Geometry, Invalid, Params, Variant};
+use lms_core::{Extractor, Frame, Geometry, Invalid, Params, ValidParams, Variant};
 // The device's interrupt vector table, as in the firmware.
 use stm32f4 as _;
 
@@ -124,7 +124,7 @@ fn any_params() -> Params {
 fn main() -> ! {
     // Big state lives in statics in the firmware; here on the stack of an
     // ELF that never runs.
-    let mut cop = CoProcessor::new(Params::DEFAULT, SensorSetup::DEFAULT);
+    let mut cop = CoProcessor::new(ValidParams::DEFAULT, SensorSetup::DEFAULT);
     cop.start(black_box(0));
     let mut extractor = Extractor::new();
     let mut framer = Framer::new(Direction::SensorToHost, black_box(Handshake::Expected));
@@ -260,7 +260,8 @@ fn main() -> ! {
                     black_box(0x10),
                 ));
                 let params = any_params();
-                if let Ok(features) = extractor.run(&frame, &params) {
+                if let Ok(params) = params.validate() {
+                    let features = extractor.run(&frame, &params);
                     black_box(features.lines.len());
                 }
                 black_box(extractor.smoothed());

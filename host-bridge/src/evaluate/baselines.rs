@@ -80,13 +80,14 @@ pub struct Extraction {
 
 /// The core's result for `frame`.
 pub fn run_core(ex: &mut Extractor, frame: &Frame, params: &Params) -> Extraction {
-    match ex.run(frame, params) {
-        Ok(f) => Extraction {
-            segments: f.segments.to_vec(),
-            lines: f.lines.to_vec(),
-            corners: f.corners.to_vec(),
-        },
-        Err(_) => Extraction::default(),
+    let Ok(params) = params.validate() else {
+        return Extraction::default();
+    };
+    let f = ex.run(frame, &params);
+    Extraction {
+        segments: f.segments.to_vec(),
+        lines: f.lines.to_vec(),
+        corners: f.corners.to_vec(),
     }
 }
 

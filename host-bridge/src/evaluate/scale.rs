@@ -97,11 +97,15 @@ pub fn run(args: &EvaluateArgs, bar: &indicatif::ProgressBar) -> Result<Scale> {
                         ..base
                     };
                     let mut captured: Vec<(u16, Vec<f32>)> = Vec::new();
-                    let _ = ex.run_observed(&s.frame, &params, |pass, d, _| {
-                        if PASSES.contains(&pass) {
-                            captured.push((pass, d.to_vec()));
-                        }
-                    });
+                    let _ = ex.run_observed(
+                        &s.frame,
+                        &params.validate().expect("sweep parameters"),
+                        |pass, d, _| {
+                            if PASSES.contains(&pass) {
+                                captured.push((pass, d.to_vec()));
+                            }
+                        },
+                    );
                     for (pi, (_, d)) in captured.iter().enumerate() {
                         let x = extraction_from_d(&s.frame, &tables, d, &params);
                         let (ls, cs) = super::score(&truth, &x, &s.frame, sigma, &gates);

@@ -21,7 +21,7 @@ use embedded_io::{Read, ReadReady, Write};
 
 use crate::device::emulator::{Emulator, Event as HostEvent, Handled, ScanSource, Settings};
 use crate::features::Features;
-use crate::params::Params;
+use crate::params::ValidParams;
 use crate::pipeline::extractor::Extractor;
 use crate::telegram::features::{emit_features, Counters, EchoedParams, REQ_COUNTERS};
 use crate::telegram::{
@@ -130,7 +130,7 @@ impl<S: core::fmt::Debug, H: core::fmt::Debug> std::error::Error for PollError<S
 /// The co-processor: all its state in fixed buffers (about 20 KiB), so it
 /// can live in a `static`.
 pub struct CoProcessor {
-    params: Params,
+    params: ValidParams,
     link: SensorLink,
     extractor: Extractor,
     host: Emulator<LatestScan>,
@@ -149,7 +149,7 @@ impl CoProcessor {
     /// with `setup`. `const`, so it can be placed in a `static` without
     /// passing through the stack; call [`CoProcessor::start`] before the
     /// first poll.
-    pub const fn new(params: Params, setup: SensorSetup) -> Self {
+    pub const fn new(params: ValidParams, setup: SensorSetup) -> Self {
         let mut settings = Settings::DEFAULT;
         settings.variant = setup.variant;
         settings.external_scans = true;
@@ -316,11 +316,7 @@ impl CoProcessor {
             latest.count += 1;
         }
         self.beams = self.frame.len() as u16;
-        if self.extractor.run(&self.frame, &self.params).is_err() {
-            self.counters.scans_rejected = self.counters.scans_rejected.wrapping_add(1);
-            self.have_features = false;
-            return Ok(());
-        }
+        self.extractor.run(&self.frame, &self.params);
         self.have_features = true;
         if self.host.streaming() {
             // Never inside a reply: the emulator hands out whole frames at
@@ -334,7 +330,7 @@ impl CoProcessor {
 
     /// The feature telegrams of the latest scan to the host.
     fn send_features<H: Write, E>(&mut self, host: &mut H) -> Result<(), PollError<E, H::Error>> {
-        let echoed = EchoedParams::from(&self.params);
+        let echoed = EchoedParams::from(self.params.get());
         let sent = emit_features(
             self.scan_counter,
             self.beams,
