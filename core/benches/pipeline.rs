@@ -71,7 +71,7 @@ fn pipeline(c: &mut Criterion) {
                 for frame in &frames {
                     let features =
                         ex.run(black_box(frame), &params.validate().expect("valid params"));
-                    lines += features.lines.len();
+                    lines += features.lines().len();
                 }
                 black_box(lines)
             });

@@ -65,9 +65,9 @@ fn main() {
             write!(out, " {:08x}", x.to_bits()).unwrap();
         }
         writeln!(out).unwrap();
-        writeln!(out, "edges {:?}", f.edges).unwrap();
-        writeln!(out, "segments {:?}", f.segments).unwrap();
-        for l in &f.lines {
+        writeln!(out, "edges {:?}", f.edges()).unwrap();
+        writeln!(out, "segments {:?}", f.segments()).unwrap();
+        for l in f.lines() {
             let v = l.floats();
             writeln!(
                 out,
@@ -79,7 +79,7 @@ fn main() {
             )
             .unwrap();
         }
-        for c in &f.corners {
+        for c in f.corners() {
             let v = [c.x, c.y, c.cov.a, c.cov.b, c.cov.c, c.angle_deg];
             writeln!(
                 out,
@@ -91,7 +91,7 @@ fn main() {
             )
             .unwrap();
         }
-        writeln!(out, "stats {:?}", f.stats).unwrap();
+        writeln!(out, "stats {:?}", f.stats()).unwrap();
         frame_index += 1;
     }
 }

@@ -98,19 +98,93 @@ impl Stats {
     pub const D0_FIELDS: usize = 12;
 }
 
-/// The features of one frame.
+/// The features of one frame: read them as slices ([`Features::lines`], …).
 #[derive(Clone, Debug, Default)]
+#[non_exhaustive]
 pub struct Features {
     /// Segments that passed `min_points`, in scan order.
-    pub segments: Vec<Segment, MAX_SEGMENTS>,
+    pub(crate) segments: Vec<Segment, MAX_SEGMENTS>,
     /// Edge points: middle beams of breaking valid windows, ascending.
-    pub edges: Vec<u16, MAX_BEAMS>,
+    pub(crate) edges: Vec<u16, MAX_BEAMS>,
     /// Accepted lines, in scan order.
-    pub lines: Vec<Line, MAX_LINES>,
+    pub(crate) lines: Vec<Line, MAX_LINES>,
     /// Corners between consecutive lines, in scan order.
-    pub corners: Vec<Corner, MAX_CORNERS>,
+    pub(crate) corners: Vec<Corner, MAX_CORNERS>,
     /// Counters of everything dropped or rejected.
-    pub stats: Stats,
+    pub(crate) stats: Stats,
+}
+
+impl Features {
+    /// No features, all counters zero (`const`, for statics).
+    pub const EMPTY: Features = Features {
+        segments: Vec::new(),
+        edges: Vec::new(),
+        lines: Vec::new(),
+        corners: Vec::new(),
+        stats: Stats::ZERO,
+    };
+
+    /// Segments that passed `min_points`, in scan order (at most [`MAX_SEGMENTS`]).
+    #[inline]
+    pub fn segments(&self) -> &[Segment] {
+        &self.segments
+    }
+
+    /// Edge points (beam indices), ascending (at most [`MAX_BEAMS`]).
+    #[inline]
+    pub fn edges(&self) -> &[u16] {
+        &self.edges
+    }
+
+    /// Accepted lines, in scan order (at most [`MAX_LINES`]).
+    #[inline]
+    pub fn lines(&self) -> &[Line] {
+        &self.lines
+    }
+
+    /// Corners between consecutive lines, in scan order (at most [`MAX_CORNERS`]).
+    #[inline]
+    pub fn corners(&self) -> &[Corner] {
+        &self.corners
+    }
+
+    /// Counters of everything dropped or rejected.
+    #[inline]
+    pub fn stats(&self) -> &Stats {
+        &self.stats
+    }
+
+    /// The lines, to adjust in place (e.g. into another frame of reference).
+    #[inline]
+    pub fn lines_mut(&mut self) -> &mut [Line] {
+        &mut self.lines
+    }
+
+    /// The counters, to set (decoders and tests that build features).
+    #[inline]
+    pub fn stats_mut(&mut self) -> &mut Stats {
+        &mut self.stats
+    }
+
+    /// Append a segment; hands it back if [`MAX_SEGMENTS`] are held.
+    pub fn push_segment(&mut self, segment: Segment) -> Result<(), Segment> {
+        self.segments.push(segment)
+    }
+
+    /// Append an edge point; hands it back if [`MAX_BEAMS`] are held.
+    pub fn push_edge(&mut self, beam: u16) -> Result<(), u16> {
+        self.edges.push(beam)
+    }
+
+    /// Append a line; hands it back if [`MAX_LINES`] are held.
+    pub fn push_line(&mut self, line: Line) -> Result<(), Line> {
+        self.lines.push(line)
+    }
+
+    /// Append a corner; hands it back if [`MAX_CORNERS`] are held.
+    pub fn push_corner(&mut self, corner: Corner) -> Result<(), Corner> {
+        self.corners.push(corner)
+    }
 }
 
 /// A run of points `first..=last` (beam indices) explained by one line.

@@ -30,6 +30,11 @@
 // `!(x < limit)` is deliberate throughout: it treats NaN as failing the test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+// The README's library example runs as a doctest of this crate.
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+struct ReadmeDoctests;
+
 pub mod device;
 pub mod features;
 pub mod frame;

@@ -150,9 +150,9 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
                 if let Assembled::Complete(summary, got) = asm.push(&t).unwrap() {
                     let want = extractor.features();
                     assert_eq!(summary.beams, 361);
-                    assert_eq!(got.segments, want.segments);
-                    assert_eq!(got.edges, want.edges);
-                    assert_eq!(got.stats, want.stats);
+                    assert_eq!(got.segments(), want.segments());
+                    assert_eq!(got.edges(), want.edges());
+                    assert_eq!(got.stats(), want.stats());
                     let bits = |l: &lms_core::Line| {
                         [
                             l.alpha,
@@ -166,11 +166,11 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
                         ]
                         .map(f32::to_bits)
                     };
-                    assert_eq!(got.lines.len(), want.lines.len());
-                    for (a, b) in got.lines.iter().zip(want.lines.iter()) {
+                    assert_eq!(got.lines().len(), want.lines().len());
+                    for (a, b) in got.lines().iter().zip(want.lines().iter()) {
                         assert_eq!(bits(a), bits(b));
                     }
-                    assert_eq!(got.corners.len(), want.corners.len());
+                    assert_eq!(got.corners().len(), want.corners().len());
                     checked += 1;
                 }
             }
@@ -185,7 +185,10 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
         "{scans} scans in a second at 500 kBd (37.5/s expected)"
     );
     assert_eq!(checked, scans, "every scan is followed by its features");
-    assert!(!bench.cop.features().lines.is_empty(), "the room has lines");
+    assert!(
+        !bench.cop.features().lines().is_empty(),
+        "the room has lines"
+    );
     assert_eq!(framer.stats().crc_errors, 0);
 
     // Counters on request: ACK + D5.

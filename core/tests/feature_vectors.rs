@@ -28,64 +28,59 @@ fn bytes(hex: &str) -> Vec<u8> {
 /// The worked example: an L-shaped corner seen at 2 m.
 fn example() -> Features {
     let mut f = Features::default();
-    f.segments
-        .push(Segment {
-            first: 10,
-            last: 60,
-        })
-        .unwrap();
-    f.segments
-        .push(Segment {
-            first: 60,
-            last: 120,
-        })
-        .unwrap();
-    f.edges.push(60).unwrap();
+    f.push_segment(Segment {
+        first: 10,
+        last: 60,
+    })
+    .unwrap();
+    f.push_segment(Segment {
+        first: 60,
+        last: 120,
+    })
+    .unwrap();
+    f.push_edge(60).unwrap();
     let cov = Sym2 {
         a: 1.0e-6,
         b: 0.0,
         c: 4.0e-6,
     };
-    f.lines
-        .push(Line {
-            alpha: 0.0,
-            r: 2.0,
-            cov,
-            first: 10,
-            last: 60,
-            points: 51,
-            chi2: 1.0,
-            endpoints: [[2.0, -1.5], [2.0, 0.5]],
-        })
-        .unwrap();
-    f.lines
-        .push(Line {
-            alpha: 1.5707964,
-            r: 0.5,
-            cov,
-            first: 60,
-            last: 120,
-            points: 61,
-            chi2: 0.5,
-            endpoints: [[2.0, 0.5], [0.5, 0.5]],
-        })
-        .unwrap();
-    f.corners
-        .push(Corner {
-            x: 2.0,
-            y: 0.5,
-            cov: Sym2 {
-                a: 4.0e-6,
-                b: 0.0,
-                c: 4.0e-6,
-            },
-            angle_deg: 90.0,
-            well_conditioned: true,
-            line_a: 0,
-            line_b: 1,
-        })
-        .unwrap();
-    f.stats.valid_beams = 361;
+    f.push_line(Line {
+        alpha: 0.0,
+        r: 2.0,
+        cov,
+        first: 10,
+        last: 60,
+        points: 51,
+        chi2: 1.0,
+        endpoints: [[2.0, -1.5], [2.0, 0.5]],
+    })
+    .unwrap();
+    f.push_line(Line {
+        alpha: 1.5707964,
+        r: 0.5,
+        cov,
+        first: 60,
+        last: 120,
+        points: 61,
+        chi2: 0.5,
+        endpoints: [[2.0, 0.5], [0.5, 0.5]],
+    })
+    .unwrap();
+    f.push_corner(Corner {
+        x: 2.0,
+        y: 0.5,
+        cov: Sym2 {
+            a: 4.0e-6,
+            b: 0.0,
+            c: 4.0e-6,
+        },
+        angle_deg: 90.0,
+        well_conditioned: true,
+        line_a: 0,
+        line_b: 1,
+    })
+    .unwrap();
+    f.stats_mut().valid_beams = 361;
     f
 }
 
@@ -130,11 +125,11 @@ fn the_worked_example_parses_back_to_the_same_bits() {
     let want = example();
     assert_eq!(summary.scan_counter, 42);
     assert_eq!(summary.params, PARAMS);
-    assert_eq!(f.segments, want.segments);
-    assert_eq!(f.edges, want.edges);
-    assert_eq!(f.lines.as_slice(), want.lines.as_slice());
-    assert_eq!(f.corners.as_slice(), want.corners.as_slice());
-    assert_eq!(f.stats, want.stats);
+    assert_eq!(f.segments(), want.segments());
+    assert_eq!(f.edges(), want.edges());
+    assert_eq!(f.lines(), want.lines());
+    assert_eq!(f.corners(), want.corners());
+    assert_eq!(f.stats(), want.stats());
 }
 
 #[test]

@@ -297,22 +297,22 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
     }
 
     // Segments: in order, at most one shared point, inside the frame.
-    prop_assert!(f.segments.len() <= MAX_SEGMENTS);
-    for s in &f.segments {
+    prop_assert!(f.segments().len() <= MAX_SEGMENTS);
+    for s in f.segments() {
         prop_assert!(s.first < s.last && usize::from(s.last) < n, "{:?}", s);
         prop_assert!(s.points() >= usize::from(params.min_points));
     }
-    for w in f.segments.windows(2) {
+    for w in f.segments().windows(2) {
         prop_assert!(w[1].first >= w[0].last, "segments overlap: {:?}", w);
     }
     // Counts add up: segments, edge points.
     let (long, short, edges) = count_runs(d, params.tau, params.min_points);
-    prop_assert_eq!(usize::from(f.stats.short_segments), short);
+    prop_assert_eq!(usize::from(f.stats().short_segments), short);
     // Split before reject turns one segment into two per split, drops short
     // halves and pieces that still fail.
-    let st = &f.stats;
+    let st = &f.stats();
     prop_assert_eq!(
-        f.segments.len()
+        f.segments().len()
             + usize::from(st.segment_overflow)
             + usize::from(st.split_short)
             + usize::from(st.split_rejected),
@@ -322,22 +322,25 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
     if params.split_depth == 0 {
         prop_assert_eq!((st.splits, st.split_short, st.split_rejected), (0, 0, 0));
     }
-    prop_assert_eq!(f.edges.len() + usize::from(f.stats.edge_overflow), edges);
-    prop_assert!(f.edges.windows(2).all(|w| w[0] < w[1]));
-    prop_assert_eq!(usize::from(f.stats.valid_beams), frame.valid_count());
     prop_assert_eq!(
-        usize::from(f.stats.invalid_windows),
+        f.edges().len() + usize::from(f.stats().edge_overflow),
+        edges
+    );
+    prop_assert!(f.edges().windows(2).all(|w| w[0] < w[1]));
+    prop_assert_eq!(usize::from(f.stats().valid_beams), frame.valid_count());
+    prop_assert_eq!(
+        usize::from(f.stats().invalid_windows),
         d.iter().filter(|x| !x.is_finite()).count()
     );
 
     // Lines: finite, PD covariance, within segments, in order; counts.
-    prop_assert!(f.lines.len() <= MAX_LINES);
+    prop_assert!(f.lines().len() <= MAX_LINES);
     let within = |beam: u16| {
-        f.segments
+        f.segments()
             .iter()
             .position(|s| s.first <= beam && beam <= s.last)
     };
-    for l in &f.lines {
+    for l in f.lines() {
         let values = l.floats();
         prop_assert!(
             values.iter().all(|v| v.is_finite()),
@@ -363,14 +366,14 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
             "line {}..={} not within segments {:?}",
             l.first,
             l.last,
-            f.segments
+            f.segments()
         );
     }
     // Endpoints: the projections onto the line of the first and last valid
     // raw points of the line's beams (f64 here; tolerance 1e-4 relative to
     // the point's range, well above f32 rounding, far below a beam spacing).
     let geometry = frame.geometry();
-    for l in &f.lines {
+    for l in f.lines() {
         let beams = usize::from(l.first)..=usize::from(l.last);
         let valid: Vec<usize> = beams.filter(|&j| frame.beams()[j].is_valid()).collect();
         let (ca, sa) = (f64::from(l.alpha).cos(), f64::from(l.alpha).sin());
@@ -392,13 +395,13 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
             );
         }
     }
-    for w in f.lines.windows(2) {
+    for w in f.lines().windows(2) {
         prop_assert!(w[1].first >= w[0].last, "lines out of order: {:?}", w);
     }
-    let s = &f.stats;
+    let s = &f.stats();
     prop_assert_eq!(
-        f.segments.len(),
-        f.lines.len()
+        f.segments().len(),
+        f.lines().len()
             + usize::from(s.degenerate_fits)
             + usize::from(s.rejected_chi2)
             + usize::from(s.merges)
@@ -409,8 +412,8 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
     );
 
     // Corners: finite, PD covariance, angle in [0, 90], between consecutive lines.
-    prop_assert!(f.corners.len() <= MAX_CORNERS);
-    for c in &f.corners {
+    prop_assert!(f.corners().len() <= MAX_CORNERS);
+    for c in f.corners() {
         let values = [c.x, c.y, c.cov.a, c.cov.b, c.cov.c, c.angle_deg];
         prop_assert!(
             values.iter().all(|v| v.is_finite()),
@@ -423,7 +426,7 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
             c.angle_deg >= params.min_corner_angle_deg
         );
         prop_assert_eq!(usize::from(c.line_b), usize::from(c.line_a) + 1);
-        prop_assert!(usize::from(c.line_b) < f.lines.len());
+        prop_assert!(usize::from(c.line_b) < f.lines().len());
         // Lines less than a fraction of a degree from parallel meet far away
         // and their corner's covariance is singular to f32 precision
         // (measured: det <= 0 only below 0.22°, in 2000 cases); such
@@ -439,8 +442,8 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
         }
     }
     prop_assert!(
-        f.corners.len() + usize::from(s.corner_overflow) + usize::from(s.degenerate_corners)
-            <= f.lines.len().saturating_sub(1)
+        f.corners().len() + usize::from(s.corner_overflow) + usize::from(s.degenerate_corners)
+            <= f.lines().len().saturating_sub(1)
     );
     Ok(())
 }

@@ -20,7 +20,7 @@ use lms_core::telegram::{
     MAX_TELEGRAM_LEN, NAK,
 };
 use lms_core::Unit;
-use lms_core::{Beam, Variant};
+use lms_core::{Beam, Stats, Variant};
 use proptest::prelude::*;
 
 fn config() -> ProptestConfig {
@@ -294,29 +294,26 @@ proptest! {
         use lms_core::Segment;
         let mut f = lms_core::Features::default();
         for (first, last) in segments {
-            f.segments.push(Segment { first, last }).unwrap();
+            f.push_segment(Segment { first, last }).unwrap();
         }
         for e in edges {
-            f.edges.push(e).unwrap();
+            f.push_edge(e).unwrap();
         }
         for (v, i) in lines {
             let v = v.map(f32::from_bits);
-            f.lines.push(Line {
+            f.push_line(Line {
                 alpha: v[0], r: v[1], cov: Sym2 { a: v[2], b: v[3], c: v[4] }, chi2: v[5],
                 endpoints: [[v[6], v[7]], [v[8], v[9]]], first: i[0], last: i[1], points: i[2],
             }).unwrap();
         }
         for (v, b) in corners {
             let v = v.map(f32::from_bits);
-            f.corners.push(Corner {
+            f.push_corner(Corner {
                 x: v[0], y: v[1], cov: Sym2 { a: v[2], b: v[3], c: v[4] }, angle_deg: v[5],
                 well_conditioned: b[0] & 1 == 1, line_a: b[1], line_b: b[2],
             }).unwrap();
         }
-        let s = &mut f.stats;
-        [s.valid_beams, s.invalid_windows, s.short_segments, s.segment_overflow, s.edge_overflow,
-         s.degenerate_fits, s.rejected_chi2, s.rejected_short, s.merges, s.line_overflow,
-         s.degenerate_corners, s.corner_overflow] = stats;
+        *f.stats_mut() = Stats::from_fields(&stats);
         let echoed = EchoedParams {
             iterations: params.0,
             sigma: f32::from_bits(params.1),
@@ -339,18 +336,18 @@ proptest! {
                 prop_assert_eq!(summary.scan_counter, counter);
                 prop_assert_eq!(summary.beams, beams);
                 prop_assert_eq!(summary.params.sigma.to_bits(), echoed.sigma.to_bits());
-                prop_assert_eq!(&got.segments, &f.segments);
-                prop_assert_eq!(&got.edges, &f.edges);
-                prop_assert_eq!(got.stats, f.stats);
+                prop_assert_eq!(got.segments(), f.segments());
+                prop_assert_eq!(got.edges(), f.edges());
+                prop_assert_eq!(got.stats(), f.stats());
                 let bits = |l: &Line| [l.alpha, l.r, l.cov.a, l.cov.b, l.cov.c, l.chi2,
                     l.endpoints[0][0], l.endpoints[0][1], l.endpoints[1][0], l.endpoints[1][1]]
                     .map(f32::to_bits);
-                prop_assert!(got.lines.iter().map(bits).eq(f.lines.iter().map(bits)));
-                prop_assert!(got.lines.iter().map(|l| (l.first, l.last, l.points))
-                    .eq(f.lines.iter().map(|l| (l.first, l.last, l.points))));
+                prop_assert!(got.lines().iter().map(bits).eq(f.lines().iter().map(bits)));
+                prop_assert!(got.lines().iter().map(|l| (l.first, l.last, l.points))
+                    .eq(f.lines().iter().map(|l| (l.first, l.last, l.points))));
                 let cbits = |c: &Corner| ([c.x, c.y, c.cov.a, c.cov.b, c.cov.c, c.angle_deg].map(f32::to_bits),
                     c.well_conditioned, c.line_a, c.line_b);
-                prop_assert!(got.corners.iter().map(cbits).eq(f.corners.iter().map(cbits)));
+                prop_assert!(got.corners().iter().map(cbits).eq(f.corners().iter().map(cbits)));
             }
         }
         prop_assert_eq!(complete, 1);

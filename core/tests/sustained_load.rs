@@ -269,7 +269,7 @@ fn sustained(scans: u32) -> Report {
                                 );
                             }
                             last_counter = summary.scan_counter;
-                            assert!(!features.lines.is_empty(), "the room has lines");
+                            assert!(!features.lines().is_empty(), "the room has lines");
                         }
                     }
                     Some(_) => {}

@@ -24,7 +24,7 @@ fuzz_target!(|data: &[u8]| {
             if let Ok(n) = emit_telegram(&mut buf, 0x80, command, body, Some(0x10)) {
                 let t = Telegram::new_checked(&buf[..n], Direction::SensorToHost).unwrap();
                 if let Ok(Assembled::Complete(summary, f)) = asm.push(&t) {
-                    let _ = (summary.counts, f.lines.len());
+                    let _ = (summary.counts, f.lines().len());
                 }
             }
             // The same bytes as an unchecked view of any length.

@@ -32,27 +32,27 @@ fuzz_target!(|data: &[u8]| {
     let n = frame.len();
     // Structure.
     let mut prev_last = None;
-    for s in &f.segments {
+    for s in f.segments() {
         assert!(s.first <= s.last && usize::from(s.last) < n, "{s:?}");
         if let Some(p) = prev_last {
             assert!(
                 s.first >= p,
                 "segments out of order or overlapping: {:?}",
-                f.segments
+                f.segments()
             );
         }
         prev_last = Some(s.last);
     }
-    assert!(f.edges.windows(2).all(|w| w[0] < w[1]));
-    assert!(f.edges.iter().all(|&e| usize::from(e) < n));
-    for l in &f.lines {
+    assert!(f.edges().windows(2).all(|w| w[0] < w[1]));
+    assert!(f.edges().iter().all(|&e| usize::from(e) < n));
+    for l in f.lines() {
         assert!(
             l.first <= l.last && usize::from(l.last) < n && l.points >= 3,
             "{l:?}"
         );
     }
-    for c in &f.corners {
-        assert!(c.line_a < c.line_b && usize::from(c.line_b) < f.lines.len());
+    for c in f.corners() {
+        assert!(c.line_a < c.line_b && usize::from(c.line_b) < f.lines().len());
     }
     // Invalid beams untouched.
     for ((s, r), b) in extractor

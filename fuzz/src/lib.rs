@@ -272,16 +272,16 @@ pub fn decode_features(input: &mut Input<'_>) -> (u32, u16, Features) {
     }
     // The split counters are not carried by D0 (split before reject is off
     // on the co-processor): they stay 0.
-    f.stats = Stats::from_fields(&st);
+    *f.stats_mut() = Stats::from_fields(&st);
     for _ in 0..segments {
         let s = lms_core::Segment {
             first: input.u16(),
             last: input.u16(),
         };
-        let _ = f.segments.push(s);
+        let _ = f.push_segment(s);
     }
     for _ in 0..edges {
-        let _ = f.edges.push(input.u16());
+        let _ = f.push_edge(input.u16());
     }
     for _ in 0..lines {
         let mut v = [0.0f32; 10];
@@ -302,7 +302,7 @@ pub fn decode_features(input: &mut Input<'_>) -> (u32, u16, Features) {
             last: input.u16(),
             points: input.u16(),
         };
-        let _ = f.lines.push(l);
+        let _ = f.push_line(l);
     }
     for _ in 0..corners {
         let mut v = [0.0f32; 6];
@@ -322,7 +322,7 @@ pub fn decode_features(input: &mut Input<'_>) -> (u32, u16, Features) {
             line_a: input.u8(),
             line_b: input.u8(),
         };
-        let _ = f.corners.push(c);
+        let _ = f.push_corner(c);
     }
     (counter, beams, f)
 }
@@ -330,26 +330,26 @@ pub fn decode_features(input: &mut Input<'_>) -> (u32, u16, Features) {
 /// Write `features` in the layout [`decode_features`] reads (for seeds).
 pub fn encode_features(out: &mut Output, counter: u32, beams: u16, f: &Features) {
     out.u32(counter).u16(beams);
-    out.u8(f.segments.len() as u8)
-        .u16(f.edges.len() as u16)
-        .u8(f.lines.len() as u8)
-        .u8(f.corners.len() as u8);
+    out.u8(f.segments().len() as u8)
+        .u16(f.edges().len() as u16)
+        .u8(f.lines().len() as u8)
+        .u8(f.corners().len() as u8);
     for (_, get) in Stats::FIELDS.iter().take(Stats::D0_FIELDS) {
-        out.u16(get(&f.stats));
+        out.u16(get(f.stats()));
     }
-    for s in &f.segments {
+    for s in f.segments() {
         out.u16(s.first).u16(s.last);
     }
-    for &e in &f.edges {
+    for &e in f.edges() {
         out.u16(e);
     }
-    for l in &f.lines {
+    for l in f.lines() {
         for v in l.floats() {
             out.f32(v);
         }
         out.u16(l.first).u16(l.last).u16(l.points);
     }
-    for c in &f.corners {
+    for c in f.corners() {
         for v in [c.x, c.y, c.cov.a, c.cov.b, c.cov.c, c.angle_deg] {
             out.f32(v);
         }
@@ -362,13 +362,13 @@ pub fn encode_features(out: &mut Output, counter: u32, beams: u16, f: &Features)
 /// Every bit of a [`Features`] value, for exact comparisons (NaN included).
 pub fn feature_bits(f: &Features) -> Vec<u32> {
     let mut v = Vec::new();
-    for s in &f.segments {
+    for s in f.segments() {
         v.extend([u32::from(s.first), u32::from(s.last)]);
     }
     v.push(u32::MAX);
-    v.extend(f.edges.iter().map(|&e| u32::from(e)));
+    v.extend(f.edges().iter().map(|&e| u32::from(e)));
     v.push(u32::MAX);
-    for l in &f.lines {
+    for l in f.lines() {
         v.extend(
             [
                 l.alpha,
@@ -387,7 +387,7 @@ pub fn feature_bits(f: &Features) -> Vec<u32> {
         v.extend([l.first, l.last, l.points].map(u32::from));
     }
     v.push(u32::MAX);
-    for c in &f.corners {
+    for c in f.corners() {
         v.extend([c.x, c.y, c.cov.a, c.cov.b, c.cov.c, c.angle_deg].map(f32::to_bits));
         v.extend([
             u32::from(c.well_conditioned),
@@ -400,7 +400,7 @@ pub fn feature_bits(f: &Features) -> Vec<u32> {
         Stats::FIELDS
             .iter()
             .take(Stats::D0_FIELDS)
-            .map(|(_, get)| u32::from(get(&f.stats))),
+            .map(|(_, get)| u32::from(get(f.stats()))),
     );
     v
 }

@@ -151,10 +151,10 @@ impl FrameRecord {
             ranges: valid_or_null(frame.ranges()),
             smoothed: valid_or_null(ex.smoothed()),
             mahalanobis: ex.mahalanobis().iter().map(|&d| finite(d)).collect(),
-            edges: f.edges.iter().copied().collect(),
-            segments: f.segments.iter().map(|s| [s.first, s.last]).collect(),
+            edges: f.edges().to_vec(),
+            segments: f.segments().iter().map(|s| [s.first, s.last]).collect(),
             lines: f
-                .lines
+                .lines()
                 .iter()
                 .map(|l| LineRecord {
                     alpha: l.alpha,
@@ -168,7 +168,7 @@ impl FrameRecord {
                 })
                 .collect(),
             corners: f
-                .corners
+                .corners()
                 .iter()
                 .map(|c| CornerRecord {
                     x: c.x,
@@ -180,7 +180,7 @@ impl FrameRecord {
                     line_b: c.line_b,
                 })
                 .collect(),
-            stats: StatsRecord::from(&f.stats),
+            stats: StatsRecord::from(f.stats()),
             pose: None,
         }
     }

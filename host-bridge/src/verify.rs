@@ -595,8 +595,8 @@ pub fn differences(got: &Features, want: &Features) -> Vec<Difference> {
         &mut out,
         "segment",
         "segments",
-        &got.segments,
-        &want.segments,
+        got.segments(),
+        want.segments(),
         |s| {
             [
                 ("first", Value::Int(s.first.into())),
@@ -604,28 +604,28 @@ pub fn differences(got: &Features, want: &Features) -> Vec<Difference> {
             ]
         },
     );
-    diff_list(&mut out, "edge", "edges", &got.edges, &want.edges, |&e| {
+    diff_list(&mut out, "edge", "edges", got.edges(), want.edges(), |&e| {
         [("beam", Value::Int(e.into()))]
     });
     diff_list(
         &mut out,
         "line",
         "lines",
-        &got.lines,
-        &want.lines,
+        got.lines(),
+        want.lines(),
         line_fields,
     );
     diff_list(
         &mut out,
         "corner",
         "corners",
-        &got.corners,
-        &want.corners,
+        got.corners(),
+        want.corners(),
         corner_fields,
     );
-    for ((field, x), (_, y)) in stats_fields(&got.stats)
+    for ((field, x), (_, y)) in stats_fields(got.stats())
         .into_iter()
-        .zip(stats_fields(&want.stats))
+        .zip(stats_fields(want.stats()))
     {
         if !x.same(y) {
             out.push(Difference {
@@ -807,8 +807,8 @@ impl Checker {
                 return false;
             }
         };
-        self.lines += got.lines.len() as u64;
-        self.corners += got.corners.len() as u64;
+        self.lines += got.lines().len() as u64;
+        self.corners += got.corners().len() as u64;
         let diffs = differences(got, want);
         match diffs.first() {
             None => true,
@@ -2077,27 +2077,25 @@ mod tests {
 
     fn features() -> Features {
         let mut f = Features::default();
-        f.segments
-            .push(lms_core::Segment { first: 3, last: 40 })
+        f.push_segment(lms_core::Segment { first: 3, last: 40 })
             .unwrap();
-        f.edges.push(40).unwrap();
-        f.lines
-            .push(lms_core::Line {
-                alpha: 0.5,
-                r: 2.0,
-                cov: Sym2 {
-                    a: 1e-6,
-                    b: 0.0,
-                    c: 4e-6,
-                },
-                first: 3,
-                last: 40,
-                points: 38,
-                chi2: f32::NAN,
-                endpoints: [[1.0, 2.0], [3.0, 4.0]],
-            })
-            .unwrap();
-        f.stats.valid_beams = 361;
+        f.push_edge(40).unwrap();
+        f.push_line(lms_core::Line {
+            alpha: 0.5,
+            r: 2.0,
+            cov: Sym2 {
+                a: 1e-6,
+                b: 0.0,
+                c: 4e-6,
+            },
+            first: 3,
+            last: 40,
+            points: 38,
+            chi2: f32::NAN,
+            endpoints: [[1.0, 2.0], [3.0, 4.0]],
+        })
+        .unwrap();
+        f.stats_mut().valid_beams = 361;
         f
     }
 
@@ -2106,12 +2104,12 @@ mod tests {
         let a = features();
         let mut b = a.clone();
         // A different NaN is still equal; identical otherwise.
-        b.lines[0].chi2 = f32::from_bits(0x7FC0_0001);
+        b.lines_mut()[0].chi2 = f32::from_bits(0x7FC0_0001);
         assert!(differences(&a, &b).is_empty());
         // One ulp in r, and -0.0 vs 0.0 in cov αr: two float differences.
-        b.lines[0].r = f32::from_bits(2.0f32.to_bits() + 1);
-        b.lines[0].cov.b = -0.0;
-        b.stats.merges = 1;
+        b.lines_mut()[0].r = f32::from_bits(2.0f32.to_bits() + 1);
+        b.lines_mut()[0].cov.b = -0.0;
+        b.stats_mut().merges = 1;
         let d = differences(&a, &b);
         assert_eq!(d.len(), 3, "{d:?}");
         assert_eq!((d[0].item.as_str(), d[0].field), ("line 0", "r"));
@@ -2122,8 +2120,14 @@ mod tests {
         assert_eq!(d[1].field, "cov_ar");
         assert_eq!((d[2].item.as_str(), d[2].field), ("stats", "merges"));
         // A missing edge: the count.
-        let mut c = a.clone();
-        c.edges.clear();
+        let mut c = Features::default();
+        for &s in a.segments() {
+            c.push_segment(s).unwrap();
+        }
+        for &l in a.lines() {
+            c.push_line(l).unwrap();
+        }
+        *c.stats_mut() = *a.stats();
         let d = differences(&a, &c);
         assert_eq!(
             d[0].to_string(),

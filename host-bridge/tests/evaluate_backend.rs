@@ -36,23 +36,23 @@ fn evaluate_back_end_and_smoothing_replicas_match_the_core_bit_for_bit() {
                     &s.frame,
                     &tables,
                     s.frame.ranges(),
-                    &f.segments,
+                    f.segments(),
                     &params,
                 );
-                assert_eq!(lines, f.lines.to_vec(), "{family:?} {k}");
-                assert_eq!(corners, f.corners.to_vec(), "{family:?} {k}");
+                assert_eq!(lines, f.lines().to_vec(), "{family:?} {k}");
+                assert_eq!(corners, f.corners().to_vec(), "{family:?} {k}");
                 let d = ex.mahalanobis().to_vec();
                 let smoothed = ex.smoothed().to_vec();
                 let x = extraction_from_d(&s.frame, &tables, &d, &params);
-                assert_eq!(x.segments, f.segments.to_vec());
-                assert_eq!(x.lines, f.lines.to_vec());
+                assert_eq!(x.segments, f.segments().to_vec());
+                assert_eq!(x.lines, f.lines().to_vec());
 
                 let (r, dv) = variants::smooth(&s.frame, &params, &Options::default());
                 assert_eq!(r, smoothed, "{family:?} {k}: smoothed ranges");
                 let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&dv), bits(&d), "{family:?} {k}: D");
                 let v = variants::extract(&s.frame, &tables, &params, &Options::default());
-                assert_eq!(v.lines, f.lines.to_vec());
+                assert_eq!(v.lines, f.lines().to_vec());
                 scans += 1;
             }
         }

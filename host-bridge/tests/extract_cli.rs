@@ -167,7 +167,7 @@ fn real_log_round_trips_bit_exactly() {
         assert!(nulls > 0, "frame {index} has invalid windows");
 
         let f = ex.features();
-        let edges: Vec<u64> = f.edges.iter().map(|&e| e as u64).collect();
+        let edges: Vec<u64> = f.edges().iter().map(|&e| e as u64).collect();
         let got: Vec<u64> = rec["edges"]
             .as_array()
             .unwrap()
@@ -176,15 +176,15 @@ fn real_log_round_trips_bit_exactly() {
             .collect();
         assert_eq!(got, edges);
         let segs: Vec<Value> = f
-            .segments
+            .segments()
             .iter()
             .map(|s| serde_json::json!([s.first, s.last]))
             .collect();
         assert_eq!(rec["segments"].as_array().unwrap(), &segs);
 
         let lines_json = rec["lines"].as_array().unwrap();
-        assert_eq!(lines_json.len(), f.lines.len());
-        for (k, (l, lj)) in f.lines.iter().zip(lines_json).enumerate() {
+        assert_eq!(lines_json.len(), f.lines().len());
+        for (k, (l, lj)) in f.lines().iter().zip(lines_json).enumerate() {
             let w = format!("frame {index} line {k}");
             assert_f32(&lj["alpha"], l.alpha, &w);
             assert_f32(&lj["r"], l.r, &w);
@@ -195,11 +195,11 @@ fn real_log_round_trips_bit_exactly() {
             assert_eq!(lj["last"], l.last);
             assert_eq!(lj["points"], l.points);
         }
-        total_lines += f.lines.len();
+        total_lines += f.lines().len();
 
         let corners_json = rec["corners"].as_array().unwrap();
-        assert_eq!(corners_json.len(), f.corners.len());
-        for (k, (c, cj)) in f.corners.iter().zip(corners_json).enumerate() {
+        assert_eq!(corners_json.len(), f.corners().len());
+        for (k, (c, cj)) in f.corners().iter().zip(corners_json).enumerate() {
             let w = format!("frame {index} corner {k}");
             assert_f32(&cj["x"], c.x, &w);
             assert_f32(&cj["y"], c.y, &w);
@@ -207,9 +207,9 @@ fn real_log_round_trips_bit_exactly() {
             assert_f32(&cj["angle_deg"], c.angle_deg, &w);
             assert_eq!(cj["well_conditioned"], c.well_conditioned);
         }
-        assert_eq!(rec["stats"]["valid_beams"], f.stats.valid_beams);
-        assert_eq!(rec["stats"]["invalid_windows"], f.stats.invalid_windows);
-        assert_eq!(rec["stats"]["merges"], f.stats.merges);
+        assert_eq!(rec["stats"]["valid_beams"], f.stats().valid_beams);
+        assert_eq!(rec["stats"]["invalid_windows"], f.stats().invalid_windows);
+        assert_eq!(rec["stats"]["merges"], f.stats().merges);
     }
     assert!(total_lines > 0);
 

@@ -65,7 +65,7 @@ fn core_split_matches_the_prototype_and_finds_the_walls() {
             score_sample(&s, &methods, &gates, &mut ex, &mut tallies);
             let tables = Tables::for_frame(&s.frame);
             let core = methods[1].extract(&mut ex, &s, &tables);
-            splits += u32::from(ex.features().stats.splits);
+            splits += u32::from(ex.features().stats().splits);
             let proto = methods[2].extract(&mut ex, &s, &tables);
             scans += 1;
             if core.segments == proto.segments {

@@ -117,10 +117,10 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
         let (walls, truth) = right_corner(turn);
         let frame = scan(&walls, SIGMA, &mut rng);
         let f = ex.run(&frame, &params.validate().unwrap());
-        let good: Vec<_> = f.corners.iter().filter(|c| c.well_conditioned).collect();
-        assert_eq!(good.len(), 1, "draw {draw}: corners {:?}", f.corners);
+        let good: Vec<_> = f.corners().iter().filter(|c| c.well_conditioned).collect();
+        assert_eq!(good.len(), 1, "draw {draw}: corners {:?}", f.corners());
         let c = *good[0];
-        for other in f.corners.iter().filter(|c| !c.well_conditioned) {
+        for other in f.corners().iter().filter(|c| !c.well_conditioned) {
             assert!(
                 other.angle_deg < 5.0,
                 "draw {draw}: unexpected corner {other:?}"
@@ -128,7 +128,7 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
             split_walls += 1;
         }
         // Within 4 standard deviations of the lines' angles (and 1°).
-        let (la, lb) = (f.lines[c.line_a as usize], f.lines[c.line_b as usize]);
+        let (la, lb) = (f.lines()[c.line_a as usize], f.lines()[c.line_b as usize]);
         let sd_deg = ((la.cov.a + lb.cov.a) as f64).sqrt().to_degrees();
         assert!(
             (c.angle_deg as f64 - 90.0).abs() < (4.0 * sd_deg).max(1.0),
@@ -149,8 +149,8 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
             ..params
         };
         let f2 = ex_excluding.run(&frame, &excluding.validate().unwrap());
-        let good2: Vec<_> = f2.corners.iter().filter(|c| c.well_conditioned).collect();
-        assert_eq!(good2.len(), 1, "draw {draw}: corners {:?}", f2.corners);
+        let good2: Vec<_> = f2.corners().iter().filter(|c| c.well_conditioned).collect();
+        assert_eq!(good2.len(), 1, "draw {draw}: corners {:?}", f2.corners());
         refitted.push(nees(
             [good2[0].x as f64 - truth[0], good2[0].y as f64 - truth[1]],
             &good2[0].cov,
@@ -226,13 +226,13 @@ fn a_ten_degree_bend_is_an_ill_conditioned_corner() {
         let frame = scan(&walls, 0.0005, &mut rng);
         let f = ex.run(&frame, &params.validate().unwrap());
         assert_eq!(
-            f.corners.len(),
+            f.corners().len(),
             1,
             "seed {seed}: lines {:?} corners {:?}",
-            f.lines,
-            f.corners
+            f.lines(),
+            f.corners()
         );
-        let c = f.corners[0];
+        let c = f.corners()[0];
         eprintln!("10° bend, sigma 0.5 mm, seed {seed}: {c:?}");
         assert!((c.angle_deg - 10.0).abs() < 0.5, "angle {}", c.angle_deg);
         assert!(
@@ -249,10 +249,10 @@ fn a_ten_degree_bend_is_an_ill_conditioned_corner() {
     let f = ex.run(&frame, &lms_core::ValidParams::DEFAULT);
     eprintln!(
         "10° bend, 0.5°, sigma 5 mm: segments {:?}, lines {}, rejected by chi2 {}, corners {}",
-        f.segments,
-        f.lines.len(),
-        f.stats.rejected_chi2,
-        f.corners.len()
+        f.segments(),
+        f.lines().len(),
+        f.stats().rejected_chi2,
+        f.corners().len()
     );
 
     // The two walls' true beams at 5 mm, fitted and intersected.

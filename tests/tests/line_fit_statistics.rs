@@ -220,7 +220,7 @@ fn an_arc_is_not_accepted_as_a_line() {
         let mut ex = Extractor::new();
         let f = ex.run(&frame, &params.validate().unwrap());
         let mut seg_chi2 = Vec::new();
-        for s in f.segments.iter() {
+        for s in f.segments().iter() {
             let line = fit_line(
                 bearings,
                 frame.ranges(),
@@ -235,16 +235,16 @@ fn an_arc_is_not_accepted_as_a_line() {
             "arc seed {seed}: beams {lo}..={hi}, whole-arc chi2 {:.0}, segments (first, last, chi2) {seg_chi2:?}, \
              lines {}, rejected by chi2 {}",
             whole.chi2,
-            f.lines.len(),
-            f.stats.rejected_chi2
+            f.lines().len(),
+            f.stats().rejected_chi2
         );
         // It is chi2 that rejects it: the smoothing alone does not break the
         // arc into lines (measured: one segment over the whole arc).
-        assert!(f.stats.rejected_chi2 >= 1, "no line rejected by chi2");
+        assert!(f.stats().rejected_chi2 >= 1, "no line rejected by chi2");
         assert!(
-            f.lines.is_empty(),
+            f.lines().is_empty(),
             "lines accepted on an arc: {:?}",
-            f.lines
+            f.lines()
                 .iter()
                 .map(|l| (l.first, l.last, l.chi2))
                 .collect::<Vec<_>>()

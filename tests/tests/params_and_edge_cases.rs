@@ -163,13 +163,13 @@ fn a_frame_with_every_beam_invalid_gives_no_features() {
         ex.run(frame, &params.validate().unwrap());
         let f = ex.features();
         assert!(
-            f.segments.is_empty()
-                && f.edges.is_empty()
-                && f.lines.is_empty()
-                && f.corners.is_empty()
+            f.segments().is_empty()
+                && f.edges().is_empty()
+                && f.lines().is_empty()
+                && f.corners().is_empty()
         );
-        assert_eq!(f.stats.valid_beams, 0);
-        assert_eq!(f.stats.invalid_windows as usize, frame.len() - 2);
+        assert_eq!(f.stats().valid_beams, 0);
+        assert_eq!(f.stats().invalid_windows as usize, frame.len() - 2);
         assert!(ex.mahalanobis().iter().all(|d| *d == f32::INFINITY));
         // Invalid beams are never modified.
         assert_eq!(ex.smoothed(), frame.ranges());
@@ -189,8 +189,8 @@ fn three_beams_and_the_largest_frame_run() {
     let f = ex.features();
     assert_eq!(ex.mahalanobis().len(), 1);
     assert!(ex.mahalanobis()[0] < 1.0, "D = {}", ex.mahalanobis()[0]);
-    assert!(f.segments.is_empty() && f.lines.is_empty());
-    assert_eq!(f.stats.short_segments, 1);
+    assert!(f.segments().is_empty() && f.lines().is_empty());
+    assert_eq!(f.stats().short_segments, 1);
     ex.run(
         &three,
         &Params {
@@ -201,7 +201,7 @@ fn three_beams_and_the_largest_frame_run() {
         .unwrap(),
     );
     let f = ex.features();
-    assert_eq!(f.segments.len(), 1);
+    assert_eq!(f.segments().len(), 1);
 
     // 401 beams (100°/0.25°): a wall at 3 m, one line, no corner.
     let g = Variant::Fov100Res25.geometry();
@@ -211,9 +211,9 @@ fn three_beams_and_the_largest_frame_run() {
     let f = ex.features();
     assert_eq!(ex.smoothed().len(), 401);
     assert_eq!(ex.mahalanobis().len(), 399);
-    assert_eq!(f.lines.len(), 1, "{:?}", f.lines);
-    assert!((f.lines[0].r - 3.0).abs() < 1e-3 && f.lines[0].alpha.abs() < 1e-3);
-    assert!(f.corners.is_empty());
+    assert_eq!(f.lines().len(), 1, "{:?}", f.lines());
+    assert!((f.lines()[0].r - 3.0).abs() < 1e-3 && f.lines()[0].alpha.abs() < 1e-3);
+    assert!(f.corners().is_empty());
 
     // 401 beams of alternating near/far ranges: every window breaks, no
     // segment, and nothing panics.
@@ -223,7 +223,7 @@ fn three_beams_and_the_largest_frame_run() {
     let zz = Frame::from_metres(g, &zigzag).unwrap();
     ex.run(&zz, &params.validate().unwrap());
     let f = ex.features();
-    assert!(f.segments.is_empty() && f.lines.is_empty());
+    assert!(f.segments().is_empty() && f.lines().is_empty());
 
     // Mixed: a single valid beam between invalid ones, and the maximum
     // number of passes.
@@ -241,6 +241,6 @@ fn three_beams_and_the_largest_frame_run() {
         .unwrap(),
     );
     let f = ex.features();
-    assert!(f.segments.is_empty());
+    assert!(f.segments().is_empty());
     assert_eq!(ex.smoothed(), sparse.ranges());
 }

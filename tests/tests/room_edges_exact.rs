@@ -80,7 +80,7 @@ fn exact_scans(truth: &TrueScan, expected: &[u16], params: &Params, seeds: u64) 
         let readings = truth.noisy(&NoiseModel::gaussian(SIGMA), &mut seeded_rng(seed));
         let frame = Frame::from_metres(geometry, &to_f32_metres(&readings, 0.0)).unwrap();
         let features = extractor.run(&frame, &params.validate().unwrap());
-        let edges: Vec<u16> = features.edges.iter().copied().collect();
+        let edges: Vec<u16> = features.edges().to_vec();
         exact += u64::from(edges == expected);
         false_edges += edges.iter().filter(|e| !expected.contains(e)).count();
     }
@@ -109,22 +109,22 @@ fn noise_free_edge_points_lines_and_corners_are_exact() {
     let frame = Frame::from_metres(Variant::Fov180Res50.geometry(), &ranges).unwrap();
     let mut extractor = Extractor::new();
     let features = extractor.run(&frame, &lms_core::ValidParams::DEFAULT);
-    let edges: Vec<u16> = features.edges.iter().copied().collect();
+    let edges: Vec<u16> = features.edges().to_vec();
     assert_eq!(edges, expected);
     // Six lines: right wall, front wall (right of the box), two box faces,
     // front wall (left of the box), left wall; three well-conditioned
     // corners: the two room corners and the box's near corner.
-    assert_eq!(features.lines.len(), 6, "{:?}", features.lines);
+    assert_eq!(features.lines().len(), 6, "{:?}", features.lines());
     let good = features
-        .corners
+        .corners()
         .iter()
         .filter(|c| c.well_conditioned)
         .count();
     assert_eq!(
-        (features.corners.len(), good),
+        (features.corners().len(), good),
         (3, 3),
         "{:?}",
-        features.corners
+        features.corners()
     );
 }
 

@@ -134,7 +134,7 @@ fn noise_free_edge_points_are_the_true_corners_and_jumps() {
                     .validate()
                     .unwrap(),
                 );
-                let edges: Vec<usize> = ex.features().edges.iter().map(|&e| e as usize).collect();
+                let edges: Vec<usize> = ex.features().edges().iter().map(|&e| e as usize).collect();
                 let d = ex.mahalanobis();
                 let true_edges = truth.true_edge_points();
                 let at = format!("{name} {variant:?} {iterations} pass(es): edges {edges:?}, truth {true_edges:?}");
@@ -194,7 +194,7 @@ fn noisy_edge_points_find_every_corner_and_jump() {
         for seed in 0..SEEDS {
             let frame = frame_of(variant, &truth, &noise, seed);
             ex.run(&frame, &lms_core::ValidParams::DEFAULT);
-            let edges: Vec<usize> = ex.features().edges.iter().map(|&e| e as usize).collect();
+            let edges: Vec<usize> = ex.features().edges().iter().map(|&e| e as usize).collect();
             let d = ex.mahalanobis();
             let at = format!("{variant:?} seed {seed}: edges {edges:?}, truth {true_edges:?}");
             for &(i, valid) in &jumps {
@@ -384,7 +384,7 @@ fn the_line_model_keeps_a_corner_that_a_gaussian_mask_moves() {
     let mut line_model = Vec::new();
     for frame in &frames {
         ex.run(frame, &lms_core::ValidParams::DEFAULT);
-        let edges = &ex.features().edges;
+        let edges = ex.features().edges();
         assert!(
             edges.contains(&(j as u16)) || edges.contains(&(j as u16 + 1)),
             "no edge at the vertex {:.2}: {edges:?}",

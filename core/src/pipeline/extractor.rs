@@ -7,8 +7,6 @@
 //! `D` and the ranges to a callback after every pass (the scale-space plots of
 //! paper Fig. 10).
 
-use heapless::Vec;
-
 use crate::features::{Features, Stats, MAX_WINDOWS};
 use crate::frame::{Frame, Geometry, MAX_BEAMS};
 use crate::params::{Params, ValidParams};
@@ -49,13 +47,7 @@ impl Extractor {
             smoothed: [0.0; MAX_BEAMS],
             window_ok: [false; MAX_WINDOWS],
             mahalanobis: [0.0; MAX_WINDOWS],
-            features: Features {
-                segments: Vec::new(),
-                edges: Vec::new(),
-                lines: Vec::new(),
-                corners: Vec::new(),
-                stats: Stats::ZERO,
-            },
+            features: Features::EMPTY,
         }
     }
 

@@ -155,7 +155,7 @@ fn main() -> ! {
                     cop.note_sensor_overflow();
                 }
                 black_box(cop.counters());
-                black_box(cop.features().lines.len());
+                black_box(cop.features().lines().len());
                 black_box(cop.link().step());
             }
             // The framer in arbitrary chunks, both directions, and what is
@@ -262,7 +262,7 @@ fn main() -> ! {
                 let params = any_params();
                 if let Ok(params) = params.validate() {
                     let features = extractor.run(&frame, &params);
-                    black_box(features.lines.len());
+                    black_box(features.lines().len());
                 }
                 black_box(extractor.smoothed());
                 black_box(extractor.mahalanobis());

@@ -85,9 +85,9 @@ pub fn run_core(ex: &mut Extractor, frame: &Frame, params: &Params) -> Extractio
     };
     let f = ex.run(frame, &params);
     Extraction {
-        segments: f.segments.to_vec(),
-        lines: f.lines.to_vec(),
-        corners: f.corners.to_vec(),
+        segments: f.segments().to_vec(),
+        lines: f.lines().to_vec(),
+        corners: f.corners().to_vec(),
     }
 }
 
