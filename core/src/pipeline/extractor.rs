@@ -8,7 +8,7 @@
 //! paper Fig. 10).
 
 use crate::features::{Features, Stats, MAX_WINDOWS};
-use crate::frame::{Frame, Geometry, MAX_BEAMS};
+use crate::frame::{Beam, Frame, Geometry, MAX_BEAMS};
 use crate::params::{Params, ValidParams};
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
@@ -76,30 +76,15 @@ impl Extractor {
         self.len = n;
         self.prepare_bearings(frame.geometry(), n);
         let windows = n.saturating_sub(2).min(MAX_WINDOWS);
-        let beams = frame.beams();
-
-        // §4–5: the scale space.
-        for (s, &r) in self.smoothed.iter_mut().zip(frame.ranges()) {
-            *s = r;
-        }
-        valid_windows(beams, &mut self.window_ok[..windows]);
-        let filter = WindowFilter::new(frame.geometry().step, params.sigma, params.q);
-        for pass in 1..=params.iterations {
-            smoothing_pass(
-                &filter,
-                &self.window_ok[..windows],
-                &mut self.smoothed[..n],
-                &mut self.mahalanobis[..windows],
-            );
-            after_pass(pass, &self.mahalanobis[..windows], &self.smoothed[..n]);
-        }
+        self.scale_space(frame, params, n, windows, &mut after_pass);
 
         // §6: segmentation on D of the last pass.
         let f = &mut self.features;
         f.lines.clear();
         f.corners.clear();
+        let d = &self.mahalanobis[..windows];
         let counts = segment(
-            &self.mahalanobis[..windows],
+            d,
             params.tau,
             params.min_points,
             &mut f.segments,
@@ -107,10 +92,7 @@ impl Extractor {
         );
         let mut stats = Stats {
             valid_beams: frame.valid_count() as u16,
-            invalid_windows: self.mahalanobis[..windows]
-                .iter()
-                .filter(|d| !d.is_finite())
-                .count() as u16,
+            invalid_windows: d.iter().filter(|d| !d.is_finite()).count() as u16,
             short_segments: counts.short_segments,
             segment_overflow: counts.segment_overflow,
             edge_overflow: counts.edge_overflow,
@@ -122,64 +104,55 @@ impl Extractor {
             cos: &self.cos_phi[..n],
             sin: &self.sin_phi[..n],
         };
-        let raw = frame.ranges();
+        let scan = RawScan {
+            bearings,
+            ranges: frame.ranges(),
+            beams: frame.beams(),
+        };
         if params.split_depth > 0 {
-            split_before_reject(bearings, raw, beams, params, &mut f.segments, &mut stats);
+            split_before_reject(
+                bearings,
+                scan.ranges,
+                scan.beams,
+                params,
+                &mut f.segments,
+                &mut stats,
+            );
         }
-        for k in 0..f.segments.len() {
-            let (first, last) = fit_span(&f.segments, k, params.fit_shared_points);
-            let line = match fit_line(bearings, raw, beams, first, last, params.sigma) {
-                Ok(line) => line,
-                Err(_) => {
-                    stats.degenerate_fits = stats.degenerate_fits.saturating_add(1);
-                    continue;
-                }
-            };
-            if !(line.chi2 <= params.max_chi2) {
-                stats.rejected_chi2 = stats.rejected_chi2.saturating_add(1);
-                continue;
-            }
-            // Merge with the previous candidate where §7.6 allows it.
-            if params.merge {
-                if let Some(prev) = f.lines.last() {
-                    if let Some(merged) = try_merge(bearings, raw, beams, prev, &line, params) {
-                        stats.merges = stats.merges.saturating_add(1);
-                        if let Some(slot) = f.lines.last_mut() {
-                            *slot = merged;
-                        }
-                        continue;
-                    }
-                }
-            }
-            if f.lines.push(line).is_err() {
-                stats.line_overflow = stats.line_overflow.saturating_add(1);
-            }
-        }
-        // Length is judged after merging, so that a wall cut by a no-echo
-        // beam is judged whole.
-        let before = f.lines.len();
-        f.lines.retain(|l| l.length() >= params.min_length);
-        stats.rejected_short = (before - f.lines.len()) as u16;
+        fit_lines(f, &scan, params, &mut stats);
 
         // §8: corners between consecutive lines with close facing endpoints.
-        for (i, pair) in f.lines.windows(2).enumerate() {
-            let (l1, l2) = (&pair[0], &pair[1]);
-            let gap_x = l2.endpoints[0][0] - l1.endpoints[1][0];
-            let gap_y = l2.endpoints[0][1] - l1.endpoints[1][1];
-            if !(libm::sqrtf(gap_x * gap_x + gap_y * gap_y) < params.corner_gap) {
-                continue;
-            }
-            match intersect(i as u8, l1, (i + 1) as u8, l2, params.min_corner_angle_deg) {
-                Some(c) => {
-                    if f.corners.push(c).is_err() {
-                        stats.corner_overflow = stats.corner_overflow.saturating_add(1);
-                    }
-                }
-                None => stats.degenerate_corners = stats.degenerate_corners.saturating_add(1),
-            }
-        }
+        find_corners(f, params, &mut stats);
         f.stats = stats;
         &self.features
+    }
+
+    /// §4–5: `params.iterations` smoothing passes over the frame's ranges,
+    /// leaving the smoothed ranges and `D` of the last pass in the buffers.
+    fn scale_space<F>(
+        &mut self,
+        frame: &Frame,
+        params: &Params,
+        n: usize,
+        windows: usize,
+        after_pass: &mut F,
+    ) where
+        F: FnMut(u16, &[f32], &[f32]),
+    {
+        for (s, &r) in self.smoothed.iter_mut().zip(frame.ranges()) {
+            *s = r;
+        }
+        valid_windows(frame.beams(), &mut self.window_ok[..windows]);
+        let filter = WindowFilter::new(frame.geometry().step, params.sigma, params.q);
+        for pass in 1..=params.iterations {
+            smoothing_pass(
+                &filter,
+                &self.window_ok[..windows],
+                &mut self.smoothed[..n],
+                &mut self.mahalanobis[..windows],
+            );
+            after_pass(pass, &self.mahalanobis[..windows], &self.smoothed[..n]);
+        }
     }
 
     /// The features of the last run.
@@ -211,5 +184,73 @@ impl Extractor {
         }
         let _ = n;
         self.geometry = Some(geometry);
+    }
+}
+
+/// The raw ranges of a frame with its bearing tables and beam status (§7
+/// fits the raw, not the smoothed, ranges).
+struct RawScan<'a> {
+    bearings: Bearings<'a>,
+    ranges: &'a [f32],
+    beams: &'a [Beam],
+}
+
+/// §7: a line per segment, χ²-gated, merged with its predecessor where §7.6
+/// allows it, then judged on length (after merging, so that a wall cut by a
+/// no-echo beam is judged whole).
+fn fit_lines(f: &mut Features, scan: &RawScan<'_>, params: &Params, stats: &mut Stats) {
+    let (bearings, raw, beams) = (scan.bearings, scan.ranges, scan.beams);
+    for k in 0..f.segments.len() {
+        let (first, last) = fit_span(&f.segments, k, params.fit_shared_points);
+        let line = match fit_line(bearings, raw, beams, first, last, params.sigma) {
+            Ok(line) => line,
+            Err(_) => {
+                stats.degenerate_fits = stats.degenerate_fits.saturating_add(1);
+                continue;
+            }
+        };
+        if !(line.chi2 <= params.max_chi2) {
+            stats.rejected_chi2 = stats.rejected_chi2.saturating_add(1);
+            continue;
+        }
+        // Merge with the previous candidate where §7.6 allows it.
+        if params.merge {
+            if let Some(prev) = f.lines.last() {
+                if let Some(merged) = try_merge(bearings, raw, beams, prev, &line, params) {
+                    stats.merges = stats.merges.saturating_add(1);
+                    if let Some(slot) = f.lines.last_mut() {
+                        *slot = merged;
+                    }
+                    continue;
+                }
+            }
+        }
+        if f.lines.push(line).is_err() {
+            stats.line_overflow = stats.line_overflow.saturating_add(1);
+        }
+    }
+    let before = f.lines.len();
+    f.lines.retain(|l| l.length() >= params.min_length);
+    stats.rejected_short = (before - f.lines.len()) as u16;
+}
+
+/// §8: a corner for each pair of consecutive lines whose facing endpoints are
+/// closer than `corner_gap`; parallel pairs are counted, not reported.
+fn find_corners(f: &mut Features, params: &Params, stats: &mut Stats) {
+    for (i, pair) in f.lines.windows(2).enumerate() {
+        let (l1, l2) = (&pair[0], &pair[1]);
+        let gap_x = l2.endpoints[0][0] - l1.endpoints[1][0];
+        let gap_y = l2.endpoints[0][1] - l1.endpoints[1][1];
+        if !(libm::sqrtf(gap_x * gap_x + gap_y * gap_y) < params.corner_gap) {
+            continue;
+        }
+        match intersect(i as u8, l1, (i + 1) as u8, l2, params.min_corner_angle_deg) {
+            Some(c) => {
+                if f.corners.push(c).is_err() {
+                    stats.corner_overflow = stats.corner_overflow.saturating_add(1);
+                }
+            }
+            None => stats.degenerate_corners = stats.degenerate_corners.saturating_add(1),
+        }
     }
 }

@@ -69,138 +69,195 @@ pub fn fit_line(
     last: u16,
     sigma: f32,
 ) -> Result<Line, FitError> {
-    let n = ranges
-        .len()
-        .min(beams.len())
-        .min(bearings.cos.len())
-        .min(bearings.sin.len());
-    let lo = first as usize;
-    let hi = (last as usize + 1).min(n);
-    if lo >= hi {
-        return Err(FitError::TooFewPoints);
-    }
-    // The beams `lo..hi` as four slices of one length, indexed from 0
-    // below: the optimiser sees that no index can be out of bounds.
-    let (Some(ranges), Some(beams), Some(cos), Some(sin)) = (
-        ranges.get(lo..hi),
-        beams.get(lo..hi),
-        bearings.cos.get(lo..hi),
-        bearings.sin.get(lo..hi),
-    ) else {
-        return Err(FitError::TooFewPoints); // not reached: hi <= n
-    };
-    let bearings = Bearings { cos, sin };
-    let (lo, hi) = (0, hi - lo);
-    let valid = |j: &usize| beams.get(*j).is_some_and(|b| b.is_valid());
-    let point = |j: usize| (ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]);
-
-    // 1. Total least squares start: centroid and central second moments.
-    let mut m = 0u32;
-    let (mut sx, mut sy) = (0.0f32, 0.0f32);
-    for j in (lo..hi).filter(valid) {
-        let (x, y) = point(j);
-        sx += x;
-        sy += y;
-        m += 1;
-    }
-    if m < 3 {
-        return Err(FitError::TooFewPoints);
-    }
-    let mf = m as f32;
-    let (xm, ym) = (sx / mf, sy / mf);
-    let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
-    for j in (lo..hi).filter(valid) {
-        let (x, y) = point(j);
-        let (dx, dy) = (x - xm, y - ym);
-        sxx += dx * dx;
-        syy += dy * dy;
-        sxy += dx * dy;
-    }
-    let mut alpha = 0.5 * libm::atan2f(-2.0 * sxy, syy - sxx);
-    let mut r = xm * libm::cosf(alpha) + ym * libm::sinf(alpha);
-    if r < 0.0 {
-        r = -r;
-        alpha = wrap_angle(alpha + core::f32::consts::PI);
-    }
-
+    let span = Span::new(bearings, ranges, beams, first, last).ok_or(FitError::TooFewPoints)?;
+    // 1. Total least squares start.
+    let (m, alpha, r) = span.total_least_squares()?;
     // 2. Gauss–Newton in the range direction.
-    for _ in 0..MAX_GN_STEPS {
-        let (ca, sa) = (libm::cosf(alpha), libm::sinf(alpha));
-        let mut jte = [0.0f32; 2];
-        let mut jtj = Sym2::default();
-        for j in (lo..hi).filter(valid) {
-            let (cd, sd) = incidence(bearings, j, ca, sa).ok_or(FitError::Degenerate)?;
-            let inv_c = 1.0 / cd;
-            let e = ranges[j] - r * inv_c;
-            let ja = -r * sd * inv_c * inv_c;
-            let jr = inv_c;
-            jtj.a += ja * ja;
-            jtj.b += ja * jr;
-            jtj.c += jr * jr;
-            jte[0] += ja * e;
-            jte[1] += jr * e;
-        }
-        let inv = jtj.inverse_spd().ok_or(FitError::Degenerate)?;
-        let d_alpha = inv.a * jte[0] + inv.b * jte[1];
-        let d_r = inv.b * jte[0] + inv.c * jte[1];
-        alpha = wrap_angle(alpha + d_alpha);
-        r += d_r;
-        if libm::fabsf(d_alpha) < GN_STEP_TOLERANCE && libm::fabsf(d_r) < GN_STEP_TOLERANCE {
-            break;
-        }
-    }
-    if r < 0.0 {
-        r = -r;
-        alpha = wrap_angle(alpha + core::f32::consts::PI);
-    }
-
+    let (alpha, r) = span.gauss_newton(alpha, r)?;
+    let (alpha, r) = facing_sensor(alpha, r);
     // 3.–4. Covariance and chi2 at the solution.
     let (ca, sa) = (libm::cosf(alpha), libm::sinf(alpha));
-    let mut jtj = Sym2::default();
-    let mut sum_e2 = 0.0f32;
-    for j in (lo..hi).filter(valid) {
-        let (cd, sd) = incidence(bearings, j, ca, sa).ok_or(FitError::Degenerate)?;
-        let inv_c = 1.0 / cd;
-        let e = ranges[j] - r * inv_c;
-        let ja = -r * sd * inv_c * inv_c;
-        jtj.a += ja * ja;
-        jtj.b += ja * inv_c;
-        jtj.c += inv_c * inv_c;
-        sum_e2 += e * e;
-    }
+    let (jtj, sum_e2) = span.normal_matrix_and_residual(ca, sa, r)?;
     let var = sigma * sigma;
     let cov = jtj.inverse_spd().ok_or(FitError::Degenerate)?.scale(var);
-    let chi2 = sum_e2 / (var * (mf - 2.0));
-
+    let chi2 = sum_e2 / (var * (m as f32 - 2.0));
     // 5. Endpoints: first and last valid points projected onto the line.
-    let first_valid = (lo..hi).find(valid).unwrap_or(lo);
-    let last_valid = (lo..hi).rev().find(valid).unwrap_or(lo);
-    let endpoint = |j: usize| {
-        let (Some(&d), Some(&c), Some(&s)) = (ranges.get(j), cos.get(j), sin.get(j)) else {
-            return [0.0; 2]; // not reached: j < hi
-        };
-        let (x, y) = (d * c, d * s);
-        let dist = x * ca + y * sa - r;
-        [x - dist * ca, y - dist * sa]
-    };
     Ok(Line {
         alpha,
         r,
         cov,
         first,
-        last: (first as usize + hi - 1) as u16,
+        last: (first as usize + span.ranges.len() - 1) as u16,
         points: m.min(u16::MAX as u32) as u16,
         chi2,
-        endpoints: [endpoint(first_valid), endpoint(last_valid)],
+        endpoints: span.endpoints(ca, sa, r),
     })
 }
 
-/// `(cos(phi_j − α), sin(phi_j − α))` from the bearing tables, if the beam
-/// meets the line from the front (`cos > MIN_INCIDENCE_COS`).
+/// The beams `first..=last` of a segment as four slices of one length,
+/// indexed from 0: no index below can be out of bounds.
+struct Span<'a> {
+    ranges: &'a [f32],
+    beams: &'a [Beam],
+    cos: &'a [f32],
+    sin: &'a [f32],
+}
+
+impl<'a> Span<'a> {
+    /// The span, or `None` if it holds no beam.
+    fn new(
+        bearings: Bearings<'a>,
+        ranges: &'a [f32],
+        beams: &'a [Beam],
+        first: u16,
+        last: u16,
+    ) -> Option<Self> {
+        let n = ranges
+            .len()
+            .min(beams.len())
+            .min(bearings.cos.len())
+            .min(bearings.sin.len());
+        let lo = first as usize;
+        let hi = (last as usize + 1).min(n);
+        if lo >= hi {
+            return None;
+        }
+        Some(Span {
+            ranges: ranges.get(lo..hi)?,
+            beams: beams.get(lo..hi)?,
+            cos: bearings.cos.get(lo..hi)?,
+            sin: bearings.sin.get(lo..hi)?,
+        })
+    }
+
+    /// `(d_j, cos phi_j, sin phi_j)` of every valid beam, in order.
+    fn valid(&self) -> impl DoubleEndedIterator<Item = (f32, f32, f32)> + '_ {
+        self.ranges
+            .iter()
+            .zip(self.beams)
+            .zip(self.cos.iter().zip(self.sin))
+            .filter(|((_, b), _)| b.is_valid())
+            .map(|((&d, _), (&c, &s))| (d, c, s))
+    }
+
+    /// §7.1: the total-least-squares line through the valid points
+    /// (centroid and central second moments): `(m, α, r)` with `r ≥ 0`.
+    fn total_least_squares(&self) -> Result<(u32, f32, f32), FitError> {
+        let mut m = 0u32;
+        let (mut sx, mut sy) = (0.0f32, 0.0f32);
+        for (d, c, s) in self.valid() {
+            sx += d * c;
+            sy += d * s;
+            m += 1;
+        }
+        if m < 3 {
+            return Err(FitError::TooFewPoints);
+        }
+        let mf = m as f32;
+        let (xm, ym) = (sx / mf, sy / mf);
+        let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
+        for (d, c, s) in self.valid() {
+            let (dx, dy) = (d * c - xm, d * s - ym);
+            sxx += dx * dx;
+            syy += dy * dy;
+            sxy += dx * dy;
+        }
+        let alpha = 0.5 * libm::atan2f(-2.0 * sxy, syy - sxx);
+        let r = xm * libm::cosf(alpha) + ym * libm::sinf(alpha);
+        let (alpha, r) = facing_sensor(alpha, r);
+        Ok((m, alpha, r))
+    }
+
+    /// §7.2: at most [`MAX_GN_STEPS`] Gauss–Newton steps on the range model
+    /// `d_j = r / cos(phi_j − α)`, from `(alpha, r)`.
+    fn gauss_newton(&self, mut alpha: f32, mut r: f32) -> Result<(f32, f32), FitError> {
+        for _ in 0..MAX_GN_STEPS {
+            let (ca, sa) = (libm::cosf(alpha), libm::sinf(alpha));
+            let mut jte = [0.0f32; 2];
+            let mut jtj = Sym2::default();
+            for (d, c, s) in self.valid() {
+                let (cd, sd) = incidence(c, s, ca, sa).ok_or(FitError::Degenerate)?;
+                let inv_c = 1.0 / cd;
+                let e = d - r * inv_c;
+                let ja = -r * sd * inv_c * inv_c;
+                let jr = inv_c;
+                jtj.a += ja * ja;
+                jtj.b += ja * jr;
+                jtj.c += jr * jr;
+                jte[0] += ja * e;
+                jte[1] += jr * e;
+            }
+            let inv = jtj.inverse_spd().ok_or(FitError::Degenerate)?;
+            let d_alpha = inv.a * jte[0] + inv.b * jte[1];
+            let d_r = inv.b * jte[0] + inv.c * jte[1];
+            alpha = wrap_angle(alpha + d_alpha);
+            r += d_r;
+            if libm::fabsf(d_alpha) < GN_STEP_TOLERANCE && libm::fabsf(d_r) < GN_STEP_TOLERANCE {
+                break;
+            }
+        }
+        Ok((alpha, r))
+    }
+
+    /// §7.3–7.4: `JᵀJ` and `Σ e²` at the solution `(cos α, sin α, r)`.
+    fn normal_matrix_and_residual(
+        &self,
+        ca: f32,
+        sa: f32,
+        r: f32,
+    ) -> Result<(Sym2, f32), FitError> {
+        let mut jtj = Sym2::default();
+        let mut sum_e2 = 0.0f32;
+        for (d, c, s) in self.valid() {
+            let (cd, sd) = incidence(c, s, ca, sa).ok_or(FitError::Degenerate)?;
+            let inv_c = 1.0 / cd;
+            let e = d - r * inv_c;
+            let ja = -r * sd * inv_c * inv_c;
+            jtj.a += ja * ja;
+            jtj.b += ja * inv_c;
+            jtj.c += inv_c * inv_c;
+            sum_e2 += e * e;
+        }
+        Ok((jtj, sum_e2))
+    }
+
+    /// §7.5: the first and last valid points projected onto the line
+    /// (the first beam's point if none is valid).
+    fn endpoints(&self, ca: f32, sa: f32, r: f32) -> [[f32; 2]; 2] {
+        let project = |(d, c, s): (f32, f32, f32)| {
+            let (x, y) = (d * c, d * s);
+            let dist = x * ca + y * sa - r;
+            [x - dist * ca, y - dist * sa]
+        };
+        let fallback = || {
+            let first = (self.ranges.first(), self.cos.first(), self.sin.first());
+            match first {
+                (Some(&d), Some(&c), Some(&s)) => project((d, c, s)),
+                _ => [0.0; 2],
+            }
+        };
+        let first = self.valid().next().map_or_else(fallback, project);
+        let last = self.valid().next_back().map_or_else(fallback, project);
+        [first, last]
+    }
+}
+
+/// The same line with `r ≥ 0`: a negative `r` flips the normal by π.
 #[inline]
-fn incidence(b: Bearings<'_>, j: usize, ca: f32, sa: f32) -> Option<(f32, f32)> {
-    let cd = b.cos[j] * ca + b.sin[j] * sa;
-    let sd = b.sin[j] * ca - b.cos[j] * sa;
+fn facing_sensor(alpha: f32, r: f32) -> (f32, f32) {
+    if r < 0.0 {
+        (wrap_angle(alpha + core::f32::consts::PI), -r)
+    } else {
+        (alpha, r)
+    }
+}
+
+/// `(cos(phi_j − α), sin(phi_j − α))` from a beam's `cos phi_j`, `sin phi_j`,
+/// if the beam meets the line from the front (`cos > MIN_INCIDENCE_COS`).
+#[inline]
+fn incidence(cos_phi: f32, sin_phi: f32, ca: f32, sa: f32) -> Option<(f32, f32)> {
+    let cd = cos_phi * ca + sin_phi * sa;
+    let sd = sin_phi * ca - cos_phi * sa;
     if cd > MIN_INCIDENCE_COS {
         Some((cd, sd))
     } else {

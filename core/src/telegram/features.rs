@@ -181,143 +181,152 @@ pub fn emit_features<E, F>(
     params: &EchoedParams,
     features: &Features,
     address: u8,
-    mut send: F,
+    send: F,
 ) -> Result<u32, E>
 where
     F: FnMut(&[u8]) -> Result<(), E>,
 {
-    let mut buf = [0u8; MAX_TELEGRAM_LEN];
-    let addr = REPLY_ADDRESS_BIT | address;
-    let mut sent = 0u32;
-    let mut out = |n: Result<usize, EmitError>, buf: &[u8]| -> Result<(), E> {
-        // Every length below is within MAX_LEN by construction; an emit
-        // error would be a bug in this module and sends nothing.
-        if let Ok(n) = n {
-            if let Some(t) = buf.get(..n) {
-                send(t)?;
-                sent = sent.wrapping_add(1);
-            }
-        }
-        Ok(())
+    let mut out = Sender {
+        buf: [0u8; MAX_TELEGRAM_LEN],
+        address: REPLY_ADDRESS_BIT | address,
+        scan_counter,
+        sent: 0,
+        send,
     };
-
     // D4: counter, count (u8), count × (first u16, last u16).
     let segs = &features.segments;
-    let n = emit_telegram_with(
-        &mut buf,
-        addr,
-        CMD_SEGMENTS,
-        5 + 4 * segs.len(),
-        Some(DEFAULT_STATUS),
-        |d| {
-            let mut w = Writer::new(d);
-            w.u32(scan_counter);
-            w.u8(segs.len() as u8);
-            for s in segs {
-                w.u16(s.first);
-                w.u16(s.last);
-            }
-        },
-    );
-    out(n, &buf)?;
-
+    out.telegram(CMD_SEGMENTS, 5 + 4 * segs.len(), |w| {
+        w.u8(segs.len() as u8);
+        for s in segs {
+            w.u16(s.first);
+            w.u16(s.last);
+        }
+    })?;
     // D3: counter, count (u16), count × beam (u16).
     let edges = &features.edges;
-    let n = emit_telegram_with(
-        &mut buf,
-        addr,
-        CMD_EDGES,
-        6 + 2 * edges.len(),
-        Some(DEFAULT_STATUS),
-        |d| {
-            let mut w = Writer::new(d);
-            w.u32(scan_counter);
-            w.u16(edges.len() as u16);
-            for &e in edges {
-                w.u16(e);
-            }
-        },
-    );
-    out(n, &buf)?;
+    out.telegram(CMD_EDGES, 6 + 2 * edges.len(), |w| {
+        w.u16(edges.len() as u16);
+        for &e in edges {
+            w.u16(e);
+        }
+    })?;
+    // D1: at least one telegram, so an empty list is explicit.
+    let lines = Parts {
+        command: CMD_LINES,
+        per_telegram: LINES_PER_TELEGRAM,
+        record_len: LINE_RECORD_LEN,
+    };
+    out.parts(&lines, &features.lines, 1, encode_line)?;
+    // D2: none if there are no corners.
+    let corners = Parts {
+        command: CMD_CORNERS,
+        per_telegram: CORNERS_PER_TELEGRAM,
+        record_len: CORNER_RECORD_LEN,
+    };
+    out.parts(&corners, &features.corners, 0, encode_corner)?;
+    // D0: the summary, last.
+    out.telegram(CMD_SUMMARY, SUMMARY_LEN, |w| {
+        encode_summary(w, beams, params, features)
+    })?;
+    Ok(out.sent)
+}
 
-    // D1: counter, part, parts, count, count × line record. At least one
-    // telegram, so an empty list is explicit.
-    let lines = &features.lines;
-    let parts = lines.len().div_ceil(LINES_PER_TELEGRAM).max(1);
-    for part in 0..parts {
-        let chunk = lines
-            .get(part * LINES_PER_TELEGRAM..)
-            .map_or(&[][..], |rest| &rest[..rest.len().min(LINES_PER_TELEGRAM)]);
-        let len = 7 + LINE_RECORD_LEN * chunk.len();
-        let n = emit_telegram_with(&mut buf, addr, CMD_LINES, len, Some(DEFAULT_STATUS), |d| {
-            let mut w = Writer::new(d);
-            w.u32(scan_counter);
-            w.u8(part as u8);
-            w.u8(parts as u8);
-            w.u8(chunk.len() as u8);
-            for l in chunk {
-                encode_line(&mut w, l);
-            }
-        });
-        out(n, &buf)?;
-    }
+/// The telegrams of one scan as they are built: one buffer, the reply
+/// address, the scan counter that opens every payload, and the count sent.
+struct Sender<F> {
+    buf: [u8; MAX_TELEGRAM_LEN],
+    address: u8,
+    scan_counter: u32,
+    sent: u32,
+    send: F,
+}
 
-    // D2: counter, part, parts, count, count × corner record; none if no corners.
-    let corners = &features.corners;
-    let parts = corners.len().div_ceil(CORNERS_PER_TELEGRAM);
-    for part in 0..parts {
-        let chunk = corners
-            .get(part * CORNERS_PER_TELEGRAM..)
-            .map_or(&[][..], |rest| {
-                &rest[..rest.len().min(CORNERS_PER_TELEGRAM)]
-            });
-        let len = 7 + CORNER_RECORD_LEN * chunk.len();
+/// How a list of records is spread over telegrams (`D1`, `D2`).
+struct Parts {
+    command: u8,
+    per_telegram: usize,
+    record_len: usize,
+}
+
+impl<F> Sender<F> {
+    /// Build one telegram of `command` whose payload is the scan counter
+    /// and then what `body` writes (`len` bytes in all), and send it.
+    fn telegram<E>(
+        &mut self,
+        command: u8,
+        len: usize,
+        body: impl FnOnce(&mut Writer<'_>),
+    ) -> Result<(), E>
+    where
+        F: FnMut(&[u8]) -> Result<(), E>,
+    {
+        let counter = self.scan_counter;
         let n = emit_telegram_with(
-            &mut buf,
-            addr,
-            CMD_CORNERS,
+            &mut self.buf,
+            self.address,
+            command,
             len,
             Some(DEFAULT_STATUS),
             |d| {
                 let mut w = Writer::new(d);
-                w.u32(scan_counter);
-                w.u8(part as u8);
-                w.u8(parts as u8);
-                w.u8(chunk.len() as u8);
-                for c in chunk {
-                    encode_corner(&mut w, c);
-                }
+                w.u32(counter);
+                body(&mut w);
             },
         );
-        out(n, &buf)?;
+        // Every length here is within MAX_LEN by construction; an emit
+        // error would be a bug in this module and sends nothing.
+        if let Some(t) = n.ok().and_then(|n| self.buf.get(..n)) {
+            (self.send)(t)?;
+            self.sent = self.sent.wrapping_add(1);
+        }
+        Ok(())
     }
 
-    // D0: the summary, last.
-    let n = emit_telegram_with(
-        &mut buf,
-        addr,
-        CMD_SUMMARY,
-        SUMMARY_LEN,
-        Some(DEFAULT_STATUS),
-        |d| {
-            let mut w = Writer::new(d);
-            w.u32(scan_counter);
-            w.u16(beams);
-            w.u8(segs.len() as u8);
-            w.u8(lines.len() as u8);
-            w.u8(corners.len() as u8);
-            w.u16(edges.len() as u16);
-            for (_, get) in Stats::FIELDS.iter().take(Stats::D0_FIELDS) {
-                w.u16(get(&features.stats));
-            }
-            w.u16(params.iterations);
-            w.f32(params.sigma);
-            w.f32(params.q);
-            w.f32(params.tau);
-        },
-    );
-    out(n, &buf)?;
-    Ok(sent)
+    /// `items` in telegrams of at most `parts.per_telegram` records (at
+    /// least `min_parts` telegrams): counter, part, parts, count, records.
+    fn parts<E, T>(
+        &mut self,
+        parts: &Parts,
+        items: &[T],
+        min_parts: usize,
+        encode: fn(&mut Writer<'_>, &T),
+    ) -> Result<(), E>
+    where
+        F: FnMut(&[u8]) -> Result<(), E>,
+    {
+        let count = items.len().div_ceil(parts.per_telegram).max(min_parts);
+        for part in 0..count {
+            let chunk = items
+                .get(part * parts.per_telegram..)
+                .map_or(&[][..], |rest| &rest[..rest.len().min(parts.per_telegram)]);
+            self.telegram(parts.command, 7 + parts.record_len * chunk.len(), |w| {
+                w.u8(part as u8);
+                w.u8(count as u8);
+                w.u8(chunk.len() as u8);
+                for item in chunk {
+                    encode(w, item);
+                }
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// `D0` after the counter: beams, the four counts, the `D0` stats words and
+/// the echoed parameters.
+fn encode_summary(w: &mut Writer<'_>, beams: u16, params: &EchoedParams, features: &Features) {
+    w.u16(beams);
+    w.u8(features.segments.len() as u8);
+    w.u8(features.lines.len() as u8);
+    w.u8(features.corners.len() as u8);
+    w.u16(features.edges.len() as u16);
+    for (_, get) in Stats::FIELDS.iter().take(Stats::D0_FIELDS) {
+        w.u16(get(&features.stats));
+    }
+    w.u16(params.iterations);
+    w.f32(params.sigma);
+    w.f32(params.q);
+    w.f32(params.tau);
 }
 
 /// Line record, 46 bytes: α, r, cov αα, αr, rr, chi2, x₀, y₀, x₁, y₁
@@ -485,77 +494,40 @@ impl FeatureAssembler {
         }
         let f = &mut self.features;
         match command {
-            CMD_SEGMENTS => {
-                let n = r.u8().ok_or(malformed)?;
-                for _ in 0..n {
-                    let s = Segment {
-                        first: r.u16().ok_or(malformed)?,
-                        last: r.u16().ok_or(malformed)?,
-                    };
-                    f.segments.push(s).map_err(|_| FeatureError::Overflow)?;
-                }
-            }
-            CMD_EDGES => {
-                let n = r.u16().ok_or(malformed)?;
-                for _ in 0..n {
-                    f.edges
-                        .push(r.u16().ok_or(malformed)?)
-                        .map_err(|_| FeatureError::Overflow)?;
-                }
-            }
-            CMD_LINES => {
-                let (_part, _parts, n) = (r.u8(), r.u8(), r.u8().ok_or(malformed)?);
-                for _ in 0..n {
-                    let l = decode_line(&mut r).ok_or(malformed)?;
-                    f.lines.push(l).map_err(|_| FeatureError::Overflow)?;
-                }
-            }
-            CMD_CORNERS => {
-                let (_part, _parts, n) = (r.u8(), r.u8(), r.u8().ok_or(malformed)?);
-                for _ in 0..n {
-                    let c = decode_corner(&mut r).ok_or(malformed)?;
-                    f.corners.push(c).map_err(|_| FeatureError::Overflow)?;
-                }
-            }
+            CMD_SEGMENTS => read_records(&mut r, malformed, |r| {
+                let n = r.u8()?;
+                Some((usize::from(n), |r: &mut Reader<'_>| {
+                    let (first, last) = (r.u16()?, r.u16()?);
+                    Some(f.segments.push(Segment { first, last }).is_ok())
+                }))
+            })?,
+            CMD_EDGES => read_records(&mut r, malformed, |r| {
+                let n = r.u16()?;
+                Some((usize::from(n), |r: &mut Reader<'_>| {
+                    Some(f.edges.push(r.u16()?).is_ok())
+                }))
+            })?,
+            CMD_LINES => read_records(&mut r, malformed, |r| {
+                let (_part, _parts, n) = (r.u8(), r.u8(), r.u8()?);
+                Some((usize::from(n), |r: &mut Reader<'_>| {
+                    Some(f.lines.push(decode_line(r)?).is_ok())
+                }))
+            })?,
+            CMD_CORNERS => read_records(&mut r, malformed, |r| {
+                let (_part, _parts, n) = (r.u8(), r.u8(), r.u8()?);
+                Some((usize::from(n), |r: &mut Reader<'_>| {
+                    Some(f.corners.push(decode_corner(r)?).is_ok())
+                }))
+            })?,
             _ => {
                 // CMD_SUMMARY
-                let beams = r.u16().ok_or(malformed)?;
-                let counts = [
-                    u16::from(r.u8().ok_or(malformed)?),
-                    u16::from(r.u8().ok_or(malformed)?),
-                    u16::from(r.u8().ok_or(malformed)?),
-                    r.u16().ok_or(malformed)?,
-                ];
-                let mut st = [0u16; Stats::D0_FIELDS];
-                for v in st.iter_mut() {
-                    *v = r.u16().ok_or(malformed)?;
-                }
-                let params = EchoedParams {
-                    iterations: r.u16().ok_or(malformed)?,
-                    sigma: r.f32().ok_or(malformed)?,
-                    q: r.f32().ok_or(malformed)?,
-                    tau: r.f32().ok_or(malformed)?,
-                };
-                f.stats = Stats::from_fields(&st);
+                let (summary, complete) = read_summary(&mut r, counter, f).ok_or(malformed)?;
                 self.current = None;
-                let got = [
-                    f.segments.len() as u16,
-                    f.lines.len() as u16,
-                    f.corners.len() as u16,
-                    f.edges.len() as u16,
-                ];
-                if got != counts || !r.is_empty() {
+                if !complete {
                     return Err(FeatureError::Incomplete {
                         scan_counter: counter,
                     });
                 }
-                let summary = Summary {
-                    scan_counter: counter,
-                    beams,
-                    counts,
-                    stats: f.stats,
-                    params,
-                };
                 return Ok(Assembled::Complete(summary, &self.features));
             }
         }
@@ -580,6 +552,65 @@ impl FeatureAssembler {
         f.corners.clear();
         f.stats = Stats::default();
     }
+}
+
+/// Read a record list: `header` reads the count and gives a reader of one
+/// record that stores it (`Some(false)` when the list is full). A short
+/// telegram is `malformed`; a full list is [`FeatureError::Overflow`].
+fn read_records<'r, H, R>(
+    r: &mut Reader<'r>,
+    malformed: FeatureError,
+    header: H,
+) -> Result<(), FeatureError>
+where
+    H: FnOnce(&mut Reader<'r>) -> Option<(usize, R)>,
+    R: FnMut(&mut Reader<'r>) -> Option<bool>,
+{
+    let (n, mut record) = header(r).ok_or(malformed)?;
+    for _ in 0..n {
+        if !record(r).ok_or(malformed)? {
+            return Err(FeatureError::Overflow);
+        }
+    }
+    Ok(())
+}
+
+/// The `D0` payload after the counter: sets `f`'s stats and returns the
+/// summary and whether the counts match what was assembled (and nothing
+/// follows). `None` if the telegram is short.
+fn read_summary(r: &mut Reader<'_>, counter: u32, f: &mut Features) -> Option<(Summary, bool)> {
+    let beams = r.u16()?;
+    let counts = [
+        u16::from(r.u8()?),
+        u16::from(r.u8()?),
+        u16::from(r.u8()?),
+        r.u16()?,
+    ];
+    let mut st = [0u16; Stats::D0_FIELDS];
+    for v in st.iter_mut() {
+        *v = r.u16()?;
+    }
+    let params = EchoedParams {
+        iterations: r.u16()?,
+        sigma: r.f32()?,
+        q: r.f32()?,
+        tau: r.f32()?,
+    };
+    f.stats = Stats::from_fields(&st);
+    let got = [
+        f.segments.len() as u16,
+        f.lines.len() as u16,
+        f.corners.len() as u16,
+        f.edges.len() as u16,
+    ];
+    let summary = Summary {
+        scan_counter: counter,
+        beams,
+        counts,
+        stats: f.stats,
+        params,
+    };
+    Some((summary, got == counts && r.is_empty()))
 }
 
 // Compile-time checks that the largest telegrams fit the LMS framing.
