@@ -98,12 +98,7 @@ defmt::timestamp!("{=u64:us}", clock::now_us());
 
 #[entry]
 fn main() -> ! {
-    let Some(board::Board {
-        mut host,
-        mut sensor,
-        mut control,
-    }) = board::init()
-    else {
+    let Some(mut board) = board::init() else {
         defmt::panic!("board::init called twice");
     };
     let app = init_app();
@@ -112,86 +107,116 @@ fn main() -> ! {
     defmt::info!(
         "lms-firmware {=str} ready: host=USART1 (rx queue {=usize} B), sensor=USART2 (rx queue {=usize} B), control=USART3; start-up stack peak {=u32} B",
         env!("CARGO_PKG_VERSION"),
-        host.rx_capacity(),
-        sensor.rx_capacity(),
+        board.host.rx_capacity(),
+        board.sensor.rx_capacity(),
         boot_stack.peak
     );
-
-    let mut scans: u32 = 0;
-    let mut sensor_losses_seen = 0;
-    let mut step = None;
+    let mut watch = Watch::default();
     loop {
-        let now_us = clock::now_us();
-        // `scan_begin` opens every poll, `scan_end` closes only a poll that
-        // processed a scan: an instruction counter that measures from the
-        // last begin to each end sees exactly the polls that carried scans.
-        board::scan_begin();
-        match app.poll(&mut sensor, &mut host, now_us) {
-            Ok(outcome) => {
-                if outcome.scans > 0 {
-                    board::scan_end();
-                    scans = scans.wrapping_add(outcome.scans);
-                }
-                if let Some(baud) = outcome.sensor_baud {
-                    defmt::info!("sensor line to {=u32} Bd", baud.bits_per_second());
-                    sensor.set_baud(baud.bits_per_second());
-                }
-                if let Some(baud) = outcome.host_baud {
-                    defmt::info!("host line to {=u32} Bd", baud.bits_per_second());
-                    host.set_baud(baud.bits_per_second());
-                }
-            }
-            Err(PollError::Sensor(never) | PollError::Host(never)) => match never {},
-        }
-        let losses = sensor.rx_counts().lost();
-        if losses != sensor_losses_seen {
-            sensor_losses_seen = losses;
+        poll(app, &mut board, &mut watch);
+        watch.sensor_queue(app, &board);
+        watch.bring_up(app);
+        serve_console(app, &mut board, &watch);
+        sleep_until_input(&board);
+    }
+}
+
+/// What the loop remembers between rounds: scans processed, the sensor
+/// queue's losses and the bring-up step last logged.
+#[derive(Default)]
+struct Watch {
+    scans: u32,
+    sensor_losses_seen: u32,
+    step: Option<lms_core::device::coprocessor::Step>,
+}
+
+/// One poll of the application; switches a UART when it asks.
+///
+/// `scan_begin` opens every poll, `scan_end` closes only a poll that
+/// processed a scan: an instruction counter that measures from the last
+/// begin to each end sees exactly the polls that carried scans.
+fn poll(app: &mut app::App, board: &mut board::Board, watch: &mut Watch) {
+    board::scan_begin();
+    let outcome = match app.poll(&mut board.sensor, &mut board.host, clock::now_us()) {
+        Ok(outcome) => outcome,
+        Err(PollError::Sensor(never) | PollError::Host(never)) => match never {},
+    };
+    if outcome.scans > 0 {
+        board::scan_end();
+        watch.scans = watch.scans.wrapping_add(outcome.scans);
+    }
+    if let Some(baud) = outcome.sensor_baud {
+        defmt::info!("sensor line to {=u32} Bd", baud.bits_per_second());
+        board.sensor.set_baud(baud.bits_per_second());
+    }
+    if let Some(baud) = outcome.host_baud {
+        defmt::info!("host line to {=u32} Bd", baud.bits_per_second());
+        board.host.set_baud(baud.bits_per_second());
+    }
+}
+
+impl Watch {
+    /// Count (once) bytes the sensor receive queue lost.
+    fn sensor_queue(&mut self, app: &mut app::App, board: &board::Board) {
+        let losses = board.sensor.rx_counts().lost();
+        if losses != self.sensor_losses_seen {
+            self.sensor_losses_seen = losses;
             defmt::warn!("sensor receive queue lost bytes ({=u32} so far)", losses);
             app.note_sensor_overflow();
         }
+    }
+
+    /// Log each new sensor bring-up step.
+    fn bring_up(&mut self, app: &app::App) {
         let now_step = app::step(app);
-        if now_step != step {
-            step = now_step;
-            if let Some(s) = step {
+        if now_step != self.step {
+            self.step = now_step;
+            if let Some(s) = self.step {
                 defmt::info!("sensor bring-up: {}", s);
             }
         }
+    }
+}
 
-        let report = || {
-            Report::collect(
-                clock::now_us(),
-                scans,
-                app.counters(),
-                host.rx_counts(),
-                sensor.rx_counts(),
-            )
-        };
-        if let Some(command) = control.try_read().and_then(Command::from_byte) {
-            let r = report();
-            defmt::info!("{}", r);
-            r.write_line(&mut control);
-            if command == Command::Quit {
-                defmt::info!("exit on console command");
-                semihosting::process::exit(EXIT_SUCCESS);
-            }
-        }
-        if cfg!(feature = "exit-after-scans") && scans >= EXIT_AFTER_SCANS {
-            let r = report();
-            defmt::info!("{}", r);
-            r.write_line(&mut control);
-            defmt::info!("exit after {=u32} scans", scans);
+/// Answer a console command with the counters (and stop on `q`); with
+/// `exit-after-scans`, report and stop after [`EXIT_AFTER_SCANS`] scans.
+fn serve_console(app: &app::App, board: &mut board::Board, watch: &Watch) {
+    let report = |board: &board::Board| {
+        Report::collect(
+            clock::now_us(),
+            watch.scans,
+            app.counters(),
+            board.host.rx_counts(),
+            board.sensor.rx_counts(),
+        )
+    };
+    if let Some(command) = board.control.try_read().and_then(Command::from_byte) {
+        let r = report(board);
+        defmt::info!("{}", r);
+        r.write_line(&mut board.control);
+        if command == Command::Quit {
+            defmt::info!("exit on console command");
             semihosting::process::exit(EXIT_SUCCESS);
         }
-
-        // Sleep until the next interrupt (at the latest the next SysTick,
-        // 1 ms) unless bytes are already waiting. Interrupts are masked
-        // while deciding, so one that arrives in between still wakes WFI.
-        critical_section::with(|_| {
-            if host.rx_pending() == 0 && sensor.rx_pending() == 0 {
-                cortex_m::asm::wfi();
-            }
-        });
     }
+    if cfg!(feature = "exit-after-scans") && watch.scans >= EXIT_AFTER_SCANS {
+        let r = report(board);
+        defmt::info!("{}", r);
+        r.write_line(&mut board.control);
+        defmt::info!("exit after {=u32} scans", watch.scans);
+        semihosting::process::exit(EXIT_SUCCESS);
+    }
+}
+
+/// Sleep until the next interrupt (at the latest the next SysTick, 1 ms)
+/// unless bytes are already waiting. Interrupts are masked while deciding,
+/// so one that arrives in between still wakes WFI.
+fn sleep_until_input(board: &board::Board) {
+    critical_section::with(|_| {
+        if board.host.rx_pending() == 0 && board.sensor.rx_pending() == 0 {
+            cortex_m::asm::wfi();
+        }
+    });
 }
 
 /// Take the application out of its static and switch it on.

@@ -37,7 +37,7 @@ use cortex_m_rt::entry;
 use embedded_io::{ErrorType, Read, ReadReady, Write};
 
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
-use lms_core::device::emulator::{Emulator, FnSource, Settings};
+use lms_core::device::emulator::{Emulator, FnSource, ScanSource, Settings};
 use lms_core::frame::MAX_BEAMS;
 use lms_core::telegram::features::{emit_features, EchoedParams, FeatureAssembler};
 use lms_core::telegram::{
@@ -148,147 +148,168 @@ fn main() -> ! {
         let input = bytes.get(..len).unwrap_or_default();
         let now_us = black_box(0u64);
         match black_box(0u8) {
-            // The co-processor, exactly as the firmware's loop calls it.
-            0 => {
-                let _ = black_box(cop.poll(&mut sensor, &mut host, now_us));
-                if black_box(false) {
-                    cop.note_sensor_overflow();
-                }
-                black_box(cop.counters());
-                black_box(cop.features().lines().len());
-                black_box(cop.link().step());
-            }
-            // The framer in arbitrary chunks, both directions, and what is
-            // done with its telegrams.
+            0 => reach_coprocessor(&mut cop, &mut sensor, &mut host, now_us),
             1 => {
                 let f = if black_box(false) {
                     &mut host_framer
                 } else {
                     &mut framer
                 };
-                f.set_handshake(black_box(Handshake::Expected));
-                let mut rest = input;
-                loop {
-                    let fed = f.feed(rest);
-                    rest = fed.remaining;
-                    match fed.event {
-                        Some(Event::Telegram(t)) => {
-                            let _ = black_box(Request::parse(&t));
-                            let _ = black_box(Reply::parse(&t));
-                            if let Ok(view) = MeasuredView::parse(&t) {
-                                let _ =
-                                    black_box(view.to_frame_into(RangeBits::Bits13, &mut frame));
-                                let _ = black_box(view.to_frame(RangeBits::Bits15));
-                                black_box(view.to_values(black_box(0x10)));
-                            }
-                            let _ = black_box(MeasuredValues::parse(&t));
-                            if let Ok(a) = assembler.push(&t) {
-                                black_box(&a);
-                            }
-                        }
-                        Some(e) => {
-                            black_box(e);
-                        }
-                        None => break,
-                    }
-                }
-                if black_box(false) {
-                    black_box(f.abandon());
-                }
-                if black_box(false) {
-                    black_box(f.discard());
-                }
-                black_box(f.stats());
+                reach_framer(f, input, &mut assembler, &mut frame);
             }
-            // Parsers and emitters on bytes that did not come through the
-            // framer (checked and unchecked views).
-            2 => {
-                let direction = if black_box(false) {
-                    Direction::HostToSensor
-                } else {
-                    Direction::SensorToHost
-                };
-                let t = Telegram::new_unchecked(input, direction);
-                let _ = black_box(Telegram::new_checked(input, direction));
-                black_box((t.command(), t.data(), t.status(), t.payload(), t.crc()));
-                black_box(t.compute_crc());
-                if let Ok(r) = Request::parse(&t) {
-                    let _ = black_box(r.emit(black_box(0), &mut out));
+            2 => reach_parsers(input, &mut out, &mut assembler),
+            3 => reach_pipeline(&mut extractor, &mut frame, &mut host),
+            _ => reach_emulator(&mut emulator, input, &mut out, now_us),
+        }
+    }
+}
+
+/// The co-processor, exactly as the firmware's loop calls it.
+fn reach_coprocessor(
+    cop: &mut CoProcessor,
+    sensor: &mut OpaquePort,
+    host: &mut OpaquePort,
+    now_us: u64,
+) {
+    let _ = black_box(cop.poll(sensor, host, now_us));
+    if black_box(false) {
+        cop.note_sensor_overflow();
+    }
+    black_box(cop.counters());
+    black_box(cop.features().lines().len());
+    black_box(cop.link().step());
+}
+
+/// The framer in arbitrary chunks, both directions, and what is done with
+/// its telegrams.
+fn reach_framer(f: &mut Framer, input: &[u8], assembler: &mut FeatureAssembler, frame: &mut Frame) {
+    f.set_handshake(black_box(Handshake::Expected));
+    let mut rest = input;
+    loop {
+        let fed = f.feed(rest);
+        rest = fed.remaining;
+        match fed.event {
+            Some(Event::Telegram(t)) => {
+                let _ = black_box(Request::parse(&t));
+                let _ = black_box(Reply::parse(&t));
+                if let Ok(view) = MeasuredView::parse(&t) {
+                    let _ = black_box(view.to_frame_into(RangeBits::Bits13, frame));
+                    let _ = black_box(view.to_frame(RangeBits::Bits15));
+                    black_box(view.to_values(black_box(0x10)));
                 }
-                if let Ok(r) = Reply::parse(&t) {
-                    let _ = black_box(r.emit(black_box(0), black_box(0x10), &mut out));
-                }
-                if let Ok(v) = MeasuredView::new(input) {
-                    let _ = black_box(v.to_frame(RangeBits::Bits14));
-                }
-                if let Some(block) = StatusBlock::from_slice(input) {
-                    black_box((block.fields(), block.variant(), block.baud(), block.units()));
-                }
-                if let Some(config) = Config::from_slice(input) {
-                    black_box((config.blanking(), config.units_code()));
-                }
+                let _ = black_box(MeasuredValues::parse(&t));
                 if let Ok(a) = assembler.push(&t) {
                     black_box(&a);
                 }
             }
-            // The pipeline on any frame and any parameters.
-            3 => {
-                let geometry = Geometry {
-                    first_bearing: any_f32(),
-                    step: any_f32(),
-                };
-                let n = black_box(MAX_BEAMS);
-                if let Ok(mut f) = Frame::new(geometry, n) {
-                    for j in 0..black_box(n) {
-                        if black_box(false) {
-                            f.set_invalid(j, Invalid::OtherCode(black_box(0)));
-                        } else {
-                            f.set_metres(j, any_f32());
-                        }
-                    }
-                    frame = f;
-                }
-                let mut ranges = [0.0f32; MAX_BEAMS];
-                black_box(&mut ranges);
-                if let Ok(f) = Frame::from_metres(geometry, ranges.get(..n).unwrap_or_default()) {
-                    black_box(f.valid_count());
-                }
-                black_box(MeasuredValues::from_frame(
-                    &frame,
-                    Unit::Millimetre,
-                    RangeBits::Bits14,
-                    black_box(0x10),
-                ));
-                let params = any_params();
-                if let Ok(params) = params.validate() {
-                    let features = extractor.run(&frame, &params);
-                    black_box(features.lines().len());
-                }
-                black_box(extractor.smoothed());
-                black_box(extractor.mahalanobis());
-                let _ = emit_features(
-                    black_box(0),
-                    black_box(0),
-                    &EchoedParams::from(&params),
-                    extractor.features(),
-                    black_box(0),
-                    |t| host.write_all(t),
-                );
+            Some(e) => {
+                black_box(e);
             }
-            // The LMS emulator fed any host bytes at any times.
-            _ => {
-                emulator.receive(now_us, input);
-                let n = emulator.transmit(black_box(0), &mut out);
-                black_box(out.get(..n));
-                while let Some(e) = emulator.next_event() {
-                    black_box(e);
-                }
-                black_box(emulator.next_wakeup_us());
-                if black_box(false) {
-                    emulator.power_on(now_us);
-                }
+            None => break,
+        }
+    }
+    if black_box(false) {
+        black_box(f.abandon());
+    }
+    if black_box(false) {
+        black_box(f.discard());
+    }
+    black_box(f.stats());
+}
+
+/// Parsers and emitters on bytes that did not come through the framer
+/// (checked and unchecked views).
+fn reach_parsers(input: &[u8], out: &mut [u8], assembler: &mut FeatureAssembler) {
+    let direction = if black_box(false) {
+        Direction::HostToSensor
+    } else {
+        Direction::SensorToHost
+    };
+    let t = Telegram::new_unchecked(input, direction);
+    let _ = black_box(Telegram::new_checked(input, direction));
+    black_box((t.command(), t.data(), t.status(), t.payload(), t.crc()));
+    black_box(t.compute_crc());
+    if let Ok(r) = Request::parse(&t) {
+        let _ = black_box(r.emit(black_box(0), out));
+    }
+    if let Ok(r) = Reply::parse(&t) {
+        let _ = black_box(r.emit(black_box(0), black_box(0x10), out));
+    }
+    if let Ok(v) = MeasuredView::new(input) {
+        let _ = black_box(v.to_frame(RangeBits::Bits14));
+    }
+    if let Some(block) = StatusBlock::from_slice(input) {
+        black_box((block.fields(), block.variant(), block.baud(), block.units()));
+    }
+    if let Some(config) = Config::from_slice(input) {
+        black_box((config.blanking(), config.units_code()));
+    }
+    if let Ok(a) = assembler.push(&t) {
+        black_box(&a);
+    }
+}
+
+/// The pipeline on any frame and any parameters.
+fn reach_pipeline(extractor: &mut Extractor, frame: &mut Frame, host: &mut OpaquePort) {
+    let geometry = Geometry {
+        first_bearing: any_f32(),
+        step: any_f32(),
+    };
+    let n = black_box(MAX_BEAMS);
+    if let Ok(mut f) = Frame::new(geometry, n) {
+        for j in 0..black_box(n) {
+            if black_box(false) {
+                f.set_invalid(j, Invalid::OtherCode(black_box(0)));
+            } else {
+                f.set_metres(j, any_f32());
             }
         }
+        *frame = f;
+    }
+    let mut ranges = [0.0f32; MAX_BEAMS];
+    black_box(&mut ranges);
+    if let Ok(f) = Frame::from_metres(geometry, ranges.get(..n).unwrap_or_default()) {
+        black_box(f.valid_count());
+    }
+    black_box(MeasuredValues::from_frame(
+        frame,
+        Unit::Millimetre,
+        RangeBits::Bits14,
+        black_box(0x10),
+    ));
+    let params = any_params();
+    if let Ok(params) = params.validate() {
+        let features = extractor.run(frame, &params);
+        black_box(features.lines().len());
+    }
+    black_box(extractor.smoothed());
+    black_box(extractor.mahalanobis());
+    let _ = emit_features(
+        black_box(0),
+        black_box(0),
+        &EchoedParams::from(&params),
+        extractor.features(),
+        black_box(0),
+        |t| host.write_all(t),
+    );
+}
+
+/// The LMS emulator fed any host bytes at any times.
+fn reach_emulator<S: ScanSource>(
+    emulator: &mut Emulator<S>,
+    input: &[u8],
+    out: &mut [u8],
+    now_us: u64,
+) {
+    emulator.receive(now_us, input);
+    let n = emulator.transmit(black_box(0), out);
+    black_box(out.get(..n));
+    while let Some(e) = emulator.next_event() {
+        black_box(e);
+    }
+    black_box(emulator.next_wakeup_us());
+    if black_box(false) {
+        emulator.power_on(now_us);
     }
 }
 
