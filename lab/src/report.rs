@@ -7,16 +7,16 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use lms_core::{Frame, Params};
 
-use super::charts::{figure, Legend, Panel, Series, COLOURS};
-use super::metrics::{inside, median, Summary, Tally};
-use super::real::{LogResult, CALIBRATION_SIGMAS};
-use super::scale::{Scale, PASSES, QS};
-use super::scenes::Family;
-use super::{
+use crate::charts::{figure, Legend, Panel, Series, COLOURS};
+use crate::metrics::{inside, median, Summary, Tally};
+use crate::real::{LogResult, CALIBRATION_SIGMAS};
+use crate::scale::{Scale, PASSES, QS};
+use crate::scenes::Family;
+use crate::{
     EvaluateArgs, Synthetic, GAUSSIAN, NO_SHARED, PROPOSAL, PROPOSAL_INFO, SPEC, SPLIT_MERGE,
 };
-use crate::extract::InputFrame;
-use crate::plot::{self, FramePlot};
+use host_bridge::extract::InputFrame;
+use host_bridge::plot::{self, FramePlot};
 
 /// Wall-clock time of each part (s).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -506,7 +506,7 @@ fn summary(md: &mut String, ctx: &Ctx) {
 }
 
 fn setup(md: &mut String, ctx: &Ctx) {
-    let g = super::metrics::Gates::default();
+    let g = crate::metrics::Gates::default();
     let _ = writeln!(md, "## Setup\n");
     let _ = writeln!(
         md,
@@ -1690,7 +1690,7 @@ fn findings(md: &mut String, ctx: &Ctx) {
          --no-shared-points`): it gives the same pieces as this prototype \
          (`host-bridge/tests/split_before_reject.rs`) and costs about a third more instructions \
          per noisy scan on the MCU (README, firmware budgets).\n",
-        super::PROPOSED_SPLIT_DEPTH,
+        crate::PROPOSED_SPLIT_DEPTH,
         mm(h),
         f(a.true_pos, 3),
         f(spec.true_pos, 3),

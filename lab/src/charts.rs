@@ -1,6 +1,6 @@
 //! Line charts for the report: one SVG with one or more panels side by
 //! side, drawn with `plotters` (text laid out with the font of
-//! [`crate::plot::ensure_font`]).
+//! [`host_bridge::plot::ensure_font`]).
 
 use std::path::Path;
 
@@ -9,7 +9,7 @@ use plotters::prelude::*;
 use plotters::series::DashedLineSeries;
 
 /// Series colours, cycling (the plot module's line colours).
-pub const COLOURS: [RGBColor; 8] = crate::plot::LINE_COLOURS;
+pub const COLOURS: [RGBColor; 8] = host_bridge::plot::LINE_COLOURS;
 
 /// One curve.
 #[derive(Clone, Debug)]
@@ -85,7 +85,7 @@ pub const PANEL_SIZE: (u32, u32) = (620, 440);
 
 /// Draw `panels` in a grid of `columns` under `title` into the SVG file `path`.
 pub fn figure(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<()> {
-    crate::plot::ensure_font()?;
+    host_bridge::plot::ensure_font()?;
     let columns = columns.clamp(1, panels.len().max(1));
     let rows = panels.len().div_ceil(columns).max(1);
     let size = (

@@ -1,15 +1,15 @@
-//! `host-bridge evaluate` end to end with a tiny count: the report is
+//! `lms-lab evaluate` end to end with a tiny count: the report is
 //! written with its sections and tables, the figures exist when a font is
 //! available, and bad options fail with a message.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+const BIN: &str = env!("CARGO_BIN_EXE_lms-lab");
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!(
-        "host-bridge-evaluate-test-{}-{name}",
+        "lms-lab-evaluate-test-{}-{name}",
         std::process::id()
     ));
     let _ = std::fs::remove_dir_all(&dir);
@@ -45,7 +45,7 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
         .arg("-o")
         .arg(&out)
         .output()
-        .expect("cannot start host-bridge");
+        .expect("cannot start lms-lab");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "evaluate failed: {stderr}");
     assert!(stderr.contains("wrote"), "{stderr}");
