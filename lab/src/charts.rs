@@ -63,6 +63,44 @@ pub struct Panel {
     pub legend: Option<Legend>,
 }
 
+impl Panel {
+    /// A panel of `series` with its caption and axis descriptions, the y
+    /// range from the data and no legend.
+    pub fn new(title: &str, x_label: &str, y_label: &str, series: Vec<Series>) -> Self {
+        Panel {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            series,
+            ..Panel::default()
+        }
+    }
+
+    /// With the y range `lo..hi`.
+    pub fn y_range(self, lo: f64, hi: f64) -> Self {
+        Panel {
+            y_range: Some((lo, hi)),
+            ..self
+        }
+    }
+
+    /// With the legend in `corner`.
+    pub fn legend(self, corner: Legend) -> Self {
+        Panel {
+            legend: Some(corner),
+            ..self
+        }
+    }
+
+    /// With categorical x positions labelled `labels`.
+    pub fn categories(self, labels: &[String]) -> Self {
+        Panel {
+            x_categories: Some(labels.to_vec()),
+            ..self
+        }
+    }
+}
+
 /// Corner of a panel for its legend.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Legend {

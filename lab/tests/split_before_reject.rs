@@ -10,12 +10,12 @@
 //! of the prototype's, and at least 0.2 above the spec's (0.66 in the
 //! report); FalsePos no higher than the spec's (the arc guard).
 
+use lms_core::{Extractor, Params};
 use lms_lab::baselines::Tables;
 use lms_lab::metrics::{Gates, Tally};
 use lms_lab::scenes::{self, Family, NoiseSpec};
 use lms_lab::variants::Options;
 use lms_lab::{score_sample, Kind, Method, PROPOSED_SPLIT_DEPTH};
-use lms_core::{Extractor, Params};
 
 const SIGMA: f64 = 0.02;
 const SCANS_PER_FAMILY: usize = 40;
