@@ -508,132 +508,138 @@ fn baseline_tables(md: &mut String, ctx: &Ctx) {
     }
 }
 
-fn detection_table(md: &mut String, ctx: &Ctx, methods: &[&str], sigmas: &[f64]) {
-    header(
-        md,
-        &[
-            "σ",
-            "method",
-            "TruePos",
-            "TruePos ≥ 5 beams",
-            "coverage",
-            "FalsePos",
-            "FalsePos w/o arcs",
-            "lines / scan",
-            "segments / scan",
-            "ms / scan",
-        ],
-    );
-    for &sigma in sigmas {
-        for &m in methods {
+/// A table of the main methods at every σ: columns σ, method, then
+/// `columns` with the cells `cells` makes of the method's pooled tally.
+fn method_table(md: &mut String, ctx: &Ctx, columns: &[&str], cells: fn(&Tally) -> Vec<String>) {
+    let mut cols = vec!["σ", "method"];
+    cols.extend_from_slice(columns);
+    header(md, &cols);
+    for &sigma in &ctx.syn.sigmas {
+        for m in main_names(ctx) {
             if !ctx.has(sigma, m) {
                 continue;
             }
-            let s = ctx.s(sigma, m);
-            row(
-                md,
-                vec![
-                    mm(sigma),
-                    m.to_string(),
-                    f(s.true_pos, 3),
-                    f(s.true_pos_detectable, 3),
-                    f(s.coverage, 2),
-                    f(s.false_pos, 3),
-                    f(s.false_pos_no_arc, 3),
-                    f(s.lines_per_scan, 2),
-                    f(s.segments_per_scan, 2),
-                    f(s.ms_per_scan, 3),
-                ],
-            );
+            let mut r = vec![mm(sigma), m.to_string()];
+            r.extend(cells(&ctx.t(sigma, m)));
+            row(md, r);
         }
     }
 }
 
-fn accuracy_table(md: &mut String, ctx: &Ctx, methods: &[&str], sigmas: &[f64]) {
-    header(
-        md,
-        &[
-            "σ",
-            "method",
-            "pairs",
-            "σΔα (mrad)",
-            "σΔr (mm)",
-            "σΔα / CRB",
-            "σΔr / CRB",
-            "gross errors",
-            "/CRB w/o gross (α / r)",
-            "NEES mean / median / ≤ 9.21",
-        ],
-    );
-    for &sigma in sigmas {
-        for &m in methods {
-            if !ctx.has(sigma, m) {
-                continue;
-            }
-            let s = ctx.s(sigma, m);
-            row(
-                md,
-                vec![
-                    mm(sigma),
-                    m.to_string(),
-                    s.matched_pairs.to_string(),
-                    f(s.sd_alpha * 1e3, 2),
-                    f(s.sd_r * 1e3, 2),
-                    f(s.crb_alpha, 2),
-                    f(s.crb_r, 2),
-                    pct(s.outliers),
-                    format!("{} / {}", f(s.crb_alpha_inliers, 2), f(s.crb_r_inliers, 2)),
-                    format!(
-                        "{} / {} / {}",
-                        f(s.nees_line, 2),
-                        f(s.nees_line_median, 2),
-                        pct(s.nees_line_inside)
-                    ),
-                ],
-            );
-        }
-    }
+fn detection_table(md: &mut String, ctx: &Ctx) {
+    let columns = [
+        "TruePos",
+        "TruePos ≥ 5 beams",
+        "coverage",
+        "FalsePos",
+        "FalsePos w/o arcs",
+        "lines / scan",
+        "segments / scan",
+        "ms / scan",
+    ];
+    method_table(md, ctx, &columns, |t| {
+        let s = t.summary();
+        vec![
+            f(s.true_pos, 3),
+            f(s.true_pos_detectable, 3),
+            f(s.coverage, 2),
+            f(s.false_pos, 3),
+            f(s.false_pos_no_arc, 3),
+            f(s.lines_per_scan, 2),
+            f(s.segments_per_scan, 2),
+            f(s.ms_per_scan, 3),
+        ]
+    });
 }
 
-fn corner_table(md: &mut String, ctx: &Ctx, methods: &[&str], sigmas: &[f64]) {
-    header(
-        md,
-        &[
-            "σ",
-            "method",
-            "true corners",
-            "found",
-            "RMS error (mm)",
-            "NEES mean / median / ≤ 9.21",
-            "corner FalsePos",
-        ],
-    );
-    for &sigma in sigmas {
-        for &m in methods {
-            if !ctx.has(sigma, m) {
-                continue;
-            }
-            let t = ctx.t(sigma, m);
-            let s = t.summary();
-            row(
-                md,
-                vec![
-                    mm(sigma),
-                    m.to_string(),
-                    t.corners.true_corners.to_string(),
-                    f(s.corner_rate, 3),
-                    f(s.corner_rms * 1e3, 1),
-                    format!(
-                        "{} / {} / {}",
-                        f(s.corner_nees, 2),
-                        f(s.corner_nees_median, 2),
-                        pct(s.corner_nees_inside)
-                    ),
-                    f(s.corner_false_pos, 3),
-                ],
-            );
-        }
-    }
+fn accuracy_table(md: &mut String, ctx: &Ctx) {
+    let columns = [
+        "pairs",
+        "σΔα (mrad)",
+        "σΔr (mm)",
+        "σΔα / CRB",
+        "σΔr / CRB",
+        "gross errors",
+        "/CRB w/o gross (α / r)",
+        "NEES mean / median / ≤ 9.21",
+    ];
+    method_table(md, ctx, &columns, |t| {
+        let s = t.summary();
+        vec![
+            s.matched_pairs.to_string(),
+            f(s.sd_alpha * 1e3, 2),
+            f(s.sd_r * 1e3, 2),
+            f(s.crb_alpha, 2),
+            f(s.crb_r, 2),
+            pct(s.outliers),
+            format!("{} / {}", f(s.crb_alpha_inliers, 2), f(s.crb_r_inliers, 2)),
+            format!(
+                "{} / {} / {}",
+                f(s.nees_line, 2),
+                f(s.nees_line_median, 2),
+                pct(s.nees_line_inside)
+            ),
+        ]
+    });
+}
+
+fn corner_table(md: &mut String, ctx: &Ctx) {
+    let columns = [
+        "true corners",
+        "found",
+        "RMS error (mm)",
+        "NEES mean / median / ≤ 9.21",
+        "corner FalsePos",
+    ];
+    method_table(md, ctx, &columns, |t| {
+        let s = t.summary();
+        vec![
+            t.corners.true_corners.to_string(),
+            f(s.corner_rate, 3),
+            f(s.corner_rms * 1e3, 1),
+            format!(
+                "{} / {} / {}",
+                f(s.corner_nees, 2),
+                f(s.corner_nees_median, 2),
+                pct(s.corner_nees_inside)
+            ),
+            f(s.corner_false_pos, 3),
+        ]
+    });
+}
+
+/// False lines by what they lie on and missed walls by cause.
+fn causes_table(md: &mut String, ctx: &Ctx) {
+    let columns = [
+        "lines",
+        "false: arc",
+        "duplicate",
+        "unresolvable",
+        "off",
+        "mixed",
+        "resolvable walls",
+        "missed: merged",
+        "fragmented",
+        "other",
+    ];
+    method_table(md, ctx, &columns, |t| {
+        let l = &t.lines;
+        [
+            l.extracted,
+            l.fp_arc,
+            l.fp_split,
+            l.fp_unresolvable,
+            l.fp_off,
+            l.fp_mixed,
+            l.true_resolvable,
+            l.missed_merged,
+            l.missed_fragmented,
+            l.missed_other,
+        ]
+        .iter()
+        .map(ToString::to_string)
+        .collect()
+    });
 }
 
 fn main_names<'a>(ctx: &Ctx<'a>) -> Vec<&'a str> {
@@ -641,23 +647,21 @@ fn main_names<'a>(ctx: &Ctx<'a>) -> Vec<&'a str> {
 }
 
 fn accuracy(md: &mut String, ctx: &Ctx) -> Result<()> {
-    let methods = main_names(ctx);
-    let sigmas = &ctx.syn.sigmas;
     let _ = writeln!(md, "## 1. Accuracy against ground truth\n");
     if ctx.figures {
         let file = "accuracy-vs-sigma.svg";
-        figures::accuracy_vs_sigma(&ctx.args.output.join(file), ctx.syn, &methods)?;
+        figures::accuracy_vs_sigma(&ctx.args.output.join(file), ctx.syn, &main_names(ctx))?;
         let _ = writeln!(md, "![detection and accuracy against σ]({file})\n");
     }
     let _ = writeln!(md, "### Detection\n");
-    detection_table(md, ctx, &methods, sigmas);
+    detection_table(md, ctx);
     let _ = writeln!(
         md,
         "\n### Line accuracy (matched lines on resolvable walls)\n"
     );
-    accuracy_table(md, ctx, &methods, sigmas);
+    accuracy_table(md, ctx);
     let _ = writeln!(md, "\n### Corners\n");
-    corner_table(md, ctx, &methods, sigmas);
+    corner_table(md, ctx);
     family_table(md, ctx);
     let _ = writeln!(md);
     Ok(())
@@ -731,50 +735,6 @@ fn diagnosis(md: &mut String, ctx: &Ctx) -> Result<()> {
     variants_table(md, ctx);
     let _ = writeln!(md);
     Ok(())
-}
-
-/// False lines by what they lie on and missed walls by cause, per σ and
-/// main method.
-fn causes_table(md: &mut String, ctx: &Ctx) {
-    header(
-        md,
-        &[
-            "σ",
-            "method",
-            "lines",
-            "false: arc",
-            "duplicate",
-            "unresolvable",
-            "off",
-            "mixed",
-            "resolvable walls",
-            "missed: merged",
-            "fragmented",
-            "other",
-        ],
-    );
-    for &sigma in &ctx.syn.sigmas {
-        for m in main_names(ctx) {
-            let l = ctx.t(sigma, m).lines;
-            row(
-                md,
-                vec![
-                    mm(sigma),
-                    m.to_string(),
-                    l.extracted.to_string(),
-                    l.fp_arc.to_string(),
-                    l.fp_split.to_string(),
-                    l.fp_unresolvable.to_string(),
-                    l.fp_off.to_string(),
-                    l.fp_mixed.to_string(),
-                    l.true_resolvable.to_string(),
-                    l.missed_merged.to_string(),
-                    l.missed_fragmented.to_string(),
-                    l.missed_other.to_string(),
-                ],
-            );
-        }
-    }
 }
 
 /// The noise-free corner evidence per σ.
