@@ -8,8 +8,6 @@
 //! 3. [`extract`] — run `lms_core::Extractor` per frame and build the JSON
 //!    Lines record ([`extract::FrameRecord`]).
 //! 4. [`plot`] — figures of one frame (scan with features, `D` per window).
-//!    [`evaluate`] — the accuracy report: synthetic scans against ground
-//!    truth, the scale space, baselines, real scans.
 //! 5. The sensor side: [`client`] (an LMS 2xx client over a serial link),
 //!    [`fake_sensor`] (its in-memory test double), [`scan`] (the `scan`
 //!    session) and [`capture`] (the file format of recorded scans).
@@ -17,13 +15,14 @@
 //!    ports) checked bit for bit against the std build.
 //!
 //! The binary `host-bridge` (src/main.rs) wires these into subcommands.
+//! The accuracy evaluation is research tooling in its own package,
+//! `lms-lab` (lab/), which uses this library.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
 pub mod capture;
 pub mod carmen;
 pub mod client;
-pub mod evaluate;
 pub mod extract;
 pub mod fake_sensor;
 pub mod options;

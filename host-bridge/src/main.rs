@@ -7,7 +7,8 @@
 //! * `scan` — record scans from a sensor into a capture file (see `host_bridge::scan`).
 //! * `simulate` — a simulated LMS 2xx on a pseudo-terminal (see `host_bridge::simulate`).
 //! * `verify` — check a co-processor's features bit for bit (see `host_bridge::verify`).
-//! * `evaluate` — accuracy report: ground truth, scale space, baselines, real scans (see `host_bridge::evaluate`).
+//!
+//! The accuracy evaluation is not here: `lms-lab evaluate` (lab/).
 
 use std::fs::File;
 use std::io::{self, Write};
@@ -53,10 +54,6 @@ enum Command {
     /// ports): play the sensor, be its client, recompute every scan's
     /// features and compare them bit for bit
     Verify(host_bridge::verify::VerifyArgs),
-    /// Measure accuracy against ground truth (synthetic scenes), the scale
-    /// space, two baselines and real scans; write a Markdown report with
-    /// SVG figures into a folder
-    Evaluate(host_bridge::evaluate::EvaluateArgs),
 }
 
 #[derive(Args, Debug)]
@@ -93,7 +90,6 @@ fn main() -> ExitCode {
         Command::Scan(args) => host_bridge::scan::run(&args),
         Command::Simulate(args) => host_bridge::simulate::run(&args),
         Command::Verify(args) => host_bridge::verify::run(&args),
-        Command::Evaluate(args) => host_bridge::evaluate::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

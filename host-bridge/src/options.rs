@@ -34,11 +34,11 @@ pub struct ParamArgs {
     #[arg(long)]
     pub no_merge: bool,
     /// Leave a corner point shared by two segments out of both line fits
-    /// (better calibrated corner covariances; docs/evaluation P2)
+    /// (better calibrated corner covariances; docs/evaluation/FINDINGS.md P2)
     #[arg(long)]
     pub no_shared_points: bool,
     /// Split before reject: levels a segment that is not one straight line
-    /// may be split before the chi2 gate (docs/evaluation P1; 8 is the
+    /// may be split before the chi2 gate (docs/evaluation/FINDINGS.md P1; 8 is the
     /// evaluated proposal) [default: 0, as ALGORITHM.md]
     #[arg(long, value_name = "LEVELS")]
     pub split_depth: Option<u8>,

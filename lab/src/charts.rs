@@ -1,6 +1,6 @@
 //! Line charts for the report: one SVG with one or more panels side by
 //! side, drawn with `plotters` (text laid out with the font of
-//! [`crate::plot::ensure_font`]).
+//! [`host_bridge::plot::ensure_font`]).
 
 use std::path::Path;
 
@@ -9,7 +9,7 @@ use plotters::prelude::*;
 use plotters::series::DashedLineSeries;
 
 /// Series colours, cycling (the plot module's line colours).
-pub const COLOURS: [RGBColor; 8] = crate::plot::LINE_COLOURS;
+pub const COLOURS: [RGBColor; 8] = host_bridge::plot::LINE_COLOURS;
 
 /// One curve.
 #[derive(Clone, Debug)]
@@ -63,6 +63,44 @@ pub struct Panel {
     pub legend: Option<Legend>,
 }
 
+impl Panel {
+    /// A panel of `series` with its caption and axis descriptions, the y
+    /// range from the data and no legend.
+    pub fn new(title: &str, x_label: &str, y_label: &str, series: Vec<Series>) -> Self {
+        Panel {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            series,
+            ..Panel::default()
+        }
+    }
+
+    /// With the y range `lo..hi`.
+    pub fn y_range(self, lo: f64, hi: f64) -> Self {
+        Panel {
+            y_range: Some((lo, hi)),
+            ..self
+        }
+    }
+
+    /// With the legend in `corner`.
+    pub fn legend(self, corner: Legend) -> Self {
+        Panel {
+            legend: Some(corner),
+            ..self
+        }
+    }
+
+    /// With categorical x positions labelled `labels`.
+    pub fn categories(self, labels: &[String]) -> Self {
+        Panel {
+            x_categories: Some(labels.to_vec()),
+            ..self
+        }
+    }
+}
+
 /// Corner of a panel for its legend.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Legend {
@@ -85,7 +123,7 @@ pub const PANEL_SIZE: (u32, u32) = (620, 440);
 
 /// Draw `panels` in a grid of `columns` under `title` into the SVG file `path`.
 pub fn figure(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<()> {
-    crate::plot::ensure_font()?;
+    host_bridge::plot::ensure_font()?;
     let columns = columns.clamp(1, panels.len().max(1));
     let rows = panels.len().div_ceil(columns).max(1);
     let size = (

@@ -27,7 +27,7 @@ use lms_core::Frame;
 use lms_scene::{seeded_rng, Bearings, NoiseModel, Point, Pose, RangeUnit, Scene, TrueScan};
 use rand::Rng;
 
-use crate::synthetic::frame_from_readings;
+use host_bridge::synthetic::frame_from_readings;
 
 /// A family of synthetic scenes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

@@ -3,16 +3,16 @@
 //! NEES and CRB ratio of a known Gaussian case, corner matching, the truth
 //! of a built-in scene, and the baselines on a noise-free corner.
 
-use host_bridge::evaluate::baselines::{gaussian_mask, split_and_merge, Tables};
-use host_bridge::evaluate::metrics::{
-    crb, scan_truth, score_corners, score_lines, CornerTruth, Gates, ScanTruth, Tally, TruePiece,
-};
-use host_bridge::evaluate::variants::chi2_quantile_999;
 use lms_core::maths::Sym2;
 use lms_core::pipeline::line_fit::fit_line;
 use lms_core::Corner;
 use lms_core::Line;
 use lms_core::{Beam, Frame, Params, Variant};
+use lms_lab::baselines::{gaussian_mask, split_and_merge, Tables};
+use lms_lab::metrics::{
+    crb, scan_truth, score_corners, score_lines, CornerTruth, Gates, ScanTruth, Tally, TruePiece,
+};
+use lms_lab::variants::chi2_quantile_999;
 use lms_scene::{Bearings, Pose, Scene};
 use rand::Rng;
 
@@ -80,10 +80,7 @@ fn valid() -> Vec<Beam> {
     vec![Beam::Valid; 361]
 }
 
-fn summary_of(
-    truth: &ScanTruth,
-    lines: &[Line],
-) -> (host_bridge::evaluate::metrics::LineScore, Tally) {
+fn summary_of(truth: &ScanTruth, lines: &[Line]) -> (lms_lab::metrics::LineScore, Tally) {
     let s = score_lines(truth, lines, &valid(), SIGMA, &Gates::default());
     let mut t = Tally::default();
     t.add(&s, &Default::default(), 0, 0.0);

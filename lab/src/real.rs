@@ -9,10 +9,10 @@ use std::time::Instant;
 use anyhow::Result;
 use lms_core::{Extractor, Frame};
 
-use super::baselines::{self, run_core, Extraction, Tables};
-use super::metrics::{mean, median};
-use super::{main_methods, Kind, Method};
-use crate::carmen::{self, Unit, UnitMode};
+use crate::baselines::{self, run_core, Extraction, Tables};
+use crate::metrics::{mean, median};
+use crate::{main_methods, Kind, Method};
+use host_bridge::carmen::{self, Unit, UnitMode};
 
 /// σ used for a log in `unit` (m): 10 mm for the cm logs (quantised to
 /// 1 cm, scattering more than the LMS's mm-mode 5 mm), 5 mm for mm logs;
@@ -128,7 +128,7 @@ fn extract(
         Kind::Core => run_core(ex, frame, &p),
         Kind::SplitMerge { k } => baselines::split_and_merge(frame, tables, &p, k),
         Kind::Gaussian { s } => baselines::gaussian_mask(frame, tables, &p, s),
-        Kind::Variant(o) => super::variants::extract(frame, tables, &p, &o),
+        Kind::Variant(o) => crate::variants::extract(frame, tables, &p, &o),
     }
 }
 
@@ -216,7 +216,7 @@ pub fn run_logs(
                 let stem = name.trim_end_matches(".gz").trim_end_matches(".log");
                 let file = format!("real-{stem}-{}.svg", scan.index);
                 let params = methods[0].params(sigma);
-                super::report::scan_figure(
+                crate::report::scan_figure(
                     &dir.join(&file),
                     format!("{name} ({} ranges), σ = {} m", log.unit, sigma),
                     scan.index,
@@ -244,11 +244,11 @@ pub fn run_logs(
 
 /// The real-scan part of `evaluate`.
 pub fn run(
-    args: &super::EvaluateArgs,
+    args: &crate::EvaluateArgs,
     logs: &[PathBuf],
     bar: &indicatif::ProgressBar,
 ) -> Result<Vec<LogResult>> {
     let figures =
-        (!args.no_plots && super::report::fonts_available()).then_some(args.output.as_path());
+        (!args.no_plots && crate::report::fonts_available()).then_some(args.output.as_path());
     run_logs(logs, args.real_every, figures, bar)
 }

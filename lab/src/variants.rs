@@ -19,7 +19,7 @@ use lms_core::{Frame, Params};
 use lms_core::pipeline::line_fit::fit_line;
 use lms_core::Segment;
 
-use super::baselines::{features_from_segments, segments_of, Extraction, Tables};
+use crate::baselines::{features_from_segments, segments_of, Extraction, Tables};
 
 /// How a point blends its observation with the windows' estimates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -345,7 +345,7 @@ pub fn extract(frame: &Frame, tables: &Tables, params: &Params, opts: &Options) 
         let limit = opts.max_sd_alpha * opts.max_sd_alpha;
         if lines.iter().any(|l| !(l.cov.a <= limit)) {
             lines.retain(|l| l.cov.a <= limit);
-            corners = super::baselines::corners_of(&lines, params);
+            corners = crate::baselines::corners_of(&lines, params);
         }
     }
     Extraction {

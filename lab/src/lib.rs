@@ -1,18 +1,30 @@
-//! `host-bridge evaluate`: the paper's claims measured — accuracy against
-//! ground truth on synthetic scans, the scale space, two baselines, and real
-//! scans — written as a Markdown report with tables and SVG plots.
+//! # lms-lab — the evaluation of the LMS 2xx feature extractor
+//!
+//! Research tooling, not the product: `lms-lab evaluate` measures the
+//! paper's claims — accuracy against ground truth on synthetic scans, the
+//! scale space, two baselines, and real scans — and writes the tables and
+//! SVG figures of a Markdown report (`docs/evaluation/README.md`); the
+//! conclusions are written by hand in `docs/evaluation/FINDINGS.md`. No
+//! stability promise: it uses the core's internals through
+//! `lms_core::unstable` (feature `unstable-lab`) and the product's library
+//! (`host-bridge`: CARMEN reader, synthetic frames, plots).
 //!
 //! * [`scenes`] — the synthetic scene families and their noisy scans.
 //! * [`metrics`] — ground truth per scan, matching, TruePos/FalsePos,
 //!   errors against the Cramér–Rao bound, NEES, corners.
 //! * [`baselines`] — split-and-merge and the Gaussian mask, on the core's
 //!   own §7–8 back end.
+//! * [`variants`] — experimental changes of the smoothing and the fit
+//!   (window stride, weight rule, split before reject, information gate).
 //! * [`scale`] — segments, lines and errors against passes and q.
 //! * [`real`] — CARMEN logs: features per scan, beams explained, time.
-//! * [`report`] — the Markdown report and its figures.
+//! * [`report`] — the Markdown tables of the report; [`figures`] its
+//!   figures, drawn with [`charts`].
+#![forbid(unsafe_code)]
 
 pub mod baselines;
 pub mod charts;
+pub mod figures;
 pub mod metrics;
 pub mod real;
 pub mod report;
@@ -34,7 +46,7 @@ use metrics::{
 };
 use scenes::{Family, NoiseSpec, Sample};
 
-/// Options of `host-bridge evaluate`.
+/// Options of `lms-lab evaluate`.
 #[derive(Args, Clone, Debug)]
 pub struct EvaluateArgs {
     /// Folder the report (README.md) and its figures are written to (created if missing)
@@ -454,7 +466,7 @@ pub fn run_synthetic(
     Ok(out)
 }
 
-/// `host-bridge evaluate`.
+/// `lms-lab evaluate`: run every part and write the report.
 pub fn run(args: &EvaluateArgs) -> Result<()> {
     ensure!(args.scans > 0, "--scans must be at least 1");
     ensure!(!args.sigmas.is_empty(), "--sigmas needs at least one value");
@@ -506,7 +518,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let path = report::write(args, &synthetic, &scale, &real, timing)?;
     bar.finish_and_clear();
     eprintln!(
-        "host-bridge evaluate: wrote {} ({:.1} s)",
+        "lms-lab evaluate: wrote {} ({:.1} s)",
         path.display(),
         started.elapsed().as_secs_f64()
     );

@@ -1,6 +1,6 @@
 //! The core's split before reject (`Params::split_depth`, f32, no_std)
 //! against the evaluation's prototype of proposal P1 (f64,
-//! `evaluate::variants`) and against ground truth, on the evaluation's
+//! `lms_lab::variants`) and against ground truth, on the evaluation's
 //! synthetic scenes at σ = 20 mm (rooms with boxes and clutter, corridors,
 //! the room with a box from random poses, rooms with curved walls).
 //!
@@ -10,12 +10,12 @@
 //! of the prototype's, and at least 0.2 above the spec's (0.66 in the
 //! report); FalsePos no higher than the spec's (the arc guard).
 
-use host_bridge::evaluate::baselines::Tables;
-use host_bridge::evaluate::metrics::{Gates, Tally};
-use host_bridge::evaluate::scenes::{self, Family, NoiseSpec};
-use host_bridge::evaluate::variants::Options;
-use host_bridge::evaluate::{score_sample, Kind, Method, PROPOSED_SPLIT_DEPTH};
 use lms_core::{Extractor, Params};
+use lms_lab::baselines::Tables;
+use lms_lab::metrics::{Gates, Tally};
+use lms_lab::scenes::{self, Family, NoiseSpec};
+use lms_lab::variants::Options;
+use lms_lab::{score_sample, Kind, Method, PROPOSED_SPLIT_DEPTH};
 
 const SIGMA: f64 = 0.02;
 const SCANS_PER_FAMILY: usize = 40;

@@ -1,15 +1,17 @@
-//! `host-bridge evaluate` end to end with a tiny count: the report is
-//! written with its sections and tables, the figures exist when a font is
-//! available, and bad options fail with a message.
+//! `lms-lab evaluate` end to end with a tiny count: the report is
+//! written with its sections and tables (and no findings prose: that is
+//! the hand-written docs/evaluation/FINDINGS.md, which the committed report
+//! links), the figures exist when a font is available, and bad options
+//! fail with a message.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+const BIN: &str = env!("CARGO_BIN_EXE_lms-lab");
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!(
-        "host-bridge-evaluate-test-{}-{name}",
+        "lms-lab-evaluate-test-{}-{name}",
         std::process::id()
     ));
     let _ = std::fs::remove_dir_all(&dir);
@@ -45,7 +47,7 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
         .arg("-o")
         .arg(&out)
         .output()
-        .expect("cannot start host-bridge");
+        .expect("cannot start lms-lab");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "evaluate failed: {stderr}");
     assert!(stderr.contains("wrote"), "{stderr}");
@@ -67,11 +69,16 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
         "## 3. Scale space: passes and q",
         "**Against passes (q = 0).**",
         "## 4. Real scans",
-        "## Findings and proposals",
-        "### Proposed changes to ALGORITHM.md",
+        "[FINDINGS.md](FINDINGS.md)",
         "## Reproduce",
+        "cargo run --release -p lms-lab -- evaluate -o docs/evaluation",
     ] {
         assert!(md.contains(needle), "report lacks {needle:?}");
+    }
+    // The findings are written by hand (docs/evaluation/FINDINGS.md), not
+    // generated: the report holds tables, figures and captions only.
+    for prose in ["## Findings", "### F1.", "### Proposed changes", "## Setup"] {
+        assert!(!md.contains(prose), "report writes prose {prose:?}");
     }
     // Every main method has a row per σ in the detection table.
     for m in [
@@ -115,6 +122,17 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
     }
     let _ = std::fs::remove_dir_all(&out);
     let _ = std::fs::remove_dir_all(&data);
+}
+
+#[test]
+fn the_committed_report_links_the_hand_written_findings() {
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/evaluation");
+    let report = std::fs::read_to_string(docs.join("README.md")).unwrap();
+    let findings = std::fs::read_to_string(docs.join("FINDINGS.md")).unwrap();
+    assert!(report.contains("[FINDINGS.md](FINDINGS.md)"));
+    for anchor in ["## Reading the tables", "## Findings and proposals"] {
+        assert!(findings.contains(anchor), "FINDINGS.md lacks {anchor:?}");
+    }
 }
 
 #[test]

@@ -3,16 +3,16 @@
 //!
 //! One 50-pass run per scan and q (`Extractor::run_observed`) hands over `D`
 //! after every pass; the passes in [`PASSES`] are segmented and fitted by the
-//! back end of [`super::baselines`] (the core's §6–8 bit for bit), so pass
+//! back end of [`crate::baselines`] (the core's §6–8 bit for bit), so pass
 //! `p` of the sweep is exactly the core run with `iterations = p`.
 
 use anyhow::Result;
 use lms_core::{Extractor, Params};
 
-use super::baselines::{extraction_from_d, Tables};
-use super::metrics::{scan_truth, Gates, Tally};
-use super::scenes::{self, Family, NoiseSpec};
-use super::EvaluateArgs;
+use crate::baselines::{extraction_from_d, Tables};
+use crate::metrics::{scan_truth, Gates, Tally};
+use crate::scenes::{self, Family, NoiseSpec};
+use crate::EvaluateArgs;
 
 /// Passes evaluated.
 pub const PASSES: [u16; 13] = [1, 2, 3, 5, 7, 10, 15, 20, 25, 30, 35, 40, 50];
@@ -108,7 +108,7 @@ pub fn run(args: &EvaluateArgs, bar: &indicatif::ProgressBar) -> Result<Scale> {
                     );
                     for (pi, (_, d)) in captured.iter().enumerate() {
                         let x = extraction_from_d(&s.frame, &tables, d, &params);
-                        let (ls, cs) = super::score(&truth, &x, &s.frame, sigma, &gates);
+                        let (ls, cs) = crate::score(&truth, &x, &s.frame, sigma, &gates);
                         tallies[qi * PASSES.len() + pi].add(&ls, &cs, x.segments.len(), 0.0);
                     }
                 }

@@ -2,10 +2,10 @@
 //! the core's segments, and the experimental smoothing pass with the spec's
 //! options, give the extractor's results bit for bit.
 
-use host_bridge::evaluate::baselines::{extraction_from_d, features_from_segments, Tables};
-use host_bridge::evaluate::scenes::{sample, Family, NoiseSpec};
-use host_bridge::evaluate::variants::{self, Options};
 use lms_core::{Extractor, Params};
+use lms_lab::baselines::{extraction_from_d, features_from_segments, Tables};
+use lms_lab::scenes::{sample, Family, NoiseSpec};
+use lms_lab::variants::{self, Options};
 
 #[test]
 fn evaluate_back_end_and_smoothing_replicas_match_the_core_bit_for_bit() {
