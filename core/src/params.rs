@@ -43,7 +43,7 @@ pub struct Params {
     /// 0..=90). Default 30.
     pub min_corner_angle_deg: f32,
     /// Split before reject (not in ALGORITHM.md; proposal P1 of
-    /// docs/evaluation): how many levels a segment that is not one straight
+    /// docs/evaluation/FINDINGS.md): how many levels a segment that is not one straight
     /// line may be split at its farthest point before the §7 gates
     /// ([`crate::pipeline::split`]). 0 (the default) is the spec; 8 is the evaluated
     /// proposal (TruePos 0.66 → 0.97 at σ = 20 mm). At most

@@ -1,5 +1,5 @@
 //! Split before reject (not in ALGORITHM.md; proposal P1 of
-//! `docs/evaluation/README.md`), on when [`Params::split_depth`] > 0.
+//! `docs/evaluation/FINDINGS.md`), on when [`Params::split_depth`] > 0.
 //!
 //! §6 finds a corner only where `D` of a three-point window crosses `tau`;
 //! at σ = 20 mm most corners stay below it, two walls share one segment and
