@@ -38,7 +38,7 @@ use lms_core::telegram::{
 use lms_core::Unit;
 use lms_core::Variant;
 
-use crate::client::{line_time, Link};
+use crate::serial::{line_time, Link};
 
 /// What happens to one streamed scan.
 #[derive(Clone, Debug, PartialEq, Eq)]

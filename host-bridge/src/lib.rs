@@ -29,6 +29,7 @@ pub mod options;
 pub mod plot;
 pub mod pty;
 pub mod scan;
+pub mod serial;
 pub mod simulate;
 pub mod synthetic;
 pub mod verify;

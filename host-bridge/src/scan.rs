@@ -36,7 +36,8 @@ use lms_core::Unit;
 use lms_core::Variant;
 
 use crate::capture::CaptureFile;
-use crate::client::{Client, ClientStats, Link, Scan, SerialLink, Timeouts};
+use crate::client::{Client, ClientStats, Scan, Timeouts};
+use crate::serial::{Link, SerialLink};
 
 /// `--baud`: the rate to stream at, or `auto` to keep the one found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

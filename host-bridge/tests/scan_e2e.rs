@@ -18,10 +18,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use host_bridge::capture::{self, CaptureWriter};
-use host_bridge::client::SerialLink;
-use host_bridge::client::{Client, ClientError, Link, Scan, Timeouts};
+use host_bridge::client::{Client, ClientError, Scan, Timeouts};
 use host_bridge::fake_sensor::{FakeSensor, StreamFault};
 use host_bridge::scan::{run_session, Plan};
+use host_bridge::serial::{Link, SerialLink};
 use host_bridge::simulate::SceneSource;
 use host_bridge::synthetic::SceneArgs;
 use lms_core::device::emulator::{Emulator, Event as EmuEvent, FnSource, ScanSource, Settings};
