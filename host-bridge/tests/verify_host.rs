@@ -116,7 +116,8 @@ fn verify_refuses_bad_options() {
 #[test]
 fn verify_ports_mode_on_two_pseudo_terminals() {
     use host_bridge::pty::Pty;
-    use host_bridge::verify::{run_coprocessor, PtyPort};
+    use host_bridge::serial::PtyPort;
+    use host_bridge::verify::run_coprocessor;
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
 

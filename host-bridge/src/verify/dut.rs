@@ -1,0 +1,130 @@
+//! The co-processor under test ([`Dut`]) and verify's ends of its lines,
+//! connected as the mode asks (`--host`, `--qemu`, `--ports`).
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use anyhow::{anyhow, bail, Result};
+use lms_core::telegram::features::Counters;
+use lms_core::telegram::Baud;
+use lms_core::Params;
+
+use super::qemu::Qemu;
+use super::VerifyArgs;
+use crate::serial::{Link, SerialLink};
+
+/// The lines to the co-processor and what it is.
+pub(super) struct Lines {
+    /// Its sensor line (verify plays the sensor here).
+    pub sensor: Box<dyn Link>,
+    /// Its host line (verify is the client here).
+    pub host: Box<dyn Link>,
+    /// The firmware's console (`--qemu` only).
+    pub console: Option<Box<dyn Link>>,
+    /// The co-processor.
+    pub dut: Dut,
+    /// How it is connected, for the log.
+    pub how: String,
+}
+
+/// Connect to the co-processor the options ask for.
+pub(super) fn connect(
+    args: &VerifyArgs,
+    params: Params,
+    timeout: Duration,
+    stop: &Arc<AtomicBool>,
+) -> Result<Lines> {
+    if let Some(elf) = &args.qemu {
+        super::qemu::connect(elf.as_deref(), timeout, stop)
+    } else if let Some(ports) = &args.ports {
+        let [host, sensor] = ports.as_slice() else {
+            bail!("--ports takes two paths: HOST SENSOR");
+        };
+        let how = format!(
+            "co-processor on serial ports {} (host line) and {} (sensor line)",
+            host.display(),
+            sensor.display()
+        );
+        Ok(Lines {
+            sensor: Box::new(SerialLink::open(sensor, Baud::B9600)?),
+            host: Box::new(SerialLink::open(host, Baud::B9600)?),
+            console: None,
+            dut: Dut::Ports,
+            how,
+        })
+    } else {
+        super::host::connect(params)
+    }
+}
+
+/// What the co-processor under test is.
+pub(super) enum Dut {
+    /// A [`CoProcessor`] in a thread (`--host`).
+    Thread {
+        handle: Option<JoinHandle<Result<Counters, String>>>,
+        stop: Arc<AtomicBool>,
+    },
+    /// The firmware under QEMU (`--qemu`).
+    Qemu(Qemu),
+    /// Something on two serial ports (`--ports`).
+    Ports,
+}
+
+impl Dut {
+    /// An error if the co-processor is gone.
+    pub(super) fn check(&mut self) -> Result<()> {
+        match self {
+            Dut::Thread { handle, .. } => {
+                if handle.as_ref().is_some_and(|h| h.is_finished()) {
+                    let result = handle.take().map(|h| h.join());
+                    match result {
+                        Some(Ok(Err(e))) => bail!("{e}"),
+                        Some(Err(_)) => bail!("the co-processor thread panicked"),
+                        _ => bail!("the co-processor thread stopped"),
+                    }
+                }
+                Ok(())
+            }
+            Dut::Qemu(q) => q.check(),
+            Dut::Ports => Ok(()),
+        }
+    }
+
+    /// `error` happened on a line: if the co-processor has gone (QEMU
+    /// exits a moment after it closes its sockets), say that instead.
+    pub(super) fn explain(&mut self, error: anyhow::Error) -> anyhow::Error {
+        if let Dut::Qemu(q) = self {
+            q.wait_exit(Duration::from_secs(1));
+        }
+        match self.check() {
+            Err(gone) => anyhow!("{gone:#} (seen as: {error:#})"),
+            Ok(()) => error,
+        }
+    }
+
+    /// After the run: a failed run keeps QEMU's log and prints its tail; a
+    /// good one waits for QEMU to exit on the console's `q`.
+    pub(super) fn after_run(&mut self, failed: bool) {
+        if let Dut::Qemu(q) = self {
+            if failed {
+                q.keep = true;
+                eprintln!("host-bridge verify: {}", q.log_tail());
+            } else if q.wait_exit(Duration::from_secs(2)).is_none() {
+                eprintln!("host-bridge verify: note: QEMU did not exit on the console's q; killed");
+            }
+        }
+    }
+}
+
+impl Drop for Dut {
+    fn drop(&mut self) {
+        if let Dut::Thread { handle, stop } = self {
+            stop.store(true, Ordering::Relaxed);
+            if let Some(h) = handle.take() {
+                let _ = h.join();
+            }
+        }
+    }
+}

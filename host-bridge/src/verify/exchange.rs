@@ -1,0 +1,105 @@
+//! The client's requests on the host line: sent until their reply comes.
+
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, ensure, Context, Result};
+use lms_core::telegram::features::{Counters, CMD_COUNTERS, REQ_COUNTERS};
+use lms_core::telegram::{emit_telegram, Request};
+
+use super::session::Session;
+use super::{RETRY, TICK};
+
+impl Session {
+    /// Send `request` on the host line until the reply `reply` comes (every
+    /// [`RETRY`], until `deadline`); returns the reply's data.
+    fn exchange(
+        &mut self,
+        request: &[u8],
+        reply: u8,
+        what: &str,
+        deadline: Instant,
+    ) -> Result<Vec<u8>> {
+        let mut attempts = 0u32;
+        loop {
+            if Instant::now() >= deadline {
+                bail!(
+                    "no answer to {what} on the host line {} ({attempts} attempts)",
+                    self.host.name()
+                );
+            }
+            self.replies.clear();
+            self.naks = 0;
+            self.host
+                .send(request)
+                .with_context(|| format!("host line {}", self.host.name()))?;
+            attempts += 1;
+            self.log(format!("client: {what} (attempt {attempts})"));
+            let sent = Instant::now();
+            while sent.elapsed() < RETRY && Instant::now() < deadline && self.naks == 0 {
+                self.pump(TICK)?;
+                if let Some(i) = self.replies.iter().position(|r| r.command == reply) {
+                    let data = self.replies.remove(i).map(|r| r.data).unwrap_or_default();
+                    return Ok(data);
+                }
+                if self.replies.iter().any(|r| r.command == 0x92) {
+                    bail!(
+                        "{what}: the host line answered 92 (unknown command){}",
+                        if request.get(4) == Some(&REQ_COUNTERS) {
+                            ": not the co-processor (the firmware's stand-in, or an LMS?)"
+                        } else {
+                            ""
+                        }
+                    );
+                }
+            }
+        }
+    }
+
+    /// A mode request (`20 xx`): expects `A0 00`.
+    pub(super) fn mode(
+        &mut self,
+        request: Request<'_>,
+        what: &str,
+        deadline: Instant,
+    ) -> Result<()> {
+        let mut buf = [0u8; 64];
+        let n = request.emit(0, &mut buf)?;
+        let data = self.exchange(&buf[..n], 0xA0, what, deadline)?;
+        ensure!(
+            data.first() == Some(&0),
+            "{what}: the co-processor answered A0 {:02X?}",
+            data
+        );
+        Ok(())
+    }
+
+    /// The co-processor's counters (`55` → `D5`).
+    pub(super) fn counters(&mut self, deadline: Instant) -> Result<Counters> {
+        let mut buf = [0u8; 16];
+        let n = emit_telegram(&mut buf, 0, REQ_COUNTERS, &[], None)?;
+        let data = self.exchange(&buf[..n], CMD_COUNTERS, "55 (counters)", deadline)?;
+        Counters::decode(&data).context("malformed D5 counters")
+    }
+
+    /// The firmware's console report (`s`), then `q`.
+    pub(super) fn firmware_report(&mut self) -> Option<String> {
+        self.console.as_ref()?;
+        self.console_text.clear();
+        let until = Instant::now() + Duration::from_secs(2);
+        if let Some(c) = self.console.as_mut() {
+            c.send(b"s").ok()?;
+        }
+        while !self.console_text.contains(&b'\n') && Instant::now() < until {
+            if self.pump(TICK).is_err() {
+                break;
+            }
+        }
+        let text = String::from_utf8_lossy(&self.console_text)
+            .trim()
+            .to_string();
+        if let Some(c) = self.console.as_mut() {
+            let _ = c.send(b"q");
+        }
+        (!text.is_empty()).then_some(text)
+    }
+}

@@ -1,0 +1,77 @@
+//! `--host`: the core's co-processor natively in a thread, on the masters
+//! of two pseudo-terminals; verify opens the two slaves as serial ports.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use lms_core::device::coprocessor::{CoProcessor, PollError, SensorSetup};
+use lms_core::telegram::features::Counters;
+use lms_core::telegram::Baud;
+use lms_core::{Params, ValidParams};
+
+use super::dut::{Dut, Lines};
+use super::TICK;
+use crate::pty::Pty;
+use crate::serial::{PtyPort, SerialLink};
+
+/// Run a [`CoProcessor`] on two ports until `stop`: poll, then wait up to
+/// 1 ms for sensor bytes. Returns its counters.
+pub fn run_coprocessor(
+    params: ValidParams,
+    mut sensor: PtyPort,
+    mut host: PtyPort,
+    stop: &AtomicBool,
+) -> Result<Counters, String> {
+    let clock = Instant::now();
+    let now_us = || u64::try_from(clock.elapsed().as_micros()).unwrap_or(u64::MAX);
+    let mut cop = Box::new(CoProcessor::new(params, SensorSetup::default()));
+    cop.start(now_us());
+    while !stop.load(Ordering::Relaxed) {
+        cop.poll(&mut sensor, &mut host, now_us())
+            .map_err(|e| match e {
+                PollError::Sensor(e) => format!("co-processor thread: sensor port: {e}"),
+                PollError::Host(e) => format!("co-processor thread: host port: {e}"),
+            })?;
+        sensor
+            .wait_readable(TICK)
+            .map_err(|e| format!("co-processor thread: {e}"))?;
+    }
+    Ok(cop.counters())
+}
+
+/// Two pseudo-terminals, the co-processor in a thread on their masters and
+/// verify's ends on their slaves.
+pub(super) fn connect(params: Params) -> Result<Lines> {
+    let sensor_pty = PtyPort::new(Pty::open(9600)?);
+    let host_pty = PtyPort::new(Pty::open(9600)?);
+    // Our ends first, so that nothing the co-processor sends is lost.
+    let sensor = SerialLink::open(sensor_pty.slave_path(), Baud::B9600)?;
+    let host = SerialLink::open(host_pty.slave_path(), Baud::B9600)?;
+    let how = format!(
+        "lms_core::device::coprocessor::CoProcessor in a thread, host line {}, sensor line {}",
+        host_pty.slave_path().display(),
+        sensor_pty.slave_path().display()
+    );
+    let params = params
+        .validate()
+        .map_err(|e| anyhow::anyhow!("invalid parameters: {e}"))?;
+    let thread_stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&thread_stop);
+    let handle = std::thread::Builder::new()
+        .name("coprocessor".into())
+        .spawn(move || run_coprocessor(params, sensor_pty, host_pty, &flag))
+        .context("cannot start the co-processor thread")?;
+    let dut = Dut::Thread {
+        handle: Some(handle),
+        stop: thread_stop,
+    };
+    Ok(Lines {
+        sensor: Box::new(sensor),
+        host: Box::new(host),
+        console: None,
+        dut,
+        how,
+    })
+}

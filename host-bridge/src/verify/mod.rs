@@ -1,0 +1,192 @@
+//! `host-bridge verify`: drive a co-processor from both of its serial lines
+//! and check, bit for bit, that the features it sends are the ones the std
+//! build computes from the very scans it passed through.
+//!
+//! ```text
+//! host-bridge verify [--host | --qemu [ELF] | --ports HOST SENSOR]
+//!                    [--scene room|corridor|random] [--seed N] [--count N]
+//!                    [--noise-sigma S] [--dropout P]
+//!                    [--replay LOG] [--frames A..B]
+//!                    [--scans N] [--timeout S] [--host-baud BAUD]
+//!                    [--max-in-flight N] [-v]
+//!                    [--iterations N] [--q Q] [--sigma S] [--tau T]
+//!                    [--min-points N] [--max-chi2 X] [--no-merge]
+//! ```
+//!
+//! # What it plays
+//!
+//! * **The sensor** on the co-processor's sensor line: a simulated LMS 2xx
+//!   ([`lms_core::device::emulator::Emulator`]) that the co-processor brings up
+//!   itself (variant, mm, 500 kBd, continuous output). Its scans come from a
+//!   [`PlaySource`]: the synthetic scene (default; the frames of
+//!   `host-bridge extract` with the same scene options) or the `FLASER`
+//!   frames `--frames A..B` of a CARMEN log (`--replay`); 180° logs of other
+//!   resolutions are resampled to 180°/0.5° like `simulate --replay` does, 100°
+//!   logs are refused. Each scan of the selection is sent exactly once, in
+//!   order, at the emulator's real pace (one `B0` per 26.7 ms at 500 kBd).
+//! * **The client** on the co-processor's host line, with raw LMS telegrams:
+//!   the counters request `55` (retried until the `D5` comes: the first
+//!   bytes may be lost while the board starts), `20 48` (500 kBd,
+//!   `--host-baud`), `20 24`; then it reads the `B0` + feature telegrams
+//!   (`D4 D3 D1… D2… D0`), reassembles them per scan
+//!   ([`FeatureAssembler`]), and at the end `20 25` and a last `55`.
+//!
+//! # Sequence (deterministic)
+//!
+//! The emulator runs on the real clock, except that its clock is held:
+//!
+//! * from the moment the co-processor has started the sensor's stream until
+//!   the client's `20 24` is acknowledged, so that no scan of the selection
+//!   is spent before the host side streams;
+//! * while `--max-in-flight` scans are out and not back (default 8 with
+//!   `--qemu`: QEMU moves only ~10 KB/s into a UART, a third of the 500 kBd
+//!   line rate, and the rest would pile up in its socket; off otherwise);
+//! * after the last scan of the selection has gone out, or at `--timeout`.
+//!
+//! The LMS's first mirror tick falls at the very start of its stream, so
+//! one scan is drawn before the clock can be held (a warm-up scan); it
+//! reaches the co-processor after the client's stream is on, and is checked
+//! like every scan that comes back, but not counted as part of the
+//! selection. So `scans_in` is one more than the selection.
+//!
+//! # The check
+//!
+//! For every scan that comes back on the host line:
+//!
+//! 1. its `B0` must be byte for byte (count word and value words) a scan
+//!    the sensor side sent, in order (the pass-through);
+//! 2. the std build recomputes the features: [`MeasuredView::to_frame`]
+//!    with 13 range bits, [`Extractor::run`] with the parameters echoed in
+//!    the `D0` summary (`iterations`, `sigma`, `q`, `tau`; the others from
+//!    the command line, default ALGORITHM.md);
+//! 3. segments, edge points, every field of every line and corner (floats
+//!    by their bits; all NaNs count as equal) and the statistics must be
+//!    identical.
+//!
+//! Every failing scan prints one line on stdout with its first differing
+//! field:
+//!
+//! ```text
+//! MISMATCH scan 12 (frame 11): line 3 alpha: co-processor 0x3FC90FDB (1.5707964), recomputed 0x3FC90FDA (1.5707963); 4 fields differ
+//! ```
+//!
+//! and the run ends with `N/N scans bit-identical`, the scans lost (sent by
+//! the sensor side, never back with features, found by counting), and the
+//! co-processor's counters from the final `55`. The exit status is 1 on any
+//! mismatch or lost scan (not back although the host line went quiet for
+//! 3 s), when fewer than `--scans` scans were checked before `--timeout`
+//! (those still on their way are reported as such), or without the final
+//! counters.
+//!
+//! # Modes (how the lines are connected)
+//!
+//! * `--host` (default): the core's [`CoProcessor`] runs natively in a
+//!   thread on the masters of two pseudo-terminals ([`crate::pty`], behind
+//!   [`PtyPort`], an `embedded-io` 0.7 port); verify opens the two slave
+//!   devices with the `serialport` crate, exactly as in `--ports`.
+//! * `--qemu [ELF]`: the firmware under `qemu-system-arm -M netduinoplus2`
+//!   (extra QEMU arguments from the `QEMU_EXTRA` environment variable)
+//!   with its three serial ports on TCP sockets on 127.0.0.1 (free ports
+//!   chosen at start), as `firmware/run-qemu.sh` does: USART1 = host line,
+//!   USART2 = sensor line, USART3 = console (read all the time, since QEMU
+//!   stalls on a full socket; `s` at the end for the firmware's report, then
+//!   `q`). QEMU runs in its own process group under `timeout` (when
+//!   installed), so it is bounded even if verify is killed; a guard kills
+//!   the group on every exit, errors and panics included. Its `defmt` log
+//!   is kept in a temporary directory and its tail decoded with
+//!   `defmt-print` (if installed) when the run fails.
+//! * `--ports HOST SENSOR`: two serial ports wired to a co-processor
+//!   (`serialport` crate, 8N1, 9600 Bd at the start as after power-on).
+//!
+//! # Layout (in the order of the data flow)
+//!
+//! * `args` — [`VerifyArgs`], the options.
+//! * `source` — [`PlaySource`]: the scans the sensor side plays, and what
+//!   it drew ([`play_source`] builds it from the options).
+//! * `dut` — the co-processor under test and the two lines to it, per mode:
+//!   `host` (the [`CoProcessor`](lms_core::device::coprocessor::CoProcessor)
+//!   in a thread, [`run_coprocessor`]), `qemu` (the firmware under QEMU, on
+//!   TCP), or two serial ports. Every line is a [`crate::serial::Link`].
+//! * `session` — both lines, the emulator, the client side and its
+//!   requests (`exchange`), the phases of the run (`phases`).
+//! * `checker` and `compare` — every scan that comes back, recomputed and
+//!   compared field by field ([`differences`]).
+//! * `report` — the outcome and the summary on stdout.
+
+mod args;
+mod checker;
+mod compare;
+mod dut;
+mod exchange;
+mod host;
+mod phases;
+mod qemu;
+mod report;
+mod session;
+mod source;
+
+use std::time::{Duration, Instant};
+
+use anyhow::{ensure, Context, Result};
+use lms_core::telegram::Baud;
+use lms_core::Params;
+
+pub use args::{VerifyArgs, DEFAULT_ELF};
+pub use compare::{differences, Difference, Value};
+pub use host::run_coprocessor;
+pub use source::{play_source, Drawn, PlaySource, Tag};
+
+/// How long a request waits for its reply before it is sent again.
+const RETRY: Duration = Duration::from_millis(500);
+/// After the last scan has gone out: give up waiting for the rest once the
+/// host line has been silent this long.
+const QUIET: Duration = Duration::from_secs(3);
+/// Time for the closing `20 25` and `55` (also after `--timeout`).
+const CLOSING: Duration = Duration::from_secs(5);
+/// Longest wait of one pass of the loop (the emulator's pacing granularity).
+const TICK: Duration = Duration::from_millis(1);
+
+/// The checked options that are not the play source: the host line's
+/// rate and the pipeline parameters.
+fn checked_options(args: &VerifyArgs) -> Result<(Baud, Params)> {
+    ensure!(
+        args.timeout.is_finite() && args.timeout > 0.0,
+        "--timeout must be > 0 (seconds)"
+    );
+    let host_baud = Baud::from_bits_per_second(args.host_baud).with_context(|| {
+        format!(
+            "--host-baud {}: not a rate of the LMS 2xx (9600, 19200, 38400 or 500000)",
+            args.host_baud
+        )
+    })?;
+    let params = args.params.to_params()?;
+    if let Some(t) = args.recompute_tau {
+        ensure!(t.is_finite() && t > 0.0, "--recompute-tau must be > 0");
+    }
+    Ok((host_baud, params))
+}
+
+/// Run `host-bridge verify`.
+pub fn run(args: &VerifyArgs) -> Result<()> {
+    let started = Instant::now();
+    let (host_baud, params) = checked_options(args)?;
+    let (source, about) = play_source(args)?;
+    let timeout = Duration::from_secs_f64(args.timeout);
+    let deadline = started + timeout;
+    let stop = crate::stop::stop_flag()?;
+    let lines = dut::connect(args, params, timeout, &stop)?;
+    eprintln!("host-bridge verify: {}", lines.how);
+    eprintln!("host-bridge verify: sensor side plays {about}");
+    let mut session = session::Session::new(lines, source, args, params, stop, started);
+    let result = session.run(host_baud, deadline).map(|mut outcome| {
+        outcome.firmware_report = session.firmware_report();
+        outcome
+    });
+    session
+        .dut
+        .after_run(!result.as_ref().is_ok_and(report::Outcome::ok));
+    let outcome = result?;
+    report::report(&outcome);
+    drop(session);
+    outcome.verdict()
+}

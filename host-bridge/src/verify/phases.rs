@@ -1,0 +1,166 @@
+//! The phases of a run (see *Sequence* in the module docs): bring-up, the
+//! host line's rate and stream, playing the selection, the rest coming
+//! back, the closing requests.
+
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Result};
+use lms_core::telegram::features::Counters;
+use lms_core::telegram::{Baud, Request};
+
+use super::report::Outcome;
+use super::session::Session;
+use super::{CLOSING, QUIET, TICK};
+
+/// The scans of the selection not back at the end: (`lost`, `late`).
+struct Missing {
+    lost: usize,
+    late: usize,
+}
+
+impl Session {
+    /// The whole run (see the module docs).
+    pub(super) fn run(&mut self, host_baud: Baud, deadline: Instant) -> Result<Outcome> {
+        self.await_sensor_stream(deadline)?;
+        // The first exchange on the host line, retried: the board may
+        // still be starting.
+        let before = self.counters(deadline)?;
+        self.log(format!("counters before: {before:?}"));
+        self.start_host_stream(host_baud, deadline)?;
+        self.emu.source_mut().arm();
+        let streaming = Instant::now();
+        self.play(deadline)?;
+        let missing = self.await_rest(deadline)?;
+        let streaming = streaming.elapsed();
+        self.note_unfinished();
+        let closing = self.close();
+        Ok(self.outcome(missing, closing, streaming))
+    }
+
+    /// 1. The co-processor brings the sensor up by itself.
+    fn await_sensor_stream(&mut self, deadline: Instant) -> Result<()> {
+        self.log("waiting for the co-processor to bring the sensor up");
+        while !self.sensor_streaming {
+            if Instant::now() >= deadline {
+                bail!(
+                    "the co-processor did not bring the sensor up within --timeout \
+                     (sensor side: {} requests answered)",
+                    self.emu.stats().requests
+                );
+            }
+            self.pump(TICK)?;
+        }
+        Ok(())
+    }
+
+    /// 3. The host line's rate, then its stream.
+    fn start_host_stream(&mut self, host_baud: Baud, deadline: Instant) -> Result<()> {
+        if host_baud != Baud::B9600 {
+            self.mode(
+                Request::SetBaud(host_baud),
+                &format!(
+                    "20 {:02X} ({} Bd)",
+                    host_baud.mode_byte(),
+                    host_baud.bits_per_second()
+                ),
+                deadline,
+            )?;
+            self.host.set_baud(host_baud)?;
+        }
+        self.mode(Request::Continuous, "20 24 (continuous output)", deadline)
+    }
+
+    /// 4. Play the selection.
+    fn play(&mut self, deadline: Instant) -> Result<()> {
+        self.log(format!("playing {} scans", self.wanted));
+        while self.play_sent < self.wanted && Instant::now() < deadline {
+            self.pump(TICK)?;
+        }
+        self.finished = true;
+        Ok(())
+    }
+
+    /// 5. Let the rest come back: until all are back, the host line is
+    /// quiet for [`QUIET`], or `deadline` (then the missing ones are late,
+    /// not lost).
+    fn await_rest(&mut self, deadline: Instant) -> Result<Missing> {
+        let timed_out = loop {
+            if self.checker.play_back >= self.play_sent {
+                break false;
+            }
+            if Instant::now() >= deadline {
+                break true;
+            }
+            if self.last_host_rx.elapsed() >= QUIET {
+                break false;
+            }
+            self.pump(TICK)?;
+        };
+        let missing = self.play_sent.saturating_sub(self.checker.play_back);
+        Ok(if timed_out {
+            Missing {
+                lost: 0,
+                late: missing,
+            }
+        } else {
+            Missing {
+                lost: missing,
+                late: 0,
+            }
+        })
+    }
+
+    /// A `B0` still waiting for its features, and feature telegrams cut
+    /// short, are failures.
+    fn note_unfinished(&mut self) {
+        if self.pending_b0.take().is_some() {
+            self.checker.without_features();
+        }
+        if self.assembler.discarded() > 0 {
+            let n = self.assembler.discarded();
+            self.checker.problem(format_args!(
+                "{n} scans' feature telegrams were cut short (no D0)"
+            ));
+        }
+    }
+
+    /// 6. Stop the stream, read the counters.
+    fn close(&mut self) -> Result<Counters, String> {
+        let closing = Instant::now() + CLOSING;
+        self.mode(Request::OnRequest, "20 25 (stop the stream)", closing)
+            .and_then(|()| self.counters(closing))
+            .map_err(|e| format!("{e:#}"))
+    }
+
+    /// The outcome from the tally.
+    fn outcome(
+        &self,
+        missing: Missing,
+        closing: Result<Counters, String>,
+        streaming: Duration,
+    ) -> Outcome {
+        let c = &self.checker;
+        let (counters, counters_error) = match closing {
+            Ok(c) => (Some(c), None),
+            Err(e) => (None, Some(e)),
+        };
+        Outcome {
+            wanted: self.wanted,
+            lost: missing.lost,
+            late: missing.late,
+            play_sent: self.play_sent,
+            play_back: c.play_back,
+            play_identical: c.play_identical,
+            other_back: c.other_back,
+            other_identical: c.other_identical,
+            problems: c.problems,
+            lines: c.lines,
+            corners: c.corners,
+            counters,
+            counters_error,
+            firmware_report: None,
+            elapsed: self.started.elapsed(),
+            streaming,
+        }
+    }
+}

@@ -1,0 +1,304 @@
+//! The session: both lines, the emulator on the sensor line, the client's
+//! framer and feature assembler on the host line, the checker; one
+//! [`Session::pump`] moves every byte that is due.
+
+use std::collections::VecDeque;
+use std::fmt;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+use lms_core::device::emulator::{Emulator, Event as EmuEvent, Settings};
+use lms_core::telegram::features::{
+    Assembled, FeatureAssembler, CMD_CORNERS, CMD_EDGES, CMD_LINES, CMD_SEGMENTS, CMD_SUMMARY,
+};
+use lms_core::telegram::{Direction, Event, Framer, Handshake};
+use lms_core::Params;
+
+use super::checker::Checker;
+use super::dut::{Dut, Lines};
+use super::source::{PlaySource, Tag};
+use super::VerifyArgs;
+use crate::serial::Link;
+
+/// A reply seen on the host line (not a scan, not a feature telegram).
+pub(super) struct HostReply {
+    pub(super) command: u8,
+    pub(super) data: Vec<u8>,
+}
+
+/// The emulator's clock: the real one, minus the time it was held.
+pub(super) struct EmuClock {
+    origin: Instant,
+    held_since: Option<Instant>,
+    held: Duration,
+}
+
+impl EmuClock {
+    fn new() -> Self {
+        EmuClock {
+            origin: Instant::now(),
+            held_since: None,
+            held: Duration::ZERO,
+        }
+    }
+
+    fn now_us(&self) -> u64 {
+        let now = self.held_since.unwrap_or_else(Instant::now);
+        let t = now.duration_since(self.origin).saturating_sub(self.held);
+        u64::try_from(t.as_micros()).unwrap_or(u64::MAX)
+    }
+
+    fn hold(&mut self) {
+        if self.held_since.is_none() {
+            self.held_since = Some(Instant::now());
+        }
+    }
+
+    fn release(&mut self) {
+        if let Some(t) = self.held_since.take() {
+            self.held += t.elapsed();
+        }
+    }
+}
+
+/// Both ends of the co-processor and everything verify keeps.
+pub(super) struct Session {
+    /// First, so that it is dropped first: QEMU is killed before its peers
+    /// disconnect (it spins when they do).
+    pub(super) dut: Dut,
+    pub(super) sensor: Box<dyn Link>,
+    pub(super) host: Box<dyn Link>,
+    pub(super) console: Option<Box<dyn Link>>,
+    pub(super) console_text: Vec<u8>,
+    pub(super) emu: Emulator<PlaySource>,
+    pub(super) clock: EmuClock,
+    /// The sensor's stream runs (the co-processor sent `20 24`).
+    pub(super) sensor_streaming: bool,
+    /// `B0`s completed on the sensor line, and of those in the selection.
+    pub(super) sent: usize,
+    pub(super) play_sent: usize,
+    pub(super) wanted: usize,
+    /// `--max-in-flight` (0 = off).
+    pub(super) max_in_flight: usize,
+    /// Nothing more is to be sent (the selection is out, or time is up).
+    pub(super) finished: bool,
+    pub(super) framer: Framer,
+    pub(super) assembler: FeatureAssembler,
+    /// The last `B0` on the host line, waiting for its features.
+    pub(super) pending_b0: Option<Vec<u8>>,
+    pub(super) replies: VecDeque<HostReply>,
+    pub(super) naks: u32,
+    pub(super) last_host_rx: Instant,
+    pub(super) checker: Checker,
+    pub(super) stop: Arc<AtomicBool>,
+    pub(super) verbose: bool,
+    pub(super) started: Instant,
+}
+
+impl Session {
+    /// The session on `lines`, playing `source`.
+    pub(super) fn new(
+        lines: Lines,
+        source: PlaySource,
+        args: &VerifyArgs,
+        params: Params,
+        stop: Arc<AtomicBool>,
+        started: Instant,
+    ) -> Self {
+        let clock = EmuClock::new();
+        let wanted = source.len();
+        let emu = Emulator::new(source, Settings::default(), clock.now_us());
+        let max_in_flight = args
+            .max_in_flight
+            .unwrap_or(if args.qemu.is_some() { 8 } else { 0 });
+        Session {
+            dut: lines.dut,
+            sensor: lines.sensor,
+            host: lines.host,
+            console: lines.console,
+            console_text: Vec::new(),
+            emu,
+            clock,
+            sensor_streaming: false,
+            sent: 0,
+            play_sent: 0,
+            wanted,
+            max_in_flight,
+            finished: false,
+            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
+            assembler: FeatureAssembler::new(),
+            pending_b0: None,
+            replies: VecDeque::new(),
+            naks: 0,
+            last_host_rx: Instant::now(),
+            checker: Checker::new(params, args.recompute_tau),
+            stop,
+            verbose: args.verbose,
+            started,
+        }
+    }
+
+    pub(super) fn log(&self, msg: impl fmt::Display) {
+        if self.verbose {
+            eprintln!("[{:8.3} s] {msg}", self.started.elapsed().as_secs_f64());
+        }
+    }
+
+    /// One pass: sensor bytes in, the emulator's bytes out, host bytes in
+    /// (waiting up to `wait`), the console drained. A failing line is
+    /// explained by the co-processor's end if it has one (QEMU's exit).
+    pub(super) fn pump(&mut self, wait: Duration) -> Result<()> {
+        if self.stop.load(Ordering::Relaxed) {
+            bail!("interrupted");
+        }
+        self.dut.check()?;
+        self.pump_lines(wait).map_err(|e| self.dut.explain(e))
+    }
+
+    fn pump_lines(&mut self, wait: Duration) -> Result<()> {
+        let mut buf = [0u8; 4096];
+        loop {
+            let n = self
+                .sensor
+                .receive(&mut buf, Duration::ZERO)
+                .with_context(|| format!("sensor line {}", self.sensor.name()))?;
+            if n == 0 {
+                break;
+            }
+            self.emu.receive(self.clock.now_us(), &buf[..n]);
+        }
+        self.pump_emulator()?;
+        let mut wait = wait;
+        loop {
+            let n = self
+                .host
+                .receive(&mut buf, wait)
+                .with_context(|| format!("host line {}", self.host.name()))?;
+            if n == 0 {
+                break;
+            }
+            self.last_host_rx = Instant::now();
+            self.feed_host(&buf[..n]);
+            wait = Duration::ZERO;
+        }
+        if let Some(console) = self.console.as_mut() {
+            loop {
+                let n = console.receive(&mut buf, Duration::ZERO)?;
+                if n == 0 {
+                    break;
+                }
+                self.console_text.extend_from_slice(&buf[..n]);
+            }
+        }
+        Ok(())
+    }
+
+    /// Hold or release the emulator's clock (see *Sequence* in the module
+    /// docs).
+    fn update_hold(&mut self) {
+        let armed = self.emu.source().armed();
+        let in_flight = self.play_sent.saturating_sub(self.checker.play_back);
+        let hold = self.finished
+            || (self.sensor_streaming && !armed)
+            || (armed && self.play_sent >= self.wanted)
+            || (armed && self.max_in_flight > 0 && in_flight >= self.max_in_flight);
+        if hold {
+            self.clock.hold();
+        } else {
+            self.clock.release();
+        }
+    }
+
+    /// Send what the emulator has due, act on its events.
+    fn pump_emulator(&mut self) -> Result<()> {
+        self.update_hold();
+        let now = self.clock.now_us();
+        let mut out = [0u8; 4096];
+        loop {
+            let n = self.emu.transmit(now, &mut out);
+            if n > 0 {
+                self.sensor
+                    .send(&out[..n])
+                    .with_context(|| format!("sensor line {}", self.sensor.name()))?;
+            }
+            while let Some(event) = self.emu.next_event() {
+                match event {
+                    EmuEvent::BaudSwitched { to, .. } => {
+                        self.log(format!("sensor line to {} Bd", to.bits_per_second()));
+                        self.sensor.set_baud(to)?;
+                    }
+                    EmuEvent::StreamStarted => {
+                        self.sensor_streaming = true;
+                        // Held until the client's stream is on.
+                        self.update_hold();
+                        self.log("sensor stream started (bring-up done)");
+                    }
+                    EmuEvent::StreamStopped => {
+                        self.sensor_streaming = false;
+                        self.log("sensor stream stopped by the co-processor");
+                    }
+                    EmuEvent::ScanSent { .. } => {
+                        self.sent += 1;
+                        let tag = self.emu.source().draws().get(self.sent - 1).map(|d| d.tag);
+                        if let Some(Tag::Play(_)) = tag {
+                            self.play_sent += 1;
+                            self.update_hold();
+                        }
+                    }
+                    EmuEvent::Request(h) => self.log(format!("sensor request: {h:?}")),
+                    EmuEvent::BadChecksum => self.log("sensor side: bad checksum, NAK"),
+                    EmuEvent::PowerOnSent
+                    | EmuEvent::IgnoredAddress { .. }
+                    | EmuEvent::Restarting => {}
+                }
+            }
+            if n == 0 {
+                return Ok(());
+            }
+        }
+    }
+
+    /// Bytes from the co-processor's host line.
+    fn feed_host(&mut self, bytes: &[u8]) {
+        let mut input = bytes;
+        loop {
+            let fed = self.framer.feed(input);
+            input = fed.remaining;
+            match fed.event {
+                Some(Event::Ack) => {}
+                Some(Event::Nak) => self.naks += 1,
+                Some(Event::Telegram(t)) => match t.command() {
+                    0xB0 => {
+                        if self.pending_b0.is_some() {
+                            self.checker.without_features();
+                        }
+                        self.pending_b0 = Some(t.as_bytes().to_vec());
+                    }
+                    CMD_SUMMARY | CMD_LINES | CMD_CORNERS | CMD_EDGES | CMD_SEGMENTS => {
+                        match self.assembler.push(&t) {
+                            Ok(Assembled::Complete(summary, features)) => {
+                                let b0 = self.pending_b0.take();
+                                self.checker.check(
+                                    b0.as_deref(),
+                                    &summary,
+                                    features,
+                                    self.emu.source(),
+                                );
+                            }
+                            Ok(_) => {}
+                            Err(e) => self.checker.problem(e),
+                        }
+                    }
+                    command => self.replies.push_back(HostReply {
+                        command,
+                        data: t.data().to_vec(),
+                    }),
+                },
+                None if input.is_empty() => break,
+                None => {}
+            }
+        }
+    }
+}
