@@ -10,7 +10,7 @@
 use anyhow::{ensure, Result};
 use clap::{Args, ValueEnum};
 use lms_core::{Frame, Invalid, Variant};
-use lms_scene::{seeded_rng, Bearings, NoiseModel, Pose, RangeUnit, Reading, Scene};
+use lms_scene::{seeded_rng, Bearings, ChaCha8Rng, NoiseModel, Pose, RangeUnit, Reading, Scene};
 
 use crate::extract::InputFrame;
 
@@ -62,6 +62,43 @@ impl Default for SceneArgs {
     }
 }
 
+impl SceneArgs {
+    /// An error naming the option that is out of range (`--count`,
+    /// `--noise-sigma` in metres, `--dropout` as a probability).
+    pub fn check(&self) -> Result<()> {
+        ensure!(self.count > 0, "--count must be at least 1");
+        ensure!(
+            self.noise_sigma.is_finite() && self.noise_sigma >= 0.0,
+            "--noise-sigma must be finite and >= 0 (metres)"
+        );
+        ensure!(
+            (0.0..=1.0).contains(&self.dropout),
+            "--dropout must be a probability in 0..=1"
+        );
+        Ok(())
+    }
+
+    /// The scene and the seeded generator positioned after drawing it (the
+    /// random room draws from it); the noise is drawn next.
+    pub fn scene_and_rng(&self) -> (Scene, ChaCha8Rng) {
+        let mut rng = seeded_rng(self.seed);
+        let scene = match self.scene {
+            SceneKind::Room => Scene::room_with_box(),
+            SceneKind::Corridor => Scene::corridor(),
+            SceneKind::Random => Scene::random_room(&mut rng),
+        };
+        (scene, rng)
+    }
+
+    /// The scene's name as on the command line (`room`, `corridor`,
+    /// `random`).
+    pub fn scene_name(&self) -> String {
+        self.scene
+            .to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_string())
+    }
+}
+
 /// A frame of the core from simulated readings at the 180°/0.5° bearings.
 pub fn frame_from_readings(readings: &[Reading]) -> Result<Frame> {
     let mut frame = Frame::new(Variant::Fov180Res50.geometry(), readings.len())
@@ -77,21 +114,8 @@ pub fn frame_from_readings(readings: &[Reading]) -> Result<Frame> {
 
 /// The frames of a synthetic scene, indexed from 0.
 pub fn frames(args: &SceneArgs) -> Result<Vec<InputFrame>> {
-    ensure!(args.count > 0, "--count must be at least 1");
-    ensure!(
-        args.noise_sigma.is_finite() && args.noise_sigma >= 0.0,
-        "--noise-sigma must be finite and >= 0 (metres)"
-    );
-    ensure!(
-        (0.0..=1.0).contains(&args.dropout),
-        "--dropout must be a probability in 0..=1"
-    );
-    let mut rng = seeded_rng(args.seed);
-    let scene = match args.scene {
-        SceneKind::Room => Scene::room_with_box(),
-        SceneKind::Corridor => Scene::corridor(),
-        SceneKind::Random => Scene::random_room(&mut rng),
-    };
+    args.check()?;
+    let (scene, mut rng) = args.scene_and_rng();
     let bearings = Bearings::lms_180_half_deg();
     debug_assert_eq!(bearings.n, Variant::Fov180Res50.beams());
     let truth = scene.cast(&bearings, Pose::IDENTITY);
