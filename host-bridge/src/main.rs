@@ -19,9 +19,9 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use host_bridge::carmen::{self, UnitMode};
+use host_bridge::carmen;
 use host_bridge::extract::{self, InputFrame};
-use host_bridge::options::{FrameRange, ParamArgs};
+use host_bridge::options::{FrameRange, ParamArgs, UnitArg};
 use host_bridge::synthetic::{self, SceneArgs};
 
 #[derive(Parser, Debug)]
@@ -75,13 +75,6 @@ struct ExtractArgs {
     output: Option<PathBuf>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum UnitArg {
-    Auto,
-    Cm,
-    Mm,
-}
-
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -111,12 +104,7 @@ fn run_extract(args: ExtractArgs) -> Result<()> {
             host_bridge::capture::input_frames(path, &range)?
         }
         Some(path) => {
-            let unit = match args.unit {
-                UnitArg::Auto => UnitMode::Auto,
-                UnitArg::Cm => UnitMode::Centimetre,
-                UnitArg::Mm => UnitMode::Millimetre,
-            };
-            let log = carmen::read_log(path, unit)?;
+            let log = carmen::read_log(path, args.unit.carmen_mode())?;
             let total = log.scans.len();
             let inputs: Vec<InputFrame> = log
                 .scans

@@ -1,12 +1,58 @@
-//! Command-line options shared by the subcommands: pipeline parameters and
-//! frame selections.
+//! Command-line options shared by the subcommands: pipeline parameters,
+//! frame selections and range units.
 
 use std::fmt;
 use std::str::FromStr;
 
 use anyhow::{anyhow, Result};
-use clap::Args;
-use lms_core::Params;
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use clap::{Args, ValueEnum};
+use lms_core::{Params, Unit};
+
+use crate::carmen::UnitMode;
+
+/// Range unit on the command line: `--unit` of `extract` and `plot` (the
+/// unit of a log's error codes, `auto` by default) and `--units` of `scan`
+/// (the sensor's units: `mm` or `cm` only, see [`UnitArg::sensor_parser`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum UnitArg {
+    /// mm if any range has three decimals, else cm.
+    Auto,
+    /// Centimetres (ranges up to 81.82 m).
+    Cm,
+    /// Millimetres (ranges up to 8.182 m).
+    Mm,
+}
+
+impl UnitArg {
+    /// How `carmen` reads a log in this unit.
+    pub fn carmen_mode(self) -> UnitMode {
+        match self {
+            UnitArg::Auto => UnitMode::Auto,
+            UnitArg::Cm => UnitMode::Centimetre,
+            UnitArg::Mm => UnitMode::Millimetre,
+        }
+    }
+
+    /// The core's unit; `None` for `auto`.
+    pub fn unit(self) -> Option<Unit> {
+        match self {
+            UnitArg::Auto => None,
+            UnitArg::Cm => Some(Unit::Centimetre),
+            UnitArg::Mm => Some(Unit::Millimetre),
+        }
+    }
+
+    /// A value parser taking only the units a sensor can be set to, `mm`
+    /// and `cm` (for `scan --units`).
+    pub fn sensor_parser() -> impl TypedValueParser<Value = UnitArg> {
+        PossibleValuesParser::new([
+            PossibleValue::new("mm").help("Millimetres (ranges up to 8.182 m)"),
+            PossibleValue::new("cm").help("Centimetres (ranges up to 81.82 m)"),
+        ])
+        .map(|s| if s == "cm" { UnitArg::Cm } else { UnitArg::Mm })
+    }
+}
 
 /// Pipeline parameters on the command line; unset ones keep the
 /// [`Params::default`] of ALGORITHM.md.

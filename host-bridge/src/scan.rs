@@ -30,13 +30,14 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{bail, ensure, Context, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use lms_core::telegram::{Baud, FramerStats};
 use lms_core::Unit;
 use lms_core::Variant;
 
 use crate::capture::CaptureFile;
 use crate::client::{Client, ClientStats, Scan, Timeouts};
+use crate::options::UnitArg;
 use crate::serial::{Link, SerialLink};
 
 /// `--baud`: the rate to stream at, or `auto` to keep the one found.
@@ -122,25 +123,6 @@ impl fmt::Display for VariantChoice {
     }
 }
 
-/// `--units`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum UnitsChoice {
-    /// Millimetres (ranges up to 8.182 m).
-    Mm,
-    /// Centimetres (ranges up to 81.82 m).
-    Cm,
-}
-
-impl UnitsChoice {
-    /// The sensor's units.
-    pub fn units(self) -> Unit {
-        match self {
-            UnitsChoice::Mm => Unit::Millimetre,
-            UnitsChoice::Cm => Unit::Centimetre,
-        }
-    }
-}
-
 /// Options of `host-bridge scan`.
 #[derive(Args, Clone, Debug)]
 pub struct ScanArgs {
@@ -158,8 +140,8 @@ pub struct ScanArgs {
     #[arg(long, default_value = "180/0.5", value_name = "FOV/RES")]
     pub variant: VariantChoice,
     /// Range units of the scans
-    #[arg(long, value_enum, default_value_t = UnitsChoice::Mm)]
-    pub units: UnitsChoice,
+    #[arg(long, default_value = "mm", value_parser = UnitArg::sensor_parser())]
+    pub units: UnitArg,
     /// Number of scans to record
     #[arg(long, default_value_t = 100, value_name = "N")]
     pub scans: usize,
@@ -376,7 +358,7 @@ impl ScanArgs {
                 BaudChoice::Rate(b) => Some(b),
             },
             variant: self.variant.0,
-            units: self.units.units(),
+            units: self.units.unit().context("--units: mm or cm")?,
             scans: self.scans,
             single: self.single,
             restore_9600: !self.keep_baud,
