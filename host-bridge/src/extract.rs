@@ -86,46 +86,51 @@ pub struct CornerRecord {
     pub line_b: u8,
 }
 
-/// [`Stats`] of a run, field for field.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[allow(missing_docs)]
-pub struct StatsRecord {
-    pub valid_beams: u16,
-    pub invalid_windows: u16,
-    pub short_segments: u16,
-    pub segment_overflow: u16,
-    pub edge_overflow: u16,
-    pub degenerate_fits: u16,
-    pub rejected_chi2: u16,
-    pub rejected_short: u16,
-    pub merges: u16,
-    pub line_overflow: u16,
-    pub degenerate_corners: u16,
-    pub corner_overflow: u16,
-    pub splits: u16,
-    pub split_short: u16,
-    pub split_rejected: u16,
-}
+/// [`Stats`] of a run, field for field: in JSON an object with one key
+/// per entry of [`Stats::FIELDS`], in that order.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StatsRecord(pub Stats);
 
 impl From<&Stats> for StatsRecord {
     fn from(s: &Stats) -> Self {
-        StatsRecord {
-            valid_beams: s.valid_beams,
-            invalid_windows: s.invalid_windows,
-            short_segments: s.short_segments,
-            segment_overflow: s.segment_overflow,
-            edge_overflow: s.edge_overflow,
-            degenerate_fits: s.degenerate_fits,
-            rejected_chi2: s.rejected_chi2,
-            rejected_short: s.rejected_short,
-            merges: s.merges,
-            line_overflow: s.line_overflow,
-            degenerate_corners: s.degenerate_corners,
-            corner_overflow: s.corner_overflow,
-            splits: s.splits,
-            split_short: s.split_short,
-            split_rejected: s.split_rejected,
+        StatsRecord(*s)
+    }
+}
+
+impl std::ops::Deref for StatsRecord {
+    type Target = Stats;
+
+    fn deref(&self) -> &Stats {
+        &self.0
+    }
+}
+
+impl Serialize for StatsRecord {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(Stats::FIELDS.len()))?;
+        for (name, read) in Stats::FIELDS {
+            map.serialize_entry(name, &read(&self.0))?;
         }
+        map.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for StatsRecord {
+    /// Counters by name, every one of [`Stats::FIELDS`] required (other
+    /// keys are ignored).
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let by_name = std::collections::BTreeMap::<String, u16>::deserialize(deserializer)?;
+        let values = Stats::FIELDS
+            .iter()
+            .map(|(name, _)| {
+                by_name
+                    .get(*name)
+                    .copied()
+                    .ok_or_else(|| serde::de::Error::missing_field(name))
+            })
+            .collect::<Result<Vec<u16>, D::Error>>()?;
+        Ok(StatsRecord(Stats::from_fields(&values)))
     }
 }
 

@@ -12,12 +12,12 @@
 
 use std::fs::File;
 use std::io::{self, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
 
 use host_bridge::carmen;
 use host_bridge::extract::{self, InputFrame};
@@ -93,65 +93,69 @@ fn main() -> ExitCode {
     }
 }
 
+/// The frames of the CARMEN log at `path` selected by `range`, and a
+/// description for the summary.
+fn log_inputs(
+    path: &Path,
+    args: &ExtractArgs,
+    range: &FrameRange,
+) -> Result<(String, Vec<InputFrame>)> {
+    let log = carmen::read_log(path, args.unit.carmen_mode())?;
+    let total = log.scans.len();
+    let inputs: Vec<InputFrame> = log
+        .scans
+        .into_iter()
+        .filter(|s| range.contains(s.index))
+        .map(|s| InputFrame {
+            index: s.index,
+            frame: s.frame,
+            pose: Some(s.meta.pose),
+        })
+        .collect();
+    if inputs.is_empty() {
+        bail!(
+            "{}: --frames {range} selects no frame (the log has {total} FLASER frames)",
+            path.display()
+        );
+    }
+    let about = format!("{} ({} frames, {} ranges)", path.display(), total, log.unit);
+    Ok((about, inputs))
+}
+
+/// The frames of the synthetic scene selected by `range`, and a
+/// description for the summary.
+fn scene_inputs(scene: &SceneArgs, range: &FrameRange) -> Result<(String, Vec<InputFrame>)> {
+    let all = synthetic::frames(scene)?;
+    let total = all.len();
+    let inputs: Vec<InputFrame> = all
+        .into_iter()
+        .filter(|f| range.contains(f.index))
+        .collect();
+    if inputs.is_empty() {
+        bail!("--frames {range} selects no frame of the {total} synthetic frames");
+    }
+    let about = format!(
+        "scene {} (seed {}, {} frames, noise {} m, dropout {})",
+        scene.scene_name(),
+        scene.seed,
+        total,
+        scene.noise_sigma,
+        scene.dropout
+    );
+    Ok((about, inputs))
+}
+
 fn run_extract(args: ExtractArgs) -> Result<()> {
     let started = Instant::now();
     let params = args.params.to_params()?;
     let range = args.frames.unwrap_or_default();
-
-    let (source, inputs): (String, Vec<InputFrame>) = match &args.log {
+    let (source, inputs) = match &args.log {
         // A capture recorded by `host-bridge scan` (told by its magic).
         Some(path) if host_bridge::capture::is_capture(path).unwrap_or(false) => {
             host_bridge::capture::input_frames(path, &range)?
         }
-        Some(path) => {
-            let log = carmen::read_log(path, args.unit.carmen_mode())?;
-            let total = log.scans.len();
-            let inputs: Vec<InputFrame> = log
-                .scans
-                .into_iter()
-                .filter(|s| range.contains(s.index))
-                .map(|s| InputFrame {
-                    index: s.index,
-                    frame: s.frame,
-                    pose: Some(s.meta.pose),
-                })
-                .collect();
-            if inputs.is_empty() {
-                bail!(
-                    "{}: --frames {range} selects no frame (the log has {total} FLASER frames)",
-                    path.display()
-                );
-            }
-            (
-                format!("{} ({} frames, {} ranges)", path.display(), total, log.unit),
-                inputs,
-            )
-        }
-        None => {
-            let all = synthetic::frames(&args.scene)?;
-            let total = all.len();
-            let inputs: Vec<InputFrame> = all
-                .into_iter()
-                .filter(|f| range.contains(f.index))
-                .collect();
-            if inputs.is_empty() {
-                bail!("--frames {range} selects no frame of the {total} synthetic frames");
-            }
-            (
-                format!(
-                    "scene {} (seed {}, {} frames, noise {} m, dropout {})",
-                    args.scene
-                        .scene
-                        .to_possible_value()
-                        .map_or_else(String::new, |v| v.get_name().to_string()),
-                    args.scene.seed,
-                    total,
-                    args.scene.noise_sigma,
-                    args.scene.dropout
-                ),
-                inputs,
-            )
-        }
+        Some(path) => log_inputs(path, &args, &range)?,
+        None => scene_inputs(&args.scene, &range)?,
     };
 
     let out: Box<dyn Write> = match &args.output {

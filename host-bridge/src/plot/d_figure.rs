@@ -2,11 +2,12 @@
 //! passes, on a log axis, with the segmentation gate τ.
 
 use anyhow::Result;
+use plotters::coord::combinators::LogCoord;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-use super::font::ensure_font;
 use super::frame::FramePlot;
 use super::style::*;
 
@@ -31,6 +32,59 @@ fn finite_runs(d: &[f32]) -> Vec<(usize, Vec<f64>)> {
     runs
 }
 
+/// The `D` chart: beam index across, `D` on a log axis.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, LogCoord<f64>>>;
+
+/// The `D` axis: every finite `D`, the smallest positive one, and the axis
+/// limits (decades).
+struct Scale {
+    finite: Vec<f64>,
+    min_pos: f64,
+    lo: f64,
+    hi: f64,
+}
+
+impl Scale {
+    fn new(fp: &FramePlot, tau: f64) -> Self {
+        let finite: Vec<f64> = fp
+            .passes
+            .iter()
+            .flat_map(|p| p.d.iter())
+            .filter(|d| d.is_finite())
+            .map(|&d| f64::from(d))
+            .collect();
+        let min_pos = finite
+            .iter()
+            .copied()
+            .filter(|&d| d > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let max = finite.iter().copied().fold(tau, f64::max);
+        let lo_exp = if min_pos.is_finite() {
+            min_pos.log10().floor().max(-12.0)
+        } else {
+            (tau.log10() - 3.0).floor()
+        };
+        let lo = 10f64.powf(lo_exp);
+        let hi = 10f64.powf(max.log10().ceil().max(lo_exp + 1.0));
+        Scale {
+            finite,
+            min_pos,
+            lo,
+            hi,
+        }
+    }
+}
+
+/// `10^e` as `1eE`, other values in short scientific notation.
+fn power(v: &f64) -> String {
+    let e = v.log10();
+    if (e - e.round()).abs() < 1e-6 {
+        format!("1e{}", e.round() as i64)
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
 /// Draw the `D` figure on `root` (any backend, [`MAHALANOBIS_SIZE`] recommended).
 pub fn draw_mahalanobis<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
@@ -39,67 +93,62 @@ pub fn draw_mahalanobis<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    ensure_font()?;
+    let (title_area, chart_area, legend_area) = layout(root)?;
     let rec = &fp.record;
     let tau = f64::from(fp.params.tau);
-    root.fill(&WHITE).map_err(draw_err)?;
-    let (w, _) = root.dim_in_pixel();
-    let (title_area, body) = root.split_vertically(TITLE_HEIGHT);
-    let (chart_area, legend_area) = body.split_horizontally(w - LEGEND_WIDTH);
-
-    let finite: Vec<f64> = fp
-        .passes
-        .iter()
-        .flat_map(|p| p.d.iter())
-        .filter(|d| d.is_finite())
-        .map(|&d| f64::from(d))
-        .collect();
-    let min_pos = finite
-        .iter()
-        .copied()
-        .filter(|&d| d > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    let max = finite.iter().copied().fold(tau, f64::max);
-    let lo_exp = if min_pos.is_finite() {
-        min_pos.log10().floor().max(-12.0)
-    } else {
-        (tau.log10() - 3.0).floor()
-    };
-    let lo = 10f64.powf(lo_exp);
-    let hi = 10f64.powf(max.log10().ceil().max(lo_exp + 1.0));
-    let windows = rec.n.saturating_sub(2);
+    let sc = Scale::new(fp, tau);
     let x_max = rec.n.saturating_sub(1) as f64;
-
     let mut chart = ChartBuilder::on(&chart_area)
         .margin(16)
         .x_label_area_size(54)
         .y_label_area_size(80)
-        .build_cartesian_2d(0.0..x_max, (lo..hi).log_scale())
+        .build_cartesian_2d(0.0..x_max, (sc.lo..sc.hi).log_scale())
         .map_err(draw_err)?;
     let beam = |v: &f64| format!("{v:.0}");
-    let power = |v: &f64| {
-        let e = v.log10();
-        if (e - e.round()).abs() < 1e-6 {
-            format!("1e{}", e.round() as i64)
-        } else {
-            format!("{v:.1e}")
-        }
-    };
-    chart
-        .configure_mesh()
-        .x_desc("beam index (centre of the window of 3 beams)")
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc("beam index (centre of the window of 3 beams)")
         .y_desc("D (log scale)")
         .x_label_formatter(&beam)
         .y_label_formatter(&power)
-        .x_labels(16)
-        .bold_line_style(GRID_BOLD)
-        .light_line_style(GRID)
-        .label_style((FONT, 16))
-        .axis_desc_style((FONT, 18))
-        .draw()
+        .x_labels(16);
+    draw_mesh(&mut mesh)?;
+    let invalid_count = shade_invalid_windows(&mut chart, fp, &sc)?;
+    draw_passes(&mut chart, fp, sc.lo)?;
+    // τ.
+    chart
+        .draw_series(std::iter::once(DashedPathElement::new(
+            vec![(0.0, tau), (x_max, tau)],
+            12,
+            7,
+            TAU.stroke_width(2),
+        )))
         .map_err(draw_err)?;
+    let passes: Vec<String> = fp.passes.iter().map(|p| p.pass.to_string()).collect();
+    let line1 = format!(
+        "Frame {} — Mahalanobis distance D per window after pass {} (log scale), τ = {}",
+        rec.frame,
+        passes.join(" and "),
+        fp.params.tau
+    );
+    let line2 = format!("{} · {}", fp.source, fp.params_text());
+    title(&title_area, &line1, &line2)?;
+    d_legend(&legend_area, fp, &sc, invalid_count)?;
+    root.present().map_err(draw_err)?;
+    Ok(())
+}
 
-    // Windows with an invalid beam: shaded bands.
+/// Windows with an invalid beam as shaded bands; returns how many.
+fn shade_invalid_windows<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    fp: &FramePlot,
+    sc: &Scale,
+) -> Result<usize>
+where
+    DB::ErrorType: 'static,
+{
+    let rec = &fp.record;
+    let (lo, hi) = (sc.lo, sc.hi);
+    let windows = rec.n.saturating_sub(2);
     let invalid_beam_window: Vec<bool> = (0..windows)
         .map(|i| rec.ranges[i..i + 3].iter().any(Option::is_none))
         .collect();
@@ -124,8 +173,15 @@ where
         }
     }
 
-    // One curve per selected pass; invalid windows break it.
-    // The last pass first and thick, earlier ones thin on top of it.
+    Ok(invalid_count)
+}
+
+/// One curve per selected pass; invalid windows break it. The last pass
+/// first and thick, earlier ones thin on top of it (`D` = 0 drawn at `lo`).
+fn draw_passes<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, fp: &FramePlot, lo: f64) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
     for (k, p) in fp.passes.iter().enumerate().rev() {
         let colour = PASS_COLOURS[k % PASS_COLOURS.len()];
         let width = if k + 1 == fp.passes.len() { 3 } else { 1 };
@@ -150,30 +206,22 @@ where
         }
     }
 
-    // τ.
-    chart
-        .draw_series(std::iter::once(DashedPathElement::new(
-            vec![(0.0, tau), (x_max, tau)],
-            12,
-            7,
-            TAU.stroke_width(2),
-        )))
-        .map_err(draw_err)?;
+    Ok(())
+}
 
-    let passes: Vec<String> = fp.passes.iter().map(|p| p.pass.to_string()).collect();
-    let line1 = format!(
-        "Frame {} — Mahalanobis distance D per window after pass {} (log scale), τ = {}",
-        rec.frame,
-        passes.join(" and "),
-        fp.params.tau
-    );
-    let line2 = format!("{} · {}", fp.source, fp.params_text());
-    title(&title_area, &line1, &line2)?;
-
-    let mut lg = Legend {
-        area: &legend_area,
-        y: 40,
-    };
+/// The legend: one entry per pass, τ, the shaded windows, how to read it.
+fn d_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    fp: &FramePlot,
+    sc: &Scale,
+    invalid_count: usize,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let tau = f64::from(fp.params.tau);
+    let (finite, min_pos, lo) = (&sc.finite, sc.min_pos, sc.lo);
+    let mut lg = Legend { area, y: 40 };
     lg.heading("Legend")?;
     for (k, p) in fp.passes.iter().enumerate() {
         let colour = PASS_COLOURS[k % PASS_COLOURS.len()];
@@ -224,7 +272,6 @@ where
     if min_pos.is_finite() && finite.iter().any(|&d| d < lo) {
         lg.note(&format!("D = 0 is drawn at {}", power(&lo)))?;
     }
-    root.present().map_err(draw_err)?;
     Ok(())
 }
 

@@ -213,3 +213,42 @@ pub(super) fn fmt_metres(v: f64) -> String {
         s.to_string()
     }
 }
+
+/// A figure's areas on a white `root`: (title, chart, legend); loads the
+/// font first.
+pub(super) type Areas<DB> = (
+    DrawingArea<DB, Shift>,
+    DrawingArea<DB, Shift>,
+    DrawingArea<DB, Shift>,
+);
+
+/// Split `root` into the title band, the chart and the legend column.
+pub(super) fn layout<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>) -> Result<Areas<DB>>
+where
+    DB::ErrorType: 'static,
+{
+    super::font::ensure_font()?;
+    root.fill(&WHITE).map_err(draw_err)?;
+    let (w, _) = root.dim_in_pixel();
+    let (title_area, body) = root.split_vertically(TITLE_HEIGHT);
+    let (chart_area, legend_area) = body.split_horizontally(w - LEGEND_WIDTH);
+    Ok((title_area, chart_area, legend_area))
+}
+
+/// Draw a chart's grid and labels in the house style.
+pub(super) fn draw_mesh<X, Y, DB>(
+    mesh: &mut plotters::chart::MeshStyle<'_, '_, X, Y, DB>,
+) -> Result<()>
+where
+    X: plotters::coord::ranged1d::Ranged + plotters::coord::ranged1d::ValueFormatter<X::ValueType>,
+    Y: plotters::coord::ranged1d::Ranged + plotters::coord::ranged1d::ValueFormatter<Y::ValueType>,
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+{
+    mesh.bold_line_style(GRID_BOLD)
+        .light_line_style(GRID)
+        .label_style((FONT, 16))
+        .axis_desc_style((FONT, 18))
+        .draw()
+        .map_err(draw_err)
+}
