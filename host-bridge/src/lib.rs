@@ -2,15 +2,21 @@
 //!
 //! Modules in the order the data flows:
 //!
-//! 1. [`options`] — command-line pipeline parameters and frame selections.
+//! 1. [`options`] — command-line pipeline parameters, frame selections and
+//!    the range-unit value ([`options::UnitArg`]).
 //! 2. Sources of frames: [`carmen`] (recorded CARMEN logs) and
 //!    [`synthetic`] (seeded scenes from `lms-scene`, the no-hardware demo).
 //! 3. [`extract`] — run `lms_core::Extractor` per frame and build the JSON
 //!    Lines record ([`extract::FrameRecord`]).
 //! 4. [`plot`] — figures of one frame (scan with features, `D` per window).
-//! 5. The sensor side: [`client`] (an LMS 2xx client over a serial link),
+//! 5. The sensor side: [`serial`] (the one serial-line trait
+//!    [`serial::Link`], the real port [`serial::SerialLink`], a pty master as
+//!    an `embedded-io` port), [`client`] (an LMS 2xx client over a link),
 //!    [`fake_sensor`] (its in-memory test double), [`scan`] (the `scan`
 //!    session) and [`capture`] (the file format of recorded scans).
+//!    [`simulate`] — a simulated LMS 2xx on a pseudo-terminal ([`pty`]);
+//!    [`resample`] re-expresses scans for another variant (simulate and
+//!    verify), [`stop`] ends either cleanly on a signal.
 //! 6. [`verify`] — a co-processor (in a thread, under QEMU, or on serial
 //!    ports) checked bit for bit against the std build.
 //!

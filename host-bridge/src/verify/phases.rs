@@ -80,9 +80,9 @@ impl Session {
         Ok(())
     }
 
-    /// 5. Let the rest come back: until all are back, the host line is
-    /// quiet for [`QUIET`], or `deadline` (then the missing ones are late,
-    /// not lost).
+    /// Step 5, let the rest come back: until all are back, the host line is
+    /// quiet for [`QUIET`], or `deadline` passes (then the missing ones
+    /// are late, not lost).
     fn await_rest(&mut self, deadline: Instant) -> Result<Missing> {
         let timed_out = loop {
             if self.checker.play_back >= self.play_sent {
