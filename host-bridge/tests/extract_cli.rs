@@ -4,32 +4,16 @@
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use lms_core::{Extractor, Frame, Invalid, Params, Variant};
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
-
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data/carmen")
-        .join(name)
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .output()
-        .expect("cannot start host-bridge")
-}
+mod common;
+use common::{run, shared_log as data};
 
 /// A fresh scratch directory for this test process and `name`.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("host-bridge-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch("extract", name)
 }
 
 /// The first `count` FLASER frames of a cm log, parsed here independently of

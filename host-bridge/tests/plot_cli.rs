@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use host_bridge::plot::{
     EDGE, ILL_CONDITIONED, LINE_COLOURS, MAHALANOBIS_SIZE, PASS_COLOURS, RAW, SCAN_SIZE, TAU,
@@ -14,22 +14,8 @@ use host_bridge::plot::{
 use plotters::style::RGBColor;
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
-
-fn csail() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/carmen/csail-corrected.log.gz")
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .output()
-        .expect("cannot start host-bridge")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{csail, run, stderr};
 
 fn ok(args: &[&str]) -> Output {
     let o = run(args);
@@ -39,13 +25,7 @@ fn ok(args: &[&str]) -> Output {
 
 /// A fresh scratch directory for this test process and `name`.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "host-bridge-plot-test-{}-{name}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch("plot", name)
 }
 
 /// The one JSON record `extract` writes for `args`.

@@ -3,37 +3,14 @@
 //! synthetic and real (CSAIL) scans; and a deliberately wrong recomputation
 //! that must make it fail, so that the check is seen to be able to fail.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-use std::time::Instant;
+use std::process::Output;
 
-const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+mod common;
+use common::{csail, stdout};
 
 /// Run `host-bridge verify ARGS`; prints its output (shown on failure).
 fn verify(args: &[&str]) -> Output {
-    let started = Instant::now();
-    let out = Command::new(BIN)
-        .arg("verify")
-        .args(args)
-        .output()
-        .expect("cannot start host-bridge");
-    println!(
-        "$ host-bridge verify {} ({:.1} s, {})\n{}{}",
-        args.join(" "),
-        started.elapsed().as_secs_f64(),
-        out.status,
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn csail() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/carmen/csail-corrected.log.gz")
+    common::run_logged(&[&["verify"], args].concat())
 }
 
 /// The summary says `n/n scans bit-identical; 0 lost`.

@@ -4,10 +4,8 @@
 //! skipped and passes. `LMS_FIRMWARE_ELF` may name another ELF.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::time::Instant;
 
-const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+mod common;
 
 fn on_path(name: &str) -> bool {
     std::env::var_os("PATH")
@@ -26,23 +24,12 @@ fn elf() -> PathBuf {
 
 /// Run `host-bridge verify ARGS`, printing its output (shown on failure).
 fn verify(args: &[&str]) -> (bool, String, String) {
-    let started = Instant::now();
-    let out = Command::new(BIN)
-        .arg("verify")
-        .args(args)
-        .output()
-        .expect("cannot start host-bridge");
-    let (text, err) = (
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    );
-    println!(
-        "$ host-bridge verify {} ({:.1} s, {})\n{text}{err}",
-        args.join(" "),
-        started.elapsed().as_secs_f64(),
-        out.status
-    );
-    (out.status.success(), text, err)
+    let out = common::run_logged(&[&["verify"], args].concat());
+    (
+        out.status.success(),
+        common::stdout(&out),
+        common::stderr(&out),
+    )
 }
 
 /// The reason to skip, if QEMU or the ELF is missing.
@@ -73,8 +60,7 @@ fn verify_qemu_firmware_is_bit_identical() {
     assert!(text.contains("10/10 scans bit-identical; 0 lost"), "{text}");
     assert!(text.contains("firmware report: "), "{text}");
 
-    let log = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data/carmen/csail-corrected.log.gz");
+    let log = common::csail();
     if log.exists() {
         let (ok, text, _) = verify(&[
             "--qemu",

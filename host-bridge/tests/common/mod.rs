@@ -1,0 +1,66 @@
+//! Helpers shared by the command-line tests of `host-bridge` (each test
+//! file uses a subset, hence `dead_code`). `independent_client.rs` does not
+//! use them: it must share nothing with the project.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::Instant;
+
+/// The `host-bridge` binary under test.
+pub const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+
+/// A recorded log of `../shared/data/carmen` by file name.
+pub fn shared_log(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/data/carmen")
+        .join(name)
+}
+
+/// The CSAIL log (cm, 361 beams).
+pub fn csail() -> PathBuf {
+    shared_log("csail-corrected.log.gz")
+}
+
+/// Run `host-bridge ARGS` and collect its output.
+pub fn run(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("cannot start host-bridge")
+}
+
+/// Run `host-bridge ARGS`, printing the command, its time, status and
+/// output (shown when the test fails).
+pub fn run_logged(args: &[&str]) -> Output {
+    let started = Instant::now();
+    let out = run(args);
+    println!(
+        "$ host-bridge {} ({:.1} s, {})\n{}{}",
+        args.join(" "),
+        started.elapsed().as_secs_f64(),
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Standard output as text.
+pub fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Standard error as text.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// A fresh scratch directory for this test process, `suite` and `name`.
+pub fn scratch(suite: &str, name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("host-bridge-{suite}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
