@@ -9,8 +9,9 @@
 //!    Lines record ([`extract::FrameRecord`]).
 //! 4. [`plot`] — figures of one frame (scan with features, `D` per window).
 //! 5. The sensor side: [`client`] (an LMS 2xx client over a serial link),
-//!    [`fake_sensor`] (its in-memory test double), [`scan`] (the `scan`
-//!    session) and [`capture`] (the file format of recorded scans).
+//!    [`emulated_link`] (its in-memory test double: the core's emulator on
+//!    a virtual line with fault injection), [`scan`] (the `scan` session)
+//!    and [`capture`] (the file format of recorded scans).
 //! 6. [`verify`] — a co-processor (in a thread, under QEMU, or on serial
 //!    ports) checked bit for bit against the std build.
 //!
@@ -23,8 +24,8 @@
 pub mod capture;
 pub mod carmen;
 pub mod client;
+pub mod emulated_link;
 pub mod extract;
-pub mod fake_sensor;
 pub mod options;
 pub mod plot;
 pub mod pty;
