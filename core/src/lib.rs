@@ -18,8 +18,8 @@
 //!    typed requests and replies, `B0` measured values → [`Frame`], and the
 //!    co-processor's feature telegrams `D0`–`D5` ← [`Features`].
 //! 4. **Devices** ([`device`]): the LMS 2xx model
-//!    ([`device::emulator`]) and the co-processor
-//!    ([`device::coprocessor`]), sans I/O.
+//!    ([`device::emulator`]), its client's handshake ([`device::client`])
+//!    and the co-processor ([`device::coprocessor`]), sans I/O.
 //!
 //! All maths is `f32` through `libm`; nothing allocates; no input panics.
 //! Capacities are constants ([`MAX_BEAMS`], [`MAX_LINES`], [`MAX_CORNERS`]);

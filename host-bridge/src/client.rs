@@ -2,19 +2,23 @@
 //!
 //! Two layers, kept apart:
 //!
-//! * **The link** ([`Link`]): moves bytes and keeps time — send, receive
+//! * **The link** ([`Link`], [`crate::serial`]): moves bytes and keeps time — send, receive
 //!   with a timeout, change the baud rate, drop unread input, and a
-//!   monotonic clock. [`SerialLink`] is a real serial port (the
-//!   `serialport` crate); tests use an in-memory sensor with a virtual
-//!   clock ([`crate::fake_sensor::FakeSensor`]).
-//! * **The protocol** ([`Client`]): every byte received goes through one
-//!   [`Framer`] of `lms_core::telegram`; requests are emitted with
-//!   [`Request::emit`] and replies parsed with [`Reply::parse`]. All waiting
-//!   is bounded by the [`Timeouts`] given to the client, measured on the
-//!   link's clock, so the same code runs against a real sensor, the
-//!   simulator on a pseudo-terminal, or the in-memory fake.
+//!   monotonic clock. [`SerialLink`](crate::serial::SerialLink) is a real serial port (the
+//!   `serialport` crate); tests use the core's LMS emulator behind an
+//!   in-memory line with a virtual clock and fault injection
+//!   ([`crate::emulated_link::EmulatedLink`]).
+//! * **The protocol** ([`Client`]): a blocking driver of the core's client
+//!   machine ([`lms_core::device::client`], sans I/O, shared with the
+//!   co-processor's bring-up). The machine frames every byte received,
+//!   tracks `ACK`/`NAK`/reply, resends and counts; this driver sends its
+//!   requests, feeds it what the link receives, hands it the link's time,
+//!   and parses replies with [`Reply::parse`]. All waiting is bounded by
+//!   the [`Timeouts`] given to the client, measured on the link's clock, so
+//!   the same code runs against a real sensor, the simulator on a
+//!   pseudo-terminal, or the in-memory emulator.
 //!
-//! # The handshake
+//! # The handshake (as the machine implements it)
 //!
 //! A request is sent, then the client waits for `ACK` (`06`) and the reply
 //! whose command is the request's `| 0x80`:
@@ -47,9 +51,10 @@ use std::fmt;
 use std::io;
 use std::time::Duration;
 
+use lms_core::device::client::{BaudProbe, Client as Machine, Limits, Outcome};
 use lms_core::telegram::{
-    Baud, Config, Direction, Event, Framer, FramerStats, Handshake, MeasuredError, MeasuredValues,
-    ModeResult, Reply, Request, Telegram, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
+    Baud, Config, Direction, FramerStats, Handshake, MeasuredError, MeasuredValues, ModeResult,
+    Reply, Request, Telegram, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
 };
 use lms_core::Unit;
 use lms_core::Variant;
@@ -83,26 +88,7 @@ impl Default for Timeouts {
     }
 }
 
-/// What the client waited for when time ran out.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Awaited {
-    /// The `ACK` after a request.
-    Ack,
-    /// The reply with this command code.
-    Reply(u8),
-    /// The next `B0` of the continuous stream.
-    StreamScan,
-}
-
-impl fmt::Display for Awaited {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Awaited::Ack => f.write_str("ACK (06)"),
-            Awaited::Reply(code) => write!(f, "reply {code:02X}"),
-            Awaited::StreamScan => f.write_str("the next streamed scan (B0)"),
-        }
-    }
-}
+pub use lms_core::device::client::{Awaited, ClientStats};
 
 /// A request as it went on the line, for messages.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -156,13 +142,6 @@ pub fn describe(request: &Request<'_>) -> String {
 /// Why a client operation failed.
 #[derive(Debug)]
 pub enum ClientError {
-    /// The port could not be opened.
-    Open {
-        /// The port's path.
-        port: String,
-        /// Why.
-        detail: String,
-    },
     /// Reading, writing or configuring the port failed.
     Io {
         /// The port.
@@ -236,9 +215,6 @@ pub enum ClientError {
 impl fmt::Display for ClientError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            ClientError::Open { port, detail } => {
-                write!(f, "cannot open serial port {port}: {detail}")
-            }
             ClientError::Io {
                 port,
                 action,
@@ -321,29 +297,6 @@ impl ClientError {
     }
 }
 
-/// Counters of the handshake (the byte-level ones are in [`FramerStats`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ClientStats {
-    /// Request telegrams sent, resends included.
-    pub sent: u32,
-    /// Requests sent again after a `NAK`.
-    pub resends: u32,
-    /// Replies accepted without an `ACK` before them.
-    pub missing_acks: u32,
-    /// `ACK` bytes that came when none was awaited.
-    pub stray_acks: u32,
-    /// Telegrams ignored for an address other than `0x80 | address`.
-    pub wrong_address: u32,
-    /// Telegrams ignored because they were not the awaited reply (e.g.
-    /// streamed scans before the reply to `20 25`).
-    pub ignored: u32,
-    /// `B0` telegrams with a good CRC whose data is not a scan.
-    pub bad_scans: u32,
-    /// Baud changes whose reply never came, found done at the new rate
-    /// ([`Client::set_baud`]).
-    pub lost_baud_replies: u32,
-}
-
 /// One scan as received.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Scan {
@@ -370,28 +323,31 @@ impl Scan {
     }
 }
 
-/// What the framer handed over, owned.
-enum Incoming {
-    Ack,
-    Nak,
-    /// A telegram with the expected address (complete, correct CRC).
-    Telegram(Vec<u8>),
-}
-
 /// Bytes read from the link per call.
 const CHUNK: usize = 4096;
 
+/// A duration in whole µs (the machine's time unit), saturated.
+fn micros(d: Duration) -> u64 {
+    u64::try_from(d.as_micros()).unwrap_or(u64::MAX)
+}
+
+/// The allowances of the current waits, for messages.
+#[derive(Clone, Copy, Debug, Default)]
+struct Waits {
+    ack: Duration,
+    reply: Duration,
+    stream: Duration,
+}
+
 /// The protocol side of an LMS 2xx client over a [`Link`] (see the
-/// [module docs](self)).
+/// [module docs](self)): a blocking driver of the core's client machine.
 pub struct Client<L: Link> {
     link: L,
-    framer: Framer,
-    /// Bytes received and not yet fed to the framer: `pending[pending_at..]`.
+    machine: Machine,
+    /// Bytes received and not yet fed to the machine: `pending[pending_at..]`.
     pending: Vec<u8>,
     pending_at: usize,
     chunk: Vec<u8>,
-    /// The sensor's address (0..=0x7F); replies carry `0x80 | address`.
-    address: u8,
     /// The rate the link is at.
     baud: Baud,
     timeouts: Timeouts,
@@ -399,7 +355,7 @@ pub struct Client<L: Link> {
     pub retries: u32,
     streaming: bool,
     last_sent: Option<Sent>,
-    stats: ClientStats,
+    waits: Waits,
 }
 
 impl<L: Link> fmt::Debug for Client<L> {
@@ -407,9 +363,9 @@ impl<L: Link> fmt::Debug for Client<L> {
         f.debug_struct("Client")
             .field("port", &self.link.name())
             .field("baud", &self.baud)
-            .field("address", &self.address)
+            .field("address", &self.machine.address())
             .field("streaming", &self.streaming)
-            .field("stats", &self.stats)
+            .field("stats", self.machine.stats())
             .finish_non_exhaustive()
     }
 }
@@ -420,23 +376,22 @@ impl<L: Link> Client<L> {
     pub fn new(link: L, baud: Baud, timeouts: Timeouts) -> Self {
         Client {
             link,
-            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
+            machine: Machine::new(0),
             pending: Vec::with_capacity(CHUNK),
             pending_at: 0,
             chunk: vec![0; CHUNK],
-            address: 0,
             baud,
             timeouts,
             retries: 3,
             streaming: false,
             last_sent: None,
-            stats: ClientStats::default(),
+            waits: Waits::default(),
         }
     }
 
     /// Talk to the sensor at `address` (0..=0x7F) instead of 0.
     pub fn with_address(mut self, address: u8) -> Self {
-        self.address = address & 0x7F;
+        self.machine.set_address(address);
         self
     }
 
@@ -478,13 +433,13 @@ impl<L: Link> Client<L> {
 
     /// Handshake counters.
     pub fn stats(&self) -> ClientStats {
-        self.stats
+        *self.machine.stats()
     }
 
     /// Byte-level counters of the framer (CRC errors, resyncs, bytes
     /// skipped, …) since the client was made.
     pub fn framer_stats(&self) -> FramerStats {
-        *self.framer.stats()
+        *self.machine.framer_stats()
     }
 
     /// The request sent last.
@@ -495,6 +450,11 @@ impl<L: Link> Client<L> {
     /// The link's clock.
     pub fn now(&self) -> Duration {
         self.link.now()
+    }
+
+    /// The link's clock in µs, the machine's time.
+    fn now_us(&self) -> u64 {
+        micros(self.link.now())
     }
 
     fn io_error(&self, action: &'static str, source: io::Error) -> ClientError {
@@ -521,63 +481,62 @@ impl<L: Link> Client<L> {
             .map_err(|e| self.io_error("discarding input", e))?;
         self.pending.clear();
         self.pending_at = 0;
-        self.framer.discard();
+        self.machine.discard();
         Ok(())
     }
 
-    /// The next handshake byte or telegram from the sensor, or `None` at
-    /// `deadline` (link time). Telegrams with another address are dropped
-    /// here.
-    fn next_incoming(&mut self, deadline: Duration) -> Result<Option<Incoming>, ClientError> {
-        let expected_address = Direction::SensorToHost.address_byte(self.address);
+    /// Run the machine on what arrives until it reports an outcome (a
+    /// time-out included); power-on telegrams are passed over.
+    fn next_outcome(&mut self) -> Result<Outcome, ClientError> {
         loop {
             let input = self.pending.get(self.pending_at..).unwrap_or_default();
-            let fed = self.framer.feed(input);
-            let consumed = input.len() - fed.remaining.len();
-            let incoming = match fed.event {
-                None => None,
-                Some(Event::Ack) => Some(Some(Incoming::Ack)),
-                Some(Event::Nak) => Some(Some(Incoming::Nak)),
-                Some(Event::Telegram(t)) if t.address() == expected_address => {
-                    Some(Some(Incoming::Telegram(t.as_bytes().to_vec())))
-                }
-                Some(Event::Telegram(_)) => Some(None),
-            };
-            self.pending_at += consumed;
-            match incoming {
-                Some(Some(event)) => return Ok(Some(event)),
-                Some(None) => {
-                    self.stats.wrong_address += 1;
-                    continue;
-                }
+            let (outcome, rest) = self.machine.feed(input, micros(self.link.now()));
+            self.pending_at += input.len() - rest.len();
+            match outcome {
+                Some(Outcome::PowerOn) => continue,
+                Some(outcome) => return Ok(outcome),
                 None => {}
             }
-            // Everything held has been framed: wait for more bytes.
-            let now = self.link.now();
-            if now >= deadline {
-                // Before giving up, re-scan what a false STX may be holding
-                // back (the line has been quiet since).
-                if self.framer.abandon() {
-                    continue;
-                }
-                return Ok(None);
+            // Everything held has been taken: time, then more bytes.
+            let now = self.now_us();
+            if let Some(outcome) = self.machine.poll(now) {
+                return Ok(outcome);
             }
-            let n = self
-                .link
-                .receive(&mut self.chunk, deadline - now)
-                .map_err(|e| ClientError::Io {
-                    port: self.link.name(),
-                    action: "reading",
-                    source: e,
-                })?;
-            self.pending.clear();
-            self.pending
-                .extend_from_slice(self.chunk.get(..n).unwrap_or_default());
-            self.pending_at = 0;
+            match self.machine.deadline_us() {
+                Some(deadline) if deadline > now => {
+                    self.receive(Duration::from_micros(deadline - now))?;
+                }
+                // At the deadline: the machine gave up a false STX; take
+                // what it held back before waiting again.
+                Some(_) => {}
+                None => self.receive(self.timeouts.reply)?,
+            }
         }
     }
 
-    fn timeout(&self, awaited: Awaited, waited: Duration) -> ClientError {
+    /// Wait up to `timeout` for bytes into `pending`.
+    fn receive(&mut self, timeout: Duration) -> Result<(), ClientError> {
+        let n = self
+            .link
+            .receive(&mut self.chunk, timeout)
+            .map_err(|e| ClientError::Io {
+                port: self.link.name(),
+                action: "reading",
+                source: e,
+            })?;
+        self.pending.clear();
+        self.pending
+            .extend_from_slice(self.chunk.get(..n).unwrap_or_default());
+        self.pending_at = 0;
+        Ok(())
+    }
+
+    fn timeout(&self, awaited: Awaited) -> ClientError {
+        let waited = match awaited {
+            Awaited::Ack => self.waits.ack,
+            Awaited::Reply(_) => self.waits.reply,
+            Awaited::StreamScan => self.waits.stream,
+        };
         ClientError::Timeout {
             port: self.link.name(),
             baud: self.baud,
@@ -589,102 +548,49 @@ impl<L: Link> Client<L> {
 
     /// Send `request` and return the awaited reply telegram (`STX` …
     /// `CRC`), handling `ACK`/`NAK` as in the [module docs](self). `ack`
-    /// is the allowance for the `ACK`.
+    /// is the allowance for the `ACK`; the longest telegram's line time
+    /// is added to every wait (a streamed scan may be on the line first).
     fn exchange(&mut self, request: &Request<'_>, ack: Duration) -> Result<Vec<u8>, ClientError> {
-        let mut bytes = vec![0u8; request.buffer_len()];
-        let n = request
-            .emit(self.address, &mut bytes)
-            .map_err(|e| ClientError::Unsupported {
-                detail: format!("cannot build {}: {e}", describe(request)),
-            })?;
-        bytes.truncate(n);
-        let sent = Sent {
-            bytes,
-            what: describe(request),
+        let longest = line_time(MAX_TELEGRAM_LEN, self.baud);
+        self.waits.ack = line_time(request.buffer_len(), self.baud) + ack + longest;
+        // At most one more streamed scan may come before the reply.
+        self.waits.reply = self.timeouts.reply + 2 * longest;
+        let limits = Limits {
+            ack_us: micros(self.waits.ack),
+            reply_us: Some(micros(self.waits.reply)),
+            retries: self.retries,
         };
-        let expected = request.reply_command();
-        let mut attempts = 0u32;
-        'send: loop {
-            attempts += 1;
+        let what = describe(request);
+        let bytes = match self.machine.prepare(request, limits) {
+            Ok(bytes) => bytes.to_vec(),
+            Err(e) => {
+                return Err(ClientError::Unsupported {
+                    detail: format!("cannot build {what}: {e}"),
+                })
+            }
+        };
+        let sent = Sent { bytes, what };
+        loop {
             self.link
                 .send(&sent.bytes)
                 .map_err(|e| self.io_error("writing", e))?;
-            self.stats.sent += 1;
             self.last_sent = Some(sent.clone());
-            let on_line = line_time(sent.bytes.len(), self.baud);
-            let longest = line_time(MAX_TELEGRAM_LEN, self.baud);
-            // Wait for ACK (or NAK, or the reply itself).
-            let started = self.link.now();
-            let ack_wait = on_line + ack + longest;
-            let mut acked = false;
-            while !acked {
-                match self.next_incoming(started + ack_wait)? {
-                    None => return Err(self.timeout(Awaited::Ack, ack_wait)),
-                    Some(Incoming::Ack) => acked = true,
-                    Some(Incoming::Nak) => {
-                        if attempts > self.retries {
-                            return Err(ClientError::Nak {
-                                port: self.link.name(),
-                                sent,
-                                attempts,
-                            });
-                        }
-                        self.stats.resends += 1;
-                        continue 'send;
-                    }
-                    Some(Incoming::Telegram(t)) => {
-                        if let Some(reply) = self.judge(&sent, expected, t)? {
-                            self.stats.missing_acks += 1;
-                            return Ok(reply);
-                        }
-                    }
+            self.machine.mark_sent(self.now_us());
+            return match self.next_outcome()? {
+                Outcome::Resend => continue,
+                // (Power-on telegrams are passed over by `next_outcome`;
+                // scans are reported only in the stream.)
+                Outcome::Reply | Outcome::Scan | Outcome::PowerOn => {
+                    Ok(self.machine.telegram_bytes().to_vec())
                 }
-            }
-            // Wait for the reply; at most one more streamed scan may come first.
-            let started = self.link.now();
-            let reply_wait = self.timeouts.reply + 2 * longest;
-            loop {
-                match self.next_incoming(started + reply_wait)? {
-                    None => return Err(self.timeout(Awaited::Reply(expected), reply_wait)),
-                    Some(Incoming::Ack) => self.stats.stray_acks += 1,
-                    Some(Incoming::Nak) => {
-                        // A NAK after the ACK: treat it like the first.
-                        if attempts > self.retries {
-                            return Err(ClientError::Nak {
-                                port: self.link.name(),
-                                sent,
-                                attempts,
-                            });
-                        }
-                        self.stats.resends += 1;
-                        continue 'send;
-                    }
-                    Some(Incoming::Telegram(t)) => {
-                        if let Some(reply) = self.judge(&sent, expected, t)? {
-                            return Ok(reply);
-                        }
-                    }
-                }
-            }
-        }
-    }
-
-    /// A telegram that arrived while awaiting `expected`: the reply, an
-    /// error (`92`), or `None` (ignored and counted).
-    fn judge(
-        &mut self,
-        sent: &Sent,
-        expected: u8,
-        telegram: Vec<u8>,
-    ) -> Result<Option<Vec<u8>>, ClientError> {
-        let command = Telegram::new_unchecked(&telegram[..], Direction::SensorToHost).command();
-        if command == expected {
-            Ok(Some(telegram))
-        } else if command == lms_core::telegram::reply::code::UNKNOWN_COMMAND {
-            Err(ClientError::UnknownCommand { sent: sent.clone() })
-        } else {
-            self.stats.ignored += 1;
-            Ok(None)
+                Outcome::NakLimit { attempts } => Err(ClientError::Nak {
+                    port: self.link.name(),
+                    sent,
+                    attempts,
+                }),
+                Outcome::UnknownCommand => Err(ClientError::UnknownCommand { sent }),
+                Outcome::Timeout(awaited) => Err(self.timeout(awaited)),
+            };
         }
     }
 
@@ -705,10 +611,7 @@ impl<L: Link> Client<L> {
         f: impl FnOnce(Reply<'_>) -> Result<T, String>,
     ) -> Result<T, ClientError> {
         let bytes = self.exchange(request, ack)?;
-        let sent = self.last_sent.clone().unwrap_or_else(|| Sent {
-            bytes: Vec::new(),
-            what: describe(request),
-        });
+        let sent = self.sent_or(request);
         let telegram = Telegram::new_unchecked(&bytes[..], Direction::SensorToHost);
         let reply = Reply::parse(&telegram).map_err(|e| ClientError::BadReply {
             sent: sent.clone(),
@@ -716,6 +619,14 @@ impl<L: Link> Client<L> {
             detail: e.to_string(),
         })?;
         f(reply).map_err(|detail| ClientError::Refused { sent, detail })
+    }
+
+    /// The request sent last, or `request` described (for messages).
+    fn sent_or(&self, request: &Request<'_>) -> Sent {
+        self.last_sent.clone().unwrap_or_else(|| Sent {
+            bytes: Vec::new(),
+            what: describe(request),
+        })
     }
 
     /// A `20 xx` mode change that must be answered `A0 00`.
@@ -729,52 +640,42 @@ impl<L: Link> Client<L> {
         })
     }
 
-    /// Find the rate the sensor is at: at each rate of `rates` in turn, set
-    /// the link, send `20 25` (which also stops a stream left running) and
-    /// wait for `ACK` and `A0 00` ([`Timeouts::probe`] for the `ACK`).
-    /// The first rate answered is kept and returned. Sensors power up at
-    /// 9600 Bd, so put it first.
+    /// Find the rate the sensor is at ([`BaudProbe`]): at each rate of
+    /// `rates` in turn, set the link, send `20 25` (which also stops a
+    /// stream left running) and wait for `ACK` and `A0 00`
+    /// ([`Timeouts::probe`] for the `ACK`, at most one resend). The first
+    /// rate answered is kept and returned. Sensors power up at 9600 Bd, so
+    /// put it first.
     pub fn find_baud(&mut self, rates: &[Baud]) -> Result<Baud, ClientError> {
-        self.framer.set_handshake(Handshake::Expected);
+        self.machine.set_handshake(Handshake::Expected);
         let retries = self.retries;
         // A wrong rate can look like NAKs: don't insist.
-        self.retries = retries.min(1);
+        self.retries = retries.min(BaudProbe::RETRIES);
+        let result = self.probe(BaudProbe::new(rates));
+        self.retries = retries;
+        result
+    }
+
+    fn probe(&mut self, mut probe: BaudProbe<'_>) -> Result<Baud, ClientError> {
         let mut longest = Duration::ZERO;
-        let mut result = None;
-        for &rate in rates {
-            if let Err(e) = self.switch_link(rate) {
-                result = Some(Err(e));
-                break;
-            }
-            match self.mode_change(&Request::OnRequest, self.timeouts.probe) {
+        while let Some(rate) = probe.next_rate() {
+            self.switch_link(rate)?;
+            match self.mode_change(&BaudProbe::REQUEST, self.timeouts.probe) {
                 Ok(()) => {
                     self.streaming = false;
-                    self.framer.set_handshake(Handshake::Expected);
-                    result = Some(Ok(rate));
-                    break;
+                    self.machine.set_handshake(Handshake::Expected);
+                    return Ok(rate);
                 }
-                Err(e) if e.is_no_answer() => {
-                    if let ClientError::Timeout { waited, .. } = e {
-                        longest = longest.max(waited);
-                    }
-                }
-                Err(e) => {
-                    result = Some(Err(e));
-                    break;
-                }
+                Err(ClientError::Timeout { waited, .. }) => longest = longest.max(waited),
+                Err(e) if e.is_no_answer() => {}
+                Err(e) => return Err(e),
             }
         }
-        self.retries = retries;
-        result.unwrap_or_else(|| {
-            Err(ClientError::NoSensor {
-                port: self.link.name(),
-                tried: rates.to_vec(),
-                sent: self.last_sent.clone().unwrap_or_else(|| Sent {
-                    bytes: Vec::new(),
-                    what: describe(&Request::OnRequest),
-                }),
-                waited: longest,
-            })
+        Err(ClientError::NoSensor {
+            port: self.link.name(),
+            tried: probe.rates().to_vec(),
+            sent: self.sent_or(&BaudProbe::REQUEST),
+            waited: longest,
         })
     }
 
@@ -782,7 +683,7 @@ impl<L: Link> Client<L> {
     /// scans still arriving before the `A0` are dropped (counted in
     /// [`ClientStats::ignored`]).
     pub fn stop_stream(&mut self) -> Result<(), ClientError> {
-        self.framer.set_handshake(Handshake::Expected);
+        self.machine.set_handshake(Handshake::Expected);
         let ack = self.timeouts.ack;
         self.mode_change(&Request::OnRequest, ack)?;
         self.streaming = false;
@@ -796,7 +697,7 @@ impl<L: Link> Client<L> {
         self.mode_change(&Request::Continuous, ack)?;
         self.streaming = true;
         // Streamed telegrams come without ACK: a 06 or 15 between them is noise.
-        self.framer.set_handshake(Handshake::Ignored);
+        self.machine.set_handshake(Handshake::Ignored);
         Ok(())
     }
 
@@ -805,26 +706,24 @@ impl<L: Link> Client<L> {
     /// telegrams that are not scans; times out after [`Timeouts::reply`]
     /// plus two telegram times without a scan.
     pub fn next_scan(&mut self) -> Result<Scan, ClientError> {
-        let started = self.link.now();
-        let wait = self.timeouts.reply + 2 * line_time(MAX_TELEGRAM_LEN, self.baud);
+        self.waits.stream = self.timeouts.reply + 2 * line_time(MAX_TELEGRAM_LEN, self.baud);
+        let now = self.now_us();
+        self.machine
+            .await_stream(now, Some(micros(self.waits.stream)));
         loop {
-            match self.next_incoming(started + wait)? {
-                None => return Err(self.timeout(Awaited::StreamScan, wait)),
-                Some(Incoming::Ack) => self.stats.stray_acks += 1,
-                Some(Incoming::Nak) => {}
-                Some(Incoming::Telegram(t)) => {
+            match self.next_outcome()? {
+                Outcome::Timeout(awaited) => return Err(self.timeout(awaited)),
+                Outcome::Scan => {
                     let time = self.link.now();
-                    let command =
-                        Telegram::new_unchecked(&t[..], Direction::SensorToHost).command();
-                    if command != lms_core::telegram::measured::MEASURED_COMMAND {
-                        self.stats.ignored += 1;
-                        continue;
-                    }
-                    match Scan::from_telegram(time, t) {
+                    let telegram = self.machine.telegram_bytes().to_vec();
+                    match Scan::from_telegram(time, telegram) {
                         Ok(scan) => return Ok(scan),
-                        Err(_) => self.stats.bad_scans += 1,
+                        // Not reached: the machine has checked the scan.
+                        Err(_) => self.machine.stats_mut().bad_scans += 1,
                     }
                 }
+                // Not reported in the stream.
+                _ => {}
             }
         }
     }
@@ -835,12 +734,9 @@ impl<L: Link> Client<L> {
         let bytes = self.exchange(&Request::OneScan, ack)?;
         let time = self.link.now();
         Scan::from_telegram(time, bytes.clone()).map_err(|e| {
-            self.stats.bad_scans += 1;
+            self.machine.stats_mut().bad_scans += 1;
             ClientError::BadReply {
-                sent: self.last_sent.clone().unwrap_or_else(|| Sent {
-                    bytes: Vec::new(),
-                    what: describe(&Request::OneScan),
-                }),
+                sent: self.sent_or(&Request::OneScan),
                 reply: bytes,
                 detail: e.to_string(),
             }
@@ -927,7 +823,7 @@ impl<L: Link> Client<L> {
                 let old = self.baud;
                 self.switch_link(baud)?;
                 if self.mode_change(&Request::OnRequest, ack).is_ok() {
-                    self.stats.lost_baud_replies += 1;
+                    self.machine.stats_mut().lost_baud_replies += 1;
                     return Ok(());
                 }
                 self.switch_link(old)?;

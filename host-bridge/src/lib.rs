@@ -12,8 +12,9 @@
 //! 5. The sensor side: [`serial`] (the one serial-line trait
 //!    [`serial::Link`], the real port [`serial::SerialLink`], a pty master as
 //!    an `embedded-io` port), [`client`] (an LMS 2xx client over a link),
-//!    [`fake_sensor`] (its in-memory test double), [`scan`] (the `scan`
-//!    session) and [`capture`] (the file format of recorded scans).
+//!    [`emulated_link`] (its in-memory test double: the core's emulator on
+//!    a virtual line with fault injection), [`scan`] (the `scan` session)
+//!    and [`capture`] (the file format of recorded scans).
 //!    [`simulate`] — a simulated LMS 2xx on a pseudo-terminal ([`pty`]);
 //!    [`resample`] re-expresses scans for another variant (simulate and
 //!    verify), [`stop`] ends either cleanly on a signal.
@@ -29,8 +30,8 @@
 pub mod capture;
 pub mod carmen;
 pub mod client;
+pub mod emulated_link;
 pub mod extract;
-pub mod fake_sensor;
 pub mod options;
 pub mod plot;
 pub mod pty;

@@ -7,7 +7,7 @@
 //!   ends of `host-bridge verify` use it; implementations are
 //!   [`SerialLink`] (a real serial port or a pseudo-terminal's slave),
 //!   verify's TCP connection to QEMU's UARTs, and the in-memory sensor of
-//!   the tests ([`crate::fake_sensor::FakeSensor`]).
+//!   the tests ([`crate::emulated_link::EmulatedLink`]).
 //! * [`PtyPort`] — the other end: a pseudo-terminal's master as an
 //!   `embedded-io` 0.7 port, for the core's `CoProcessor` running in a
 //!   thread (`host-bridge verify --host`).

@@ -29,7 +29,7 @@
 //!   bytes may be lost while the board starts), `20 48` (500 kBd,
 //!   `--host-baud`), `20 24`; then it reads the `B0` + feature telegrams
 //!   (`D4 D3 D1… D2… D0`), reassembles them per scan
-//!   ([`FeatureAssembler`]), and at the end `20 25` and a last `55`.
+//!   ([`FeatureAssembler`](lms_core::telegram::features::FeatureAssembler)), and at the end `20 25` and a last `55`.
 //!
 //! # Sequence (deterministic)
 //!
@@ -55,8 +55,8 @@
 //!
 //! 1. its `B0` must be byte for byte (count word and value words) a scan
 //!    the sensor side sent, in order (the pass-through);
-//! 2. the std build recomputes the features: [`MeasuredView::to_frame`]
-//!    with 13 range bits, [`Extractor::run`] with the parameters echoed in
+//! 2. the std build recomputes the features: [`MeasuredView::to_frame`](lms_core::telegram::MeasuredView::to_frame)
+//!    with 13 range bits, [`Extractor::run`](lms_core::Extractor::run) with the parameters echoed in
 //!    the `D0` summary (`iterations`, `sigma`, `q`, `tau`; the others from
 //!    the command line, default ALGORITHM.md);
 //! 3. segments, edge points, every field of every line and corner (floats
@@ -80,9 +80,9 @@
 //!
 //! # Modes (how the lines are connected)
 //!
-//! * `--host` (default): the core's [`CoProcessor`] runs natively in a
+//! * `--host` (default): the core's [`CoProcessor`](lms_core::device::coprocessor::CoProcessor) runs natively in a
 //!   thread on the masters of two pseudo-terminals ([`crate::pty`], behind
-//!   [`PtyPort`], an `embedded-io` 0.7 port); verify opens the two slave
+//!   [`PtyPort`](crate::serial::PtyPort), an `embedded-io` 0.7 port); verify opens the two slave
 //!   devices with the `serialport` crate, exactly as in `--ports`.
 //! * `--qemu [ELF]`: the firmware under `qemu-system-arm -M netduinoplus2`
 //!   (extra QEMU arguments from the `QEMU_EXTRA` environment variable)

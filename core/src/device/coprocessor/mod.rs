@@ -233,7 +233,7 @@ impl CoProcessor {
             }
             let mut input = &chunk[..n.min(CHUNK)];
             loop {
-                let (event, rest) = self.link.feed(input);
+                let (event, rest) = self.link.feed(input, now_us);
                 input = rest;
                 match event {
                     Some(LinkEvent::Scan) => {

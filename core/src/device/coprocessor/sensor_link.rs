@@ -1,8 +1,10 @@
 //! The co-processor's sensor side: bring the LMS 2xx up and take its `B0`
 //! stream (sans I/O: bytes and time in, bytes and events out).
 //!
-//! Bring-up, one request at a time, each resent after [`REPLY_TIMEOUT_US`]
-//! without its reply (the first bytes may be lost while the line settles):
+//! Bring-up, one request at a time through the client machine
+//! ([`crate::device::client`]), each resent after [`REPLY_TIMEOUT_US`]
+//! without its reply (the first bytes may be lost while the line settles)
+//! and at once after a `NAK`, without limit:
 //!
 //! 1. `20 25` — values on request only (stops a stream left running);
 //! 2. `3B` — the variant (default 180°/0.5°);
@@ -12,16 +14,30 @@
 //! 6. `20 4x` — the wanted baud rate; after the reply both sides switch
 //!    ([`LinkEvent::SwitchBaud`]);
 //! 7. `20 24` — continuous output; from then on every `B0` is a scan.
+//!
+//! A refused step (a reply that is not what was asked, or `92`) is sent
+//! again when its time is up; the `90` power-on telegram (the sensor
+//! restarted) starts the bring-up again.
 
+use crate::device::client::{Client, Limits, Outcome};
 use crate::telegram::{
-    Baud, Config, Direction, Event, Framer, FramerStats, Handshake, ModeResult, Reply, Request,
-    DEFAULT_ADDRESS, DEFAULT_PASSWORD, MAX_TELEGRAM_LEN,
+    Baud, Config, FramerStats, ModeResult, Reply, Request, DEFAULT_ADDRESS, DEFAULT_PASSWORD,
+    MAX_TELEGRAM_LEN,
 };
 use crate::Unit;
 use crate::Variant;
 
 /// How long to wait for a reply before sending the request again (µs).
 pub const REPLY_TIMEOUT_US: u64 = 300_000;
+
+/// The waits of every bring-up request: the reply is due within
+/// [`REPLY_TIMEOUT_US`] of sending, `ACK` or not; `NAK`s are answered by
+/// resending, however many.
+const LIMITS: Limits = Limits {
+    ack_us: REPLY_TIMEOUT_US,
+    reply_us: None,
+    retries: u32::MAX,
+};
 
 /// What the link wants from the sensor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -88,16 +104,13 @@ pub enum LinkEvent {
 /// The sensor side of the co-processor.
 pub struct SensorLink {
     setup: SensorSetup,
-    framer: Framer,
+    client: Client,
     step: Step,
-    /// When the current request was last sent (µs); `None` = not yet sent.
-    sent_at: Option<u64>,
+    /// The current step's request has been sent.
+    requested: bool,
+    /// A `NAK` came: send the request again at the next poll.
+    nak: bool,
     config: Option<Config>,
-    /// Requests sent again after a time-out.
-    retries: u32,
-    /// The last `B0` telegram, STX … CRC.
-    scan: [u8; MAX_TELEGRAM_LEN],
-    scan_len: usize,
 }
 
 impl SensorLink {
@@ -105,19 +118,18 @@ impl SensorLink {
     pub const fn new(setup: SensorSetup) -> Self {
         SensorLink {
             setup,
-            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
+            client: Client::new(DEFAULT_ADDRESS),
             step: Step::StopStream,
-            sent_at: None,
+            requested: false,
+            nak: false,
             config: None,
-            retries: 0,
-            scan: [0; MAX_TELEGRAM_LEN],
-            scan_len: 0,
         }
     }
 
-    /// The bytes of the last `B0` telegram reported by [`LinkEvent::Scan`].
+    /// The bytes of the last `B0` telegram reported by [`LinkEvent::Scan`]
+    /// (until the next [`feed`](SensorLink::feed)).
     pub fn scan_bytes(&self) -> &[u8] {
-        self.scan.get(..self.scan_len).unwrap_or_default()
+        self.client.telegram_bytes()
     }
 
     /// The current bring-up step.
@@ -125,38 +137,53 @@ impl SensorLink {
         self.step
     }
 
-    /// Requests resent after a time-out.
+    /// Requests resent (after a time-out or a `NAK`).
     pub fn retries(&self) -> u32 {
-        self.retries
+        self.client.stats().resends
     }
 
     /// The framer's counters (CRC errors, resyncs, bytes skipped).
     pub fn framer_stats(&self) -> &FramerStats {
-        self.framer.stats()
+        self.client.framer_stats()
     }
 
     /// Start the bring-up again (e.g. after the sensor reset).
     pub fn restart(&mut self) {
         self.step = Step::StopStream;
-        self.sent_at = None;
+        self.requested = false;
+        self.nak = false;
         self.config = None;
     }
 
-    /// The request to send now, if one is due (not sent yet, or timed out),
-    /// written into `buf`; returns its length. Call it every poll.
+    /// The request to send now, if one is due (not sent yet, timed out, or
+    /// refused with `NAK`), written into `buf`; returns its length. Call it
+    /// every poll.
     pub fn due_request(&mut self, now_us: u64, buf: &mut [u8]) -> Option<usize> {
         if self.step == Step::Streaming {
             return None;
         }
-        if let Some(at) = self.sent_at {
-            if now_us.saturating_sub(at) < REPLY_TIMEOUT_US {
+        if self.requested {
+            if !(self.nak || self.client.expired(now_us)) {
                 return None;
             }
-            self.retries = self.retries.wrapping_add(1);
             // A late reply may sit half-received in the framer: start clean.
-            self.framer.abandon();
+            self.client.abandon();
+        } else {
+            let request = self.request()?;
+            self.client.prepare(&request, LIMITS).ok()?;
         }
-        let request = match self.step {
+        let bytes = self.client.request_bytes();
+        let n = bytes.len();
+        crate::telegram::copy_into(buf.get_mut(..n)?, bytes);
+        self.requested = true;
+        self.nak = false;
+        self.client.mark_sent(now_us);
+        Some(n)
+    }
+
+    /// The request of the current step.
+    fn request(&self) -> Option<Request<'static>> {
+        Some(match self.step {
             Step::StopStream => Request::OnRequest,
             Step::SetVariant => Request::set_variant(self.setup.variant),
             Step::InstallationMode => Request::InstallationMode {
@@ -174,36 +201,42 @@ impl SensorLink {
             Step::SetBaud => Request::SetBaud(self.setup.baud),
             Step::StartStream => Request::Continuous,
             Step::Streaming => return None,
-        };
-        let n = request.emit(DEFAULT_ADDRESS, buf).ok()?;
-        self.sent_at = Some(now_us);
-        Some(n)
+        })
     }
 
-    /// Take bytes from the sensor. Returns the first event found and the
-    /// bytes not yet consumed; call again with the rest until it returns
-    /// `None` with nothing left.
-    pub fn feed<'i>(&mut self, input: &'i [u8]) -> (Option<LinkEvent>, &'i [u8]) {
-        let step = self.step;
-        let fed = self.framer.feed(input);
-        let rest = fed.remaining;
-        let telegram = match fed.event {
-            Some(Event::Telegram(t)) => t,
-            // ACK/NAK: a NAK means our request was damaged; resend at once.
-            Some(Event::Nak) => {
-                self.sent_at = Some(0);
-                return (None, rest);
+    /// Take bytes from the sensor received by `now_us`. Returns the first
+    /// event found and the bytes not yet consumed; call again with the rest
+    /// until it returns `None` with nothing left.
+    pub fn feed<'i>(&mut self, input: &'i [u8], now_us: u64) -> (Option<LinkEvent>, &'i [u8]) {
+        let (outcome, rest) = self.client.feed(input, now_us);
+        let event = match outcome {
+            Some(Outcome::Scan) => Some(LinkEvent::Scan),
+            Some(Outcome::Reply) => self.on_reply(now_us),
+            // Our request was damaged: resend at once.
+            Some(Outcome::Resend) => {
+                self.nak = true;
+                None
             }
-            Some(Event::Ack) | None => return (None, rest),
+            // Sent again when its time is up.
+            Some(Outcome::UnknownCommand) => {
+                self.client.keep_waiting();
+                None
+            }
+            // The sensor restarted: bring it up again.
+            Some(Outcome::PowerOn) => {
+                self.restart();
+                None
+            }
+            Some(Outcome::NakLimit { .. } | Outcome::Timeout(_)) | None => None,
         };
-        let (advance, event) = match Reply::parse(&telegram) {
-            Ok(Reply::Measured(_)) if step == Step::Streaming => {
-                let bytes = telegram.as_bytes();
-                let n = bytes.len().min(MAX_TELEGRAM_LEN);
-                self.scan[..n].copy_from_slice(&bytes[..n]);
-                self.scan_len = n;
-                return (Some(LinkEvent::Scan), rest);
-            }
+        (event, rest)
+    }
+
+    /// The current step's reply: go on to the next step, or wait on (and
+    /// resend when the time is up).
+    fn on_reply(&mut self, now_us: u64) -> Option<LinkEvent> {
+        let step = self.step;
+        let (advance, event) = match Reply::parse(&self.client.telegram()) {
             Ok(Reply::ModeChanged(r)) => match step {
                 Step::StopStream | Step::StartStream => (r == ModeResult::Ok, None),
                 Step::InstallationMode => (r == ModeResult::Ok, None),
@@ -223,26 +256,27 @@ impl SensorLink {
             Ok(Reply::ConfigWritten { accepted, .. }) if step == Step::WriteConfig => {
                 (accepted, (!accepted).then_some(LinkEvent::Refused(step)))
             }
-            // The sensor restarted: bring it up again.
-            Ok(Reply::PowerOn(_)) => {
-                self.restart();
-                return (None, rest);
-            }
             _ => (false, None),
         };
-        if advance {
-            self.step = match step {
-                Step::StopStream => Step::SetVariant,
-                Step::SetVariant => Step::InstallationMode,
-                Step::InstallationMode => Step::ReadConfig,
-                Step::ReadConfig => Step::WriteConfig,
-                Step::WriteConfig => Step::SetBaud,
-                Step::SetBaud => Step::StartStream,
-                Step::StartStream | Step::Streaming => Step::Streaming,
-            };
-            self.sent_at = None;
+        if !advance {
+            self.client.keep_waiting();
+            return event;
         }
-        (event, rest)
+        self.step = match step {
+            Step::StopStream => Step::SetVariant,
+            Step::SetVariant => Step::InstallationMode,
+            Step::InstallationMode => Step::ReadConfig,
+            Step::ReadConfig => Step::WriteConfig,
+            Step::WriteConfig => Step::SetBaud,
+            Step::SetBaud => Step::StartStream,
+            Step::StartStream | Step::Streaming => Step::Streaming,
+        };
+        if self.step == Step::Streaming {
+            self.client.await_stream(now_us, None);
+        }
+        self.requested = false;
+        self.nak = false;
+        event
     }
 }
 
