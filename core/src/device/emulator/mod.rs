@@ -1,0 +1,360 @@
+//! A simulated SICK LMS 2xx: a sans-I/O model of the sensor's side of the
+//! serial line (PROTOCOL.md §1–§5). Bytes from the host and the time go in;
+//! the bytes the sensor sends, paced at its line rate, and [`Event`]s come
+//! out. No clock, no port, no allocation: the host tool (`host-bridge
+//! simulate`, over a pseudo-terminal) and the co-processor firmware (towards
+//! its own client) drive the same code.
+//!
+//! # Behaviour
+//!
+//! | situation | the emulator |
+//! |---|---|
+//! | power-on ([`Emulator::new`], [`Emulator::power_on`]) | 9600 Bd, mode `25` (values on request), the power-on variant of [`Settings`]; sends the `90` telegram ([`POWER_ON_DATA`]) |
+//! | a host telegram with a correct CRC for its address | `ACK` (0x06), then the reply telegram (one frame, back to back) |
+//! | a telegram for another address | ignored (nothing sent; [`Event::IgnoredAddress`]) |
+//! | a bad checksum | `NAK` (0x15) ([`Event::BadChecksum`]) |
+//! | an unknown or malformed command | `ACK`, `92` |
+//! | `20 00 'SICK_LMS'` | `A0 00`, installation mode (`B1` mode byte `00`); another password: `A0 01`, mode kept |
+//! | `20 24` | `A0 00`; the `B0` stream starts when the reply has been sent |
+//! | `20 25` | the stream stops at once (a `B0` already on the line is finished), then `A0 00` |
+//! | `20 40`/`41`/`42`/`48` | `A0 00` at the old rate; when its last byte is out, the line switches ([`Event::BaudSwitched`]) |
+//! | `30 01` | `ACK`, one `B0` |
+//! | `31` | `B1`: operating mode, scan angle, resolution, baud word, address and units as they are now ([`Emulator::status_fields`]) |
+//! | `3A` | `BA "LMS200;30106x;V02.10"` |
+//! | `3B` | `BB 01` and the new variant, if it is one of the five and the [`ScanSource`] supports it; else `BB 00` and the variant kept (so 0.25° only with 100°) |
+//! | `74` | `F4` + the 34-byte configuration |
+//! | `77` | in installation mode: `F7 01` + the new configuration (units byte `[6]`: 0 cm, 1 mm; other codes are refused with `F7 00`); otherwise `F7 00` + the configuration kept |
+//! | `10` | `ACK`, `91`; input ignored and the stream stopped; [`Settings::restart_us`] after the `91`, back to 9600 Bd, mode `25`, the power-on variant, and the `90` telegram. The configuration survives, as the real sensor keeps it in EEPROM. |
+//!
+//! Every reply ends with the status byte [`Settings::status`] (`0x10`).
+//!
+//! # Timing (PROTOCOL.md §3)
+//!
+//! The line is modelled byte by byte: a byte takes 10 bit times (8N1) at the
+//! current rate, [`line_time_us`], and [`Emulator::transmit`] hands out only
+//! the bytes whose stop bit has passed by `now_us`. Frames follow one another
+//! on the line; a reply waits for a `B0` that is already being sent.
+//!
+//! In continuous mode the mirror completes a scan every
+//! [`scan_period_us`]: 13.3 ms at 1°, 26.7 ms at 0.5° (two interlaced turns
+//! of 1/75 s), 53.3 ms at 0.25° (four turns). Whenever the line is free the
+//! newest complete scan is sent; scans completed while the line was busy are
+//! skipped (counted in [`EmulatorStats::scans_skipped`]). So the stream is
+//! paced by the mirror at 500000 Bd (a 732-byte `B0` takes 14.6 ms) and by
+//! the line below it (190 ms per `B0` at 38400 Bd).
+//!
+//! # Scans
+//!
+//! The values come from a caller-supplied [`ScanSource`]: raw value words
+//! (range in the low 13 bits, flags above, PROTOCOL.md §3) for the current
+//! variant and units. [`FnSource`] turns a closure into one.
+//!
+//! # Driving it
+//!
+//! ```
+//! use lms_core::device::emulator::{Emulator, Event, FnSource, Settings};
+//! use lms_core::telegram::Baud;
+//!
+//! // A sensor that sees a wall 2 m (200 cm) away on every beam.
+//! let source = FnSource::new(|_variant, _units, out| {
+//!     out.fill(200);
+//!     out.len()
+//! });
+//! let mut lms = Emulator::new(source, Settings::default(), 0);
+//! let mut out = [0u8; 1024];
+//!
+//! // The power-on telegram (29 bytes) is on the line after 29 × 10 bits
+//! // at 9600 Bd, 30.2 ms.
+//! assert_eq!(lms.transmit(30_000, &mut out), 28);
+//! assert_eq!(lms.transmit(31_000, &mut out[28..]), 1);
+//! assert_eq!(&out[..5], &[0x02, 0x80, 0x17, 0x00, 0x90]);
+//!
+//! // The host asks for 38400 Bd: ACK and `A0 00` at 9600 Bd, then the switch.
+//! lms.receive(40_000, &[0x02, 0x00, 0x02, 0x00, 0x20, 0x40, 0x50, 0x08]);
+//! let n = lms.transmit(100_000, &mut out);
+//! assert_eq!(&out[..n], &[0x06, 0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A]);
+//! assert_eq!(lms.baud(), Baud::B38400);
+//! let mut switched = false;
+//! while let Some(e) = lms.next_event() {
+//!     switched |= matches!(e, Event::BaudSwitched { to: Baud::B38400, .. });
+//! }
+//! assert!(switched);
+//! ```
+//!
+//! A driver loop: [`receive`](Emulator::receive) whatever arrived; call
+//! [`transmit`](Emulator::transmit) and send what it returns, again until it
+//! returns 0 (it stops early after the last byte before a baud switch, so
+//! that the caller can switch its UART in between); drain
+//! [`next_event`](Emulator::next_event); sleep until
+//! [`next_wakeup_us`](Emulator::next_wakeup_us) or the next input.
+//!
+//! # Panic contract
+//!
+//! Nothing here panics, allocates or uses `unsafe`, whatever bytes, times or
+//! scan values it is given. Full queues drop and count
+//! ([`EmulatorStats`]); time going backwards is treated as no time passing.
+
+mod events;
+mod requests;
+mod settings;
+mod source;
+#[cfg(test)]
+mod tests;
+mod transmit;
+
+pub use events::{EmulatorStats, Event, Handled};
+pub use settings::{OperatingMode, Settings};
+pub use source::{FnSource, ScanSource, EXTRA_REPLY_CAPACITY};
+
+use transmit::{Done, Outgoing, Pending, Stream};
+
+use heapless::Deque;
+
+use crate::frame::{Invalid, Variant};
+use crate::telegram::reply::POWER_ON_LEN;
+use crate::telegram::{
+    copy_into, emit_telegram, Baud, Config, Direction, Event as FramerEvent, Framer, FramerStats,
+    Handshake, MeasuredValues, ModeResult, RangeBits, Reply, Request, StatusBlock, StatusFields,
+    VariantReply, ACK, DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, MAX_TELEGRAM_LEN,
+    MAX_VALUES, NAK, REPLY_ADDRESS_BIT, SENSOR_TYPE_LMS200,
+};
+use crate::Unit;
+
+/// Data bytes of the `90` power-on telegram: the type string and a space
+/// (the content is ours; PROTOCOL.md fixes only the length, 21 bytes).
+pub const POWER_ON_DATA: [u8; POWER_ON_LEN] = *b"LMS200;30106x;V02.10 ";
+
+/// A telegram being received is given up after the line has been idle this
+/// long (µs), so that a false `STX` cannot hold back the next request.
+pub const RX_IDLE_TIMEOUT_US: u64 = 50_000;
+
+/// Default time from the end of the `91` reply to the `90` power-on
+/// telegram after a reset (µs).
+pub const DEFAULT_RESTART_US: u64 = 1_000_000;
+
+/// Bits on the line per byte: start bit, 8 data bits, stop bit (8N1).
+pub const BITS_PER_BYTE: u64 = 10;
+
+/// One mirror turn is 1/75 s = 40000/3 µs; this is 3 × that, to keep the
+/// scan times exact in integers.
+const TURN_US_TIMES_3: u64 = 40_000;
+
+/// Requests (and NAKs) waiting for the line.
+pub const PENDING_CAPACITY: usize = 8;
+/// Events held until [`Emulator::next_event`] takes them.
+pub const EVENT_CAPACITY: usize = 32;
+/// Largest frame on the line: `ACK` + the largest telegram.
+const TX_CAPACITY: usize = 1 + MAX_TELEGRAM_LEN;
+
+/// Time the line needs for `bytes` bytes at `baud` (µs, rounded up): 10 bits
+/// per byte. A 732-byte `B0` takes 14640 µs at 500000 Bd, 190625 µs at
+/// 38400 Bd.
+pub const fn line_time_us(bytes: usize, baud: Baud) -> u64 {
+    let bits = (bytes as u64).saturating_mul(BITS_PER_BYTE);
+    let bps = baud.bits_per_second() as u64;
+    bits.saturating_mul(1_000_000).div_ceil(bps)
+}
+
+/// Mirror turns per complete scan: 1 at 1°, 2 at 0.5° and 4 at 0.25°
+/// (interlaced turns, PROTOCOL.md §3).
+pub const fn turns_per_scan(variant: Variant) -> u64 {
+    match variant.resolution_centideg() {
+        100 => 1,
+        50 => 2,
+        _ => 4,
+    }
+}
+
+/// Time between complete scans in continuous mode (µs, rounded): 13333 at
+/// 1°, 26667 at 0.5°, 53333 at 0.25°.
+pub const fn scan_period_us(variant: Variant) -> u64 {
+    (turns_per_scan(variant) * TURN_US_TIMES_3 + 1) / 3
+}
+
+/// The simulated sensor (see the [module docs](self)).
+pub struct Emulator<S> {
+    source: S,
+    settings: Settings,
+    baud: Baud,
+    mode: OperatingMode,
+    variant: Variant,
+    config: Config,
+    framer: Framer,
+    /// When bytes last arrived (µs).
+    last_rx_us: u64,
+    /// Between a `10` and the `90`: input ignored.
+    resetting: bool,
+    restart_at_us: Option<u64>,
+    pending: Deque<Pending, PENDING_CAPACITY>,
+    stream: Option<Stream>,
+    /// Continuous mode with [`Settings::external_scans`]: the caller streams.
+    external_stream: bool,
+    /// Data of the last [`ReplyKind::Extra`] reply.
+    extra: [u8; EXTRA_REPLY_CAPACITY],
+    /// The frame on the line: `tx[..tx_len]`, of which `tx_sent` handed out.
+    tx: [u8; TX_CAPACITY],
+    tx_len: usize,
+    tx_sent: usize,
+    tx_start_us: u64,
+    tx_done: Done,
+    /// When the line finished the last frame (µs).
+    line_free_us: u64,
+    scan: [u16; MAX_VALUES],
+    events: Deque<Event, EVENT_CAPACITY>,
+    stats: EmulatorStats,
+}
+
+impl<S: ScanSource> Emulator<S> {
+    /// A sensor switched on at `now_us`: 9600 Bd, mode `25`, the `90`
+    /// telegram queued.
+    pub fn new(source: S, settings: Settings, now_us: u64) -> Self {
+        let mut emulator = Emulator::off(source, settings);
+        emulator.power_on(now_us);
+        emulator
+    }
+
+    /// A sensor not yet switched on: silent until [`Emulator::power_on`].
+    /// `const`, so an emulator can be placed in a `static` without passing
+    /// through the stack.
+    pub const fn off(source: S, settings: Settings) -> Self {
+        let mut settings = settings;
+        settings.address &= 0x7F;
+        Emulator {
+            source,
+            settings,
+            baud: Baud::B9600,
+            mode: OperatingMode::OnRequest,
+            variant: settings.variant,
+            config: settings.config,
+            framer: Framer::new(Direction::HostToSensor, Handshake::Ignored),
+            last_rx_us: 0,
+            resetting: false,
+            restart_at_us: None,
+            pending: Deque::new(),
+            stream: None,
+            external_stream: false,
+            extra: [0; EXTRA_REPLY_CAPACITY],
+            tx: [0; TX_CAPACITY],
+            tx_len: 0,
+            tx_sent: 0,
+            tx_start_us: 0,
+            tx_done: Done::Nothing,
+            line_free_us: 0,
+            scan: [0; MAX_VALUES],
+            events: Deque::new(),
+            stats: EmulatorStats::ZERO,
+        }
+    }
+
+    /// Switch the sensor off and on at `now_us`: whatever was queued or on
+    /// the line is lost; 9600 Bd, mode `25`, the power-on variant, the `90`
+    /// telegram. The configuration is kept (EEPROM).
+    pub fn power_on(&mut self, now_us: u64) {
+        self.set_baud(Baud::B9600);
+        self.mode = OperatingMode::OnRequest;
+        self.variant = self.settings.variant;
+        self.framer.discard();
+        self.pending.clear();
+        self.stream = None;
+        self.external_stream = false;
+        self.resetting = false;
+        self.restart_at_us = None;
+        self.tx_len = 0;
+        self.tx_sent = 0;
+        self.tx_done = Done::Nothing;
+        self.line_free_us = now_us;
+        self.queue(now_us, Outgoing::PowerOn);
+    }
+
+    /// Bytes the host sent that arrived by `now_us`, in any chunks.
+    pub fn receive(&mut self, now_us: u64, bytes: &[u8]) {
+        if bytes.is_empty() {
+            return;
+        }
+        self.last_rx_us = now_us;
+        if self.resetting {
+            let n = u32::try_from(bytes.len()).unwrap_or(u32::MAX);
+            self.stats.ignored_bytes = self.stats.ignored_bytes.wrapping_add(n);
+            return;
+        }
+        self.feed(now_us, bytes);
+    }
+
+    /// The `B1` fields as they are now.
+    pub fn status_fields(&self) -> StatusFields {
+        StatusFields {
+            operating_mode: self.mode.code(),
+            scan_angle_deg: self.variant.fov_deg(),
+            resolution_centideg: self.variant.resolution_centideg(),
+            baud: self.baud,
+            address: self.settings.address,
+            units_code: self.config.units_code(),
+        }
+    }
+
+    /// The current line rate.
+    pub fn baud(&self) -> Baud {
+        self.baud
+    }
+
+    /// The operating mode.
+    pub fn operating_mode(&self) -> OperatingMode {
+        self.mode
+    }
+
+    /// The scan variant.
+    pub fn variant(&self) -> Variant {
+        self.variant
+    }
+
+    /// The configuration block.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Unit of the range values (from the configuration; cm unless it says
+    /// mm).
+    pub fn units(&self) -> Unit {
+        self.config.units().unwrap_or(Unit::Centimetre)
+    }
+
+    /// `true` while the continuous stream runs.
+    pub fn streaming(&self) -> bool {
+        self.stream.is_some() || self.external_stream
+    }
+
+    /// `true` between a `10` request and the `90` telegram.
+    pub fn restarting(&self) -> bool {
+        self.resetting
+    }
+
+    /// `true` if nothing is on the line or waiting for it.
+    pub fn line_idle(&self) -> bool {
+        self.tx_len == 0 && self.pending.is_empty()
+    }
+
+    /// The settings given to [`new`](Emulator::new).
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The counters.
+    pub fn stats(&self) -> &EmulatorStats {
+        &self.stats
+    }
+
+    /// The receive framer's counters (bytes skipped, CRC errors, …).
+    pub fn framer_stats(&self) -> &FramerStats {
+        self.framer.stats()
+    }
+
+    /// The scan source.
+    pub fn source(&self) -> &S {
+        &self.source
+    }
+
+    /// The scan source, to change it.
+    pub fn source_mut(&mut self) -> &mut S {
+        &mut self.source
+    }
+}

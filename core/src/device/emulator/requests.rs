@@ -1,0 +1,292 @@
+//! Requests in: the framer, and one answer per request (PROTOCOL.md §2).
+
+use super::transmit::ReplyKind;
+use super::*;
+
+/// A received telegram, copied out of the framer.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Incoming {
+    address: u8,
+    request: Request<'static>,
+}
+
+/// The request without its borrowed bytes (only `Unknown` has any; its
+/// length is kept in `data_len`).
+fn detach(request: Request<'_>) -> Request<'static> {
+    match request {
+        Request::InstallationMode { password } => Request::InstallationMode { password },
+        Request::Continuous => Request::Continuous,
+        Request::OnRequest => Request::OnRequest,
+        Request::SetBaud(b) => Request::SetBaud(b),
+        Request::OneScan => Request::OneScan,
+        Request::Status => Request::Status,
+        Request::SensorType => Request::SensorType,
+        Request::SetVariant {
+            angle_deg,
+            resolution_centideg,
+        } => Request::SetVariant {
+            angle_deg,
+            resolution_centideg,
+        },
+        Request::ReadConfig => Request::ReadConfig,
+        Request::WriteConfig(c) => Request::WriteConfig(c),
+        Request::Reset => Request::Reset,
+        Request::Unknown { command, .. } => Request::Unknown { command, data: &[] },
+    }
+}
+
+impl<S: ScanSource> Emulator<S> {
+    /// Feed the framer until it has nothing more, answering what it finds.
+    pub(super) fn feed(&mut self, now_us: u64, bytes: &[u8]) {
+        let mut input = bytes;
+        // Each round consumes input or delivers a telegram; the bound only
+        // guards against a framer bug.
+        for _ in 0..bytes
+            .len()
+            .saturating_add(MAX_TELEGRAM_LEN)
+            .saturating_add(2)
+        {
+            let fed = self.framer.feed(input);
+            input = fed.remaining;
+            let naks = fed.crc_errors;
+            let incoming = match fed.event {
+                Some(FramerEvent::Telegram(t)) => Request::parse(&t).ok().map(|r| Incoming {
+                    address: t.address(),
+                    request: detach(r),
+                }),
+                Some(FramerEvent::Ack | FramerEvent::Nak) | None => None,
+            };
+            let data_len = match fed.event {
+                Some(FramerEvent::Telegram(t)) => t.data().len(),
+                _ => 0,
+            };
+            // A command the sensor does not know may be the source's.
+            let extra = match fed.event {
+                Some(FramerEvent::Telegram(t)) if t.address() == self.settings.address => {
+                    match Request::parse(&t) {
+                        Ok(Request::Unknown { command, data }) => self
+                            .source
+                            .extra_command(command, data, &mut self.extra)
+                            .filter(|&(_, len)| len <= EXTRA_REPLY_CAPACITY),
+                        _ => None,
+                    }
+                }
+                _ => None,
+            };
+            let done = fed.event.is_none();
+            for _ in 0..naks {
+                self.stats.naks = self.stats.naks.wrapping_add(1);
+                self.queue(now_us, Outgoing::Nak);
+                self.event(Event::BadChecksum);
+            }
+            if let Some(incoming) = incoming {
+                self.handle(now_us, incoming, data_len, extra);
+            }
+            if self.resetting {
+                // The sensor ignores what follows a reset in the same burst,
+                // as it ignores later bytes (see `receive`).
+                self.framer.discard();
+                let n = u32::try_from(input.len()).unwrap_or(u32::MAX);
+                self.stats.ignored_bytes = self.stats.ignored_bytes.wrapping_add(n);
+                break;
+            }
+            if done {
+                break;
+            }
+        }
+    }
+
+    /// Answer one request.
+    pub(super) fn handle(
+        &mut self,
+        now_us: u64,
+        incoming: Incoming,
+        data_len: usize,
+        extra: Option<(u8, usize)>,
+    ) {
+        if incoming.address != self.settings.address {
+            self.stats.ignored = self.stats.ignored.wrapping_add(1);
+            self.event(Event::IgnoredAddress {
+                address: incoming.address,
+            });
+            return;
+        }
+        if self.pending.is_full() {
+            self.stats.dropped_requests = self.stats.dropped_requests.wrapping_add(1);
+            return;
+        }
+        self.stats.requests = self.stats.requests.wrapping_add(1);
+        let (reply, then, handled) = self.answer(now_us, incoming.request, data_len, extra);
+        self.queue(now_us, Outgoing::Reply { reply, then });
+        self.event(Event::Request(handled));
+    }
+
+    /// The reply to `request`, what happens after it, and what to report;
+    /// applies the request's effect on the sensor's state.
+    pub(super) fn answer(
+        &mut self,
+        now_us: u64,
+        request: Request<'static>,
+        data_len: usize,
+        extra: Option<(u8, usize)>,
+    ) -> (ReplyKind, Done, Handled) {
+        let ok = ReplyKind::Mode(ModeResult::Ok);
+        match request {
+            Request::InstallationMode { password } => self.installation_mode(password),
+            Request::Continuous => {
+                self.mode = OperatingMode::Continuous;
+                (ok, Done::StartStream, Handled::Continuous)
+            }
+            Request::OnRequest => {
+                self.mode = OperatingMode::OnRequest;
+                self.stop_stream();
+                (ok, Done::Nothing, Handled::OnRequest)
+            }
+            Request::SetBaud(b) => (ok, Done::SwitchBaud(b), Handled::SetBaud(b)),
+            Request::OneScan => (ReplyKind::OneScan, Done::Nothing, Handled::OneScan),
+            Request::Status => (
+                ReplyKind::Status(self.status_fields()),
+                Done::Nothing,
+                Handled::Status,
+            ),
+            Request::SensorType => (ReplyKind::SensorType, Done::Nothing, Handled::SensorType),
+            Request::SetVariant {
+                angle_deg,
+                resolution_centideg,
+            } => self.variant_request(now_us, angle_deg, resolution_centideg),
+            Request::ReadConfig => (
+                ReplyKind::Config(self.config),
+                Done::Nothing,
+                Handled::ReadConfig,
+            ),
+            Request::WriteConfig(c) => self.config_write(c),
+            Request::Reset => {
+                self.stop_stream();
+                self.resetting = true;
+                self.event(Event::Restarting);
+                (ReplyKind::ResetAck, Done::Restart, Handled::Reset)
+            }
+            Request::Unknown { command, .. } => match extra {
+                Some((reply, len)) => (
+                    ReplyKind::Extra {
+                        command: reply,
+                        len,
+                    },
+                    Done::Nothing,
+                    Handled::Extra { command },
+                ),
+                None => (
+                    ReplyKind::Unknown,
+                    Done::Nothing,
+                    Handled::Unknown { command, data_len },
+                ),
+            },
+        }
+    }
+
+    /// `20 00` + password: installation mode (stops a stream) if the
+    /// password is right, else `A0 01`.
+    pub(super) fn installation_mode(&mut self, password: [u8; 8]) -> (ReplyKind, Done, Handled) {
+        let accepted = password == DEFAULT_PASSWORD;
+        let result = if accepted {
+            self.mode = OperatingMode::Installation;
+            self.stop_stream();
+            ModeResult::Ok
+        } else {
+            ModeResult::BadPassword
+        };
+        (
+            ReplyKind::Mode(result),
+            Done::Nothing,
+            Handled::InstallationMode { accepted },
+        )
+    }
+
+    /// `3B`: switch to the variant if it exists and the source supports it;
+    /// the `BB` reply names the variant in force either way.
+    pub(super) fn variant_request(
+        &mut self,
+        now_us: u64,
+        angle_deg: u16,
+        resolution_centideg: u16,
+    ) -> (ReplyKind, Done, Handled) {
+        let wanted = Variant::from_fov_res(angle_deg, resolution_centideg)
+            .filter(|&v| self.source.supports(v));
+        if let Some(v) = wanted {
+            self.set_variant(now_us, v);
+        }
+        let accepted = wanted.is_some();
+        (
+            ReplyKind::Variant(VariantReply {
+                accepted,
+                angle_deg: self.variant.fov_deg(),
+                resolution_centideg: self.variant.resolution_centideg(),
+            }),
+            Done::Nothing,
+            Handled::SetVariant {
+                angle_deg,
+                resolution_centideg,
+                accepted,
+            },
+        )
+    }
+
+    /// `77`: taken in installation mode with known units; the `F7` reply
+    /// carries the configuration in force either way.
+    pub(super) fn config_write(&mut self, c: Config) -> (ReplyKind, Done, Handled) {
+        let accepted = self.mode == OperatingMode::Installation && c.units().is_some();
+        if accepted {
+            self.config = c;
+        }
+        (
+            ReplyKind::ConfigWritten {
+                accepted,
+                config: self.config,
+            },
+            Done::Nothing,
+            Handled::WriteConfig { accepted },
+        )
+    }
+
+    /// Change the variant; a running stream restarts its scan clock.
+    pub(super) fn set_variant(&mut self, now_us: u64, v: Variant) {
+        self.variant = v;
+        if let Some(stream) = self.stream.as_mut() {
+            *stream = Stream {
+                start_us: now_us,
+                last: None,
+            };
+        }
+    }
+
+    pub(super) fn stop_stream(&mut self) {
+        let external = core::mem::replace(&mut self.external_stream, false);
+        if self.stream.take().is_some() || external {
+            self.event(Event::StreamStopped);
+        }
+    }
+
+    pub(super) fn set_baud(&mut self, to: Baud) {
+        let from = self.baud;
+        if from != to {
+            self.baud = to;
+            self.event(Event::BaudSwitched { from, to });
+        }
+    }
+
+    pub(super) fn queue(&mut self, now_us: u64, what: Outgoing) {
+        let pending = Pending {
+            ready_us: now_us,
+            what,
+        };
+        if self.pending.push_back(pending).is_err() {
+            self.stats.dropped_requests = self.stats.dropped_requests.wrapping_add(1);
+        }
+    }
+
+    pub(super) fn event(&mut self, e: Event) {
+        if self.events.push_back(e).is_err() {
+            self.stats.events_dropped = self.stats.events_dropped.wrapping_add(1);
+        }
+    }
+}

@@ -1,0 +1,53 @@
+//! Where the emulator's scans come from.
+
+use crate::frame::Variant;
+use crate::Unit;
+
+/// Where the scans come from: raw value words for the current variant and
+/// units.
+pub trait ScanSource {
+    /// Write the next scan's value words (range in the low 13 bits, flags
+    /// above; error codes 8183…8191, PROTOCOL.md §3) in `units` into `out`,
+    /// which is exactly `variant.beams()` long; return how many were
+    /// written. Values not written are sent as "not valid" (8191).
+    fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize;
+
+    /// `false` if this source cannot produce `variant` (the sensor then
+    /// refuses a `3B` for it with `BB 00`). Every variant by default.
+    fn supports(&self, variant: Variant) -> bool {
+        let _ = variant;
+        true
+    }
+
+    /// A command the LMS 2xx does not know (it would answer `92`): the
+    /// source may answer it instead by writing a reply's data into `reply`
+    /// (at most [`EXTRA_REPLY_CAPACITY`] bytes) and returning the reply's
+    /// command code and data length; the emulator sends `ACK` and that
+    /// reply. `None` (the default) keeps the `92`. The co-processor uses it
+    /// for its counters request.
+    fn extra_command(&mut self, command: u8, data: &[u8], reply: &mut [u8]) -> Option<(u8, usize)> {
+        let _ = (command, data, reply);
+        None
+    }
+}
+
+/// Largest reply data a [`ScanSource::extra_command`] may write.
+pub const EXTRA_REPLY_CAPACITY: usize = 64;
+
+/// A [`ScanSource`] from a closure `(variant, units, out) -> written`.
+#[derive(Clone, Copy, Debug)]
+pub struct FnSource<F>(pub F);
+
+impl<F: FnMut(Variant, Unit, &mut [u16]) -> usize> FnSource<F> {
+    /// Wrap a closure (this constructor lets the compiler infer the
+    /// closure's argument types).
+    pub const fn new(f: F) -> Self {
+        FnSource(f)
+    }
+}
+
+impl<F: FnMut(Variant, Unit, &mut [u16]) -> usize> ScanSource for FnSource<F> {
+    fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize {
+        (self.0)(variant, units, out)
+    }
+}

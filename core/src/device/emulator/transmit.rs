@@ -1,0 +1,385 @@
+//! Bytes out: replies and scans paced at the line rate and the mirror's
+//! turns (see *Timing* in the module docs).
+
+use super::*;
+
+/// A reply as decided when its request arrived.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum ReplyKind {
+    Mode(ModeResult),
+    Status(StatusFields),
+    SensorType,
+    Variant(VariantReply),
+    Config(Config),
+    ConfigWritten {
+        accepted: bool,
+        config: Config,
+    },
+    ResetAck,
+    Unknown,
+    /// `30 01`: a `B0` from the source when the frame starts.
+    OneScan,
+    /// A reply from [`ScanSource::extra_command`], its data in `extra`.
+    Extra {
+        command: u8,
+        len: usize,
+    },
+}
+
+/// What happens when a frame's last byte has gone out.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Done {
+    Nothing,
+    SwitchBaud(Baud),
+    StartStream,
+    Restart,
+    PowerOn,
+    Scan { continuous: bool, skipped: u32 },
+}
+
+/// A frame waiting for the line.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Outgoing {
+    Nak,
+    PowerOn,
+    /// `ACK` + the reply, then `then`.
+    Reply {
+        reply: ReplyKind,
+        then: Done,
+    },
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Pending {
+    /// When the request arrived (µs): the frame starts no earlier.
+    pub(super) ready_us: u64,
+    pub(super) what: Outgoing,
+}
+
+/// The continuous stream's clock.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Stream {
+    /// Time of scan 0 (µs).
+    pub(super) start_us: u64,
+    /// Index of the last scan sent.
+    pub(super) last: Option<u64>,
+}
+
+impl Stream {
+    /// Time scan `k` is complete (µs).
+    pub(super) fn tick_us(&self, k: u64, turns: u64) -> u64 {
+        let offset = k.saturating_mul(turns * TURN_US_TIMES_3) / 3;
+        self.start_us.saturating_add(offset)
+    }
+
+    /// The scan to send next when the line is free from `free_us` on: the
+    /// newest complete by then if it has not been sent, else the one after
+    /// the last sent. Returns its index and completion time.
+    pub(super) fn next(&self, free_us: u64, turns: u64) -> (u64, u64) {
+        let free = free_us.max(self.start_us);
+        let elapsed = free.saturating_sub(self.start_us);
+        let newest = elapsed.saturating_mul(3) / (turns * TURN_US_TIMES_3);
+        let k = match self.last {
+            Some(last) if newest <= last => last.saturating_add(1),
+            _ => newest,
+        };
+        (k, self.tick_us(k, turns))
+    }
+}
+
+impl<S: ScanSource> Emulator<S> {
+    /// The sensor → host bytes whose line time has come by `now_us` (see
+    /// *Timing* in the module docs), at most `out.len()`; returns how
+    /// many were written. It stops right after the last byte sent at the
+    /// old rate when the line switches ([`Event::BaudSwitched`]): call it
+    /// again until it returns 0.
+    pub fn transmit(&mut self, now_us: u64, out: &mut [u8]) -> usize {
+        let mut n = 0;
+        // Each round completes a frame or stops; the bound only guards
+        // against a logic error.
+        for _ in 0..out.len().saturating_add(PENDING_CAPACITY).saturating_add(4) {
+            self.advance(now_us);
+            if self.tx_len == 0 {
+                break;
+            }
+            let due = self.bytes_due(now_us);
+            let k = due
+                .saturating_sub(self.tx_sent)
+                .min(out.len().saturating_sub(n));
+            let src = self
+                .tx
+                .get(self.tx_sent..self.tx_sent.saturating_add(k))
+                .unwrap_or_default();
+            copy_into(out.get_mut(n..).unwrap_or_default(), src);
+            n = n.saturating_add(k);
+            self.tx_sent = self.tx_sent.saturating_add(k);
+            self.stats.bytes_sent = self.stats.bytes_sent.wrapping_add(k as u64);
+            if self.tx_sent < self.tx_len || self.finish_frame() {
+                break;
+            }
+        }
+        n
+    }
+
+    /// Bytes of the current frame whose stop bit has passed at `now_us`.
+    pub(super) fn bytes_due(&self, now_us: u64) -> usize {
+        if self.settings.external_scans {
+            return self.tx_len;
+        }
+        let Some(elapsed) = now_us.checked_sub(self.tx_start_us) else {
+            return 0;
+        };
+        if elapsed >= line_time_us(self.tx_len, self.baud) {
+            return self.tx_len;
+        }
+        // elapsed < 818 bytes at 9600 Bd < 10⁶ µs: no overflow.
+        let bits = elapsed.saturating_mul(u64::from(self.baud.bits_per_second())) / 1_000_000;
+        usize::try_from(bits / BITS_PER_BYTE)
+            .unwrap_or(usize::MAX)
+            .min(self.tx_len)
+    }
+
+    /// The frame's last byte has been handed out: free the line and do what
+    /// follows. Returns `true` if the line switched rate.
+    pub(super) fn finish_frame(&mut self) -> bool {
+        let end = self
+            .tx_start_us
+            .saturating_add(line_time_us(self.tx_len, self.baud));
+        self.line_free_us = end;
+        self.tx_len = 0;
+        self.tx_sent = 0;
+        let done = core::mem::replace(&mut self.tx_done, Done::Nothing);
+        match done {
+            Done::Nothing => {}
+            Done::SwitchBaud(b) => {
+                let before = self.baud;
+                self.set_baud(b);
+                return before != b;
+            }
+            Done::StartStream => {
+                if self.mode == OperatingMode::Continuous && !self.resetting {
+                    if self.settings.external_scans {
+                        self.external_stream = true;
+                    } else {
+                        self.stream = Some(Stream {
+                            start_us: end,
+                            last: None,
+                        });
+                    }
+                    self.event(Event::StreamStarted);
+                }
+            }
+            Done::Restart => {
+                self.restart_at_us = Some(end.saturating_add(self.settings.restart_us));
+            }
+            Done::PowerOn => self.event(Event::PowerOnSent),
+            Done::Scan {
+                continuous,
+                skipped,
+            } => {
+                self.stats.scans_sent = self.stats.scans_sent.wrapping_add(1);
+                self.stats.scans_skipped = self.stats.scans_skipped.wrapping_add(skipped);
+                self.event(Event::ScanSent {
+                    variant: self.variant,
+                    continuous,
+                    skipped,
+                });
+            }
+        }
+        false
+    }
+
+    /// Timers: the restart after a reset, the receive time-out; and the
+    /// next frame when the line is free.
+    pub(super) fn advance(&mut self, now_us: u64) {
+        if let Some(at) = self.restart_at_us {
+            if now_us >= at {
+                self.power_on(at);
+            }
+        }
+        if !self.resetting {
+            // Each round drops one false STX; a telegram is at most
+            // MAX_TELEGRAM_LEN bytes.
+            for _ in 0..MAX_TELEGRAM_LEN {
+                let idle = now_us.saturating_sub(self.last_rx_us) >= RX_IDLE_TIMEOUT_US;
+                if !(idle && self.framer.buffered() > 0 && self.framer.abandon()) {
+                    break;
+                }
+                self.stats.abandoned = self.stats.abandoned.wrapping_add(1);
+                // What the re-scan finds arrived before the time-out.
+                let at = self.last_rx_us.saturating_add(RX_IDLE_TIMEOUT_US);
+                self.feed(at, &[]);
+            }
+        }
+        if self.tx_len != 0 {
+            return;
+        }
+        if let Some(p) = self.pending.pop_front() {
+            self.start_frame(p.ready_us, p.what);
+            return;
+        }
+        let turns = turns_per_scan(self.variant);
+        let Some(stream) = self.stream.as_mut() else {
+            return;
+        };
+        // Decided as of when the line became free, however late the call.
+        let (k, tick) = stream.next(self.line_free_us, turns);
+        if tick > now_us {
+            return;
+        }
+        let skipped = match stream.last {
+            Some(last) => k.saturating_sub(last).saturating_sub(1),
+            None => k,
+        };
+        stream.last = Some(k);
+        let skipped = u32::try_from(skipped).unwrap_or(u32::MAX);
+        self.start_scan(
+            tick,
+            false,
+            Done::Scan {
+                continuous: true,
+                skipped,
+            },
+        );
+    }
+
+    /// Put a frame on the line, starting when both it and the line are ready.
+    pub(super) fn start_frame(&mut self, ready_us: u64, what: Outgoing) {
+        let address = self.settings.address;
+        let status = self.settings.status;
+        match what {
+            Outgoing::Nak => {
+                if let Some(b) = self.tx.first_mut() {
+                    *b = NAK;
+                }
+                self.set_frame(ready_us, Some(1), Done::Nothing);
+            }
+            Outgoing::PowerOn => {
+                let n = Reply::PowerOn(POWER_ON_DATA).emit(address, status, &mut self.tx);
+                self.set_frame(ready_us, n.ok(), Done::PowerOn);
+            }
+            Outgoing::Reply {
+                reply: ReplyKind::OneScan,
+                ..
+            } => self.start_scan(
+                ready_us,
+                true,
+                Done::Scan {
+                    continuous: false,
+                    skipped: 0,
+                },
+            ),
+            Outgoing::Reply { reply, then } => {
+                let reply = match reply {
+                    ReplyKind::Mode(r) => Reply::ModeChanged(r),
+                    ReplyKind::Status(f) => Reply::Status(StatusBlock::from_fields(&f)),
+                    ReplyKind::SensorType => Reply::SensorType(SENSOR_TYPE_LMS200.as_bytes()),
+                    ReplyKind::Variant(v) => Reply::Variant(v),
+                    ReplyKind::Config(c) => Reply::Config(c),
+                    ReplyKind::ConfigWritten { accepted, config } => {
+                        Reply::ConfigWritten { accepted, config }
+                    }
+                    ReplyKind::ResetAck => Reply::ResetAck,
+                    ReplyKind::Unknown | ReplyKind::OneScan => Reply::UnknownCommand,
+                    ReplyKind::Extra { command, len } => {
+                        let extra = self.extra;
+                        let data = extra.get(..len).unwrap_or_default();
+                        let n = self.emit_after_ack(|buf| {
+                            emit_telegram(
+                                buf,
+                                REPLY_ADDRESS_BIT | address,
+                                command,
+                                data,
+                                Some(status),
+                            )
+                        });
+                        self.set_frame(ready_us, n.ok(), then);
+                        return;
+                    }
+                };
+                let n = self.emit_after_ack(|buf| reply.emit(address, status, buf));
+                self.set_frame(ready_us, n.ok(), then);
+            }
+        }
+    }
+
+    /// `ACK` then what `emit` writes.
+    pub(super) fn emit_after_ack<E>(
+        &mut self,
+        emit: impl FnOnce(&mut [u8]) -> Result<usize, E>,
+    ) -> Result<usize, E> {
+        let (first, rest) = match self.tx.split_first_mut() {
+            Some(split) => split,
+            None => return Ok(0),
+        };
+        *first = ACK;
+        emit(rest).map(|n| n.saturating_add(1))
+    }
+
+    /// A `B0` with the source's next scan, with `ACK` before it for `30 01`.
+    pub(super) fn start_scan(&mut self, ready_us: u64, ack: bool, done: Done) {
+        let variant = self.variant;
+        let units = self.units();
+        let beams = variant.beams().min(MAX_VALUES);
+        let out = self.scan.get_mut(..beams).unwrap_or_default();
+        let written = self.source.next_scan(variant, units, out).min(out.len());
+        let not_valid = RangeBits::Bits13.encode_invalid(Invalid::NoEcho);
+        out.get_mut(written..).unwrap_or_default().fill(not_valid);
+        let address = self.settings.address;
+        let values = MeasuredValues::from_raw(out, units, self.settings.status);
+        let n = match values {
+            Ok(v) if ack => self.emit_after_ack(|buf| v.emit(address, buf)),
+            Ok(v) => v.emit(address, &mut self.tx),
+            // Cannot happen: `beams <= MAX_VALUES`.
+            Err(_) => Ok(0),
+        };
+        self.set_frame(ready_us, n.ok(), done);
+    }
+
+    /// Start the frame of `len` bytes in `tx` (`None`: it could not be
+    /// written; nothing is sent and `done` is not carried out).
+    pub(super) fn set_frame(&mut self, ready_us: u64, len: Option<usize>, done: Done) {
+        match len {
+            Some(len) if len > 0 => {
+                self.tx_len = len.min(TX_CAPACITY);
+                self.tx_sent = 0;
+                self.tx_start_us = ready_us.max(self.line_free_us);
+                self.tx_done = done;
+            }
+            _ => self.stats.emit_errors = self.stats.emit_errors.wrapping_add(1),
+        }
+    }
+
+    /// The next event, oldest first.
+    pub fn next_event(&mut self) -> Option<Event> {
+        self.events.pop_front()
+    }
+
+    /// The earliest time (µs) at which [`transmit`](Emulator::transmit) will
+    /// have something to do: the next byte's stop bit, a queued reply, the
+    /// next scan, the end of a reset or the receive time-out. `None` if
+    /// nothing will happen without input.
+    pub fn next_wakeup_us(&self) -> Option<u64> {
+        let mut next: Option<u64> = None;
+        let mut consider = |t: u64| next = Some(next.map_or(t, |n: u64| n.min(t)));
+        if self.tx_len > 0 {
+            let bytes = self.tx_sent.saturating_add(1);
+            consider(
+                self.tx_start_us
+                    .saturating_add(line_time_us(bytes, self.baud)),
+            );
+        } else if let Some(p) = self.pending.front() {
+            consider(p.ready_us.max(self.line_free_us));
+        } else if let Some(stream) = &self.stream {
+            let (_, tick) = stream.next(self.line_free_us, turns_per_scan(self.variant));
+            consider(tick.max(self.line_free_us));
+        }
+        if let Some(at) = self.restart_at_us {
+            consider(at);
+        }
+        if self.framer.buffered() > 0 && !self.resetting {
+            consider(self.last_rx_us.saturating_add(RX_IDLE_TIMEOUT_US));
+        }
+        next
+    }
+}
