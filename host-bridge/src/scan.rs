@@ -25,8 +25,7 @@ use std::fmt;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::str::FromStr;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 use anyhow::{bail, ensure, Context, Result};
@@ -372,32 +371,14 @@ pub fn run(args: &ScanArgs) -> Result<()> {
     let link = SerialLink::open(&args.port, Baud::B9600)?;
     let mut client = Client::new(link, Baud::B9600, Timeouts::default());
     client.retries = args.retries;
-
     let mut capture = match &args.output {
         Some(path) => Some(CaptureFile::create(path)?),
         None => None,
     };
-    let progress = if std::io::stderr().is_terminal() {
-        let bar = indicatif::ProgressBar::new(plan.scans as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "{spinner} scanning {bar:30} {pos}/{len} scans, {per_sec}, {eta} left",
-        ) {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-
+    let progress = progress_bar(plan.scans);
     // Ctrl-C / SIGTERM: finish the scan in hand, then stop cleanly (see
     // the module docs); a second signal exits at once with status 130.
-    let interrupted = Arc::new(AtomicBool::new(false));
-    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register_conditional_shutdown(signal, 130, Arc::clone(&interrupted))
-            .and_then(|_| signal_hook::flag::register(signal, Arc::clone(&interrupted)))
-            .context("cannot install the signal handler")?;
-    }
-
+    let interrupted = crate::stop::interrupt_flag()?;
     let result = run_session(&mut client, &plan, |i, since_start, scan| {
         if let Some(c) = capture.as_mut() {
             let us = u64::try_from(since_start.as_micros()).unwrap_or(u64::MAX);
@@ -410,25 +391,9 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         Ok(())
     });
     progress.finish_and_clear();
-
     let summary = match result {
         Ok(s) => s,
-        Err(e) => {
-            if let Some(c) = capture {
-                let (records, partial) = (c.records(), c.partial().to_owned());
-                drop(c);
-                return Err(e.context(format!(
-                    "the capture is incomplete: {records} scans recorded so far are in {} \
-                     (not renamed to {})",
-                    partial.display(),
-                    args.output
-                        .as_deref()
-                        .unwrap_or(partial.as_path())
-                        .display()
-                )));
-            }
-            return Err(e);
-        }
+        Err(e) => return Err(incomplete_capture(e, capture, args)),
     };
     let capture_line = match capture {
         Some(c) => {
@@ -441,6 +406,52 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         }
         None => String::new(),
     };
+    print_summary(args, &plan, &summary, &capture_line);
+    if let Some(e) = &summary.restore_error {
+        eprintln!("host-bridge scan: warning: could not put the sensor back at 9600 Bd: {e}");
+    }
+    Ok(())
+}
+
+/// A progress bar of `scans` on a terminal, hidden otherwise.
+fn progress_bar(scans: usize) -> indicatif::ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(scans as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{spinner} scanning {bar:30} {pos}/{len} scans, {per_sec}, {eta} left",
+    ) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// The session's error, saying where the scans recorded so far are (the
+/// `.partial` file is kept, not renamed).
+fn incomplete_capture(
+    e: anyhow::Error,
+    capture: Option<CaptureFile>,
+    args: &ScanArgs,
+) -> anyhow::Error {
+    let Some(c) = capture else {
+        return e;
+    };
+    let (records, partial) = (c.records(), c.partial().to_owned());
+    drop(c);
+    e.context(format!(
+        "the capture is incomplete: {records} scans recorded so far are in {} \
+         (not renamed to {})",
+        partial.display(),
+        args.output
+            .as_deref()
+            .unwrap_or(partial.as_path())
+            .display()
+    ))
+}
+
+/// The closing summary on stderr: scans, rate, line and handshake counters.
+fn print_summary(args: &ScanArgs, plan: &Plan, summary: &Summary, capture_line: &str) {
     let h = &summary.handshake;
     eprintln!(
         "host-bridge scan: {} scans from {} ({}, {} values, {}) at {} Bd (sensor found at {} Bd) in {:.2} s: {:.1} scans/s\n  \
@@ -449,11 +460,7 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         args.port.display(),
         variant_name(plan.variant),
         plan.variant.beams(),
-        match plan.units {
-            Unit::Millimetre => "mm",
-            Unit::Centimetre => "cm",
-            Unit::Decimetre => "10 cm",
-        },
+        plan.units,
         summary.baud.bits_per_second(),
         summary.found_baud.bits_per_second(),
         summary.elapsed.as_secs_f64(),
@@ -465,10 +472,6 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         h.wrong_address,
         capture_line,
     );
-    if let Some(e) = &summary.restore_error {
-        eprintln!("host-bridge scan: warning: could not put the sensor back at 9600 Bd: {e}");
-    }
-    Ok(())
 }
 
 #[cfg(test)]

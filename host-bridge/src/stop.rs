@@ -1,4 +1,4 @@
-//! A clean stop on SIGINT and SIGTERM (`simulate`, `verify`).
+//! A clean stop on SIGINT and SIGTERM (`simulate`, `verify`, `scan`).
 
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -14,4 +14,17 @@ pub fn stop_flag() -> Result<Arc<AtomicBool>> {
             .context("cannot install the signal handler")?;
     }
     Ok(stop)
+}
+
+/// Like [`stop_flag`], but a second SIGINT or SIGTERM while the first is
+/// being handled exits at once with status 130 (`scan`: the first signal
+/// finishes the scan in hand and stops the sensor cleanly).
+pub fn interrupt_flag() -> Result<Arc<AtomicBool>> {
+    let interrupted = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(signal, 130, Arc::clone(&interrupted))
+            .and_then(|_| signal_hook::flag::register(signal, Arc::clone(&interrupted)))
+            .context("cannot install the signal handler")?;
+    }
+    Ok(interrupted)
 }
