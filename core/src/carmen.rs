@@ -255,7 +255,10 @@ impl<'a> Flaser<'a> {
         *frame = Frame::new(self.variant.geometry(), self.beams)
             .map_err(|_| LineError::UnsupportedBeamCount(self.beams))?;
         let per_metre = f64::from(unit.per_metre());
-        let (all_ones, first_code) = (i64::from(unit.all_ones()), i64::from(unit.first_error_code()));
+        let (all_ones, first_code) = (
+            i64::from(unit.all_ones()),
+            i64::from(unit.first_error_code()),
+        );
         let texts = self.line.split_ascii_whitespace().skip(2).take(self.beams);
         for (beam, text) in texts.enumerate() {
             let metres = parse_range(beam, text)?;

@@ -156,7 +156,10 @@ pub fn open_log(path: &Path) -> Result<Reader<Box<dyn BufRead>>, ReadError> {
 pub fn load_frames(stem: &str, max: usize) -> Vec<crate::Frame> {
     let path = log_path(stem);
     let fail = |e: ReadError| -> ! {
-        panic!("{}: {e} (../shared/data must sit beside the repo)", path.display())
+        panic!(
+            "{}: {e} (../shared/data must sit beside the repo)",
+            path.display()
+        )
     };
     let reader = open_log(&path).unwrap_or_else(|e| fail(e));
     reader
@@ -211,7 +214,10 @@ mod tests {
         open_text(&gz).unwrap().read_to_string(&mut a).unwrap();
         assert_eq!(a, text);
         let frames = |p: &Path| -> Vec<Vec<f32>> {
-            open_log(p).unwrap().map(|s| s.unwrap().frame.ranges().to_vec()).collect()
+            open_log(p)
+                .unwrap()
+                .map(|s| s.unwrap().frame.ranges().to_vec())
+                .collect()
         };
         assert_eq!(frames(&plain), frames(&gz));
         assert_eq!(frames(&gz).len(), 1);

@@ -33,7 +33,6 @@ use lms_core::{ValidParams, Variant};
 
 mod common;
 
-
 // ------------------------------------------------- the counting allocator --
 
 /// Counts allocations made on a thread while its `MEASURING` flag is set.
@@ -118,7 +117,10 @@ fn sustained(scans: u32) -> Report {
     let mut lms = Emulator::new(source, Settings::default(), 0);
     let mut cop = Box::new(CoProcessor::new(ValidParams::DEFAULT, SensorSetup::DEFAULT));
     cop.start(0);
-    let (mut sensor, mut host) = (Port::with_capacity(PORT_BYTES), Port::with_capacity(PORT_BYTES));
+    let (mut sensor, mut host) = (
+        Port::with_capacity(PORT_BYTES),
+        Port::with_capacity(PORT_BYTES),
+    );
     let (mut sensor_peak, mut host_peak) = (0usize, 0usize);
     let mut client = Framer::new(Direction::SensorToHost, Handshake::Expected);
     let mut asm = FeatureAssembler::new();

@@ -11,11 +11,11 @@
 
 use std::path::{Path, PathBuf};
 
+use lms_core::carmen::{self, ReadError};
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{emit_features, EchoedParams};
 use lms_core::telegram::{MeasuredValues, RangeBits, Request, ACK};
-use lms_core::carmen::{self, ReadError};
 use lms_core::{test_support, Unit};
 use lms_core::{Beam, Extractor, Params, Variant};
 use lms_fuzz::{

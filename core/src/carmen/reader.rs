@@ -94,7 +94,12 @@ impl<R: BufRead> Lines<R> {
     fn next_flaser(&mut self) -> Result<Option<(usize, &str)>, ReadError> {
         loop {
             self.buf.clear();
-            if self.input.read_until(b'\n', &mut self.buf).map_err(ReadError::Io)? == 0 {
+            if self
+                .input
+                .read_until(b'\n', &mut self.buf)
+                .map_err(ReadError::Io)?
+                == 0
+            {
                 return Ok(None);
             }
             self.number += 1;
@@ -125,9 +130,15 @@ pub fn decide_unit<R: BufRead>(input: R) -> Result<Unit, ReadError> {
     let mut lines = Lines::new(input);
     let mut mm = false;
     while let Some((line, text)) = lines.next_flaser()? {
-        mm |= Flaser::parse(text).map_err(|e| at_line(line, e))?.three_decimals;
+        mm |= Flaser::parse(text)
+            .map_err(|e| at_line(line, e))?
+            .three_decimals;
     }
-    Ok(if mm { Unit::Millimetre } else { Unit::Centimetre })
+    Ok(if mm {
+        Unit::Millimetre
+    } else {
+        Unit::Centimetre
+    })
 }
 
 /// The `FLASER` scans of a log in one unit, frame by frame.
@@ -166,7 +177,9 @@ impl<R: BufRead> Reader<R> {
             return Ok(None);
         };
         let flaser = Flaser::parse(text).map_err(|e| at_line(line, e))?;
-        flaser.fill(self.unit, frame).map_err(|e| at_line(line, e))?;
+        flaser
+            .fill(self.unit, frame)
+            .map_err(|e| at_line(line, e))?;
         let index = self.index;
         self.index += 1;
         Ok(Some((index, line, flaser)))

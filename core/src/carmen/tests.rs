@@ -82,14 +82,23 @@ fn errors_name_the_line() {
     let r = vec!["2"; 181];
     let mut bad = r.clone();
     bad[7] = "2.x";
-    let text = format!("# c\n{}{}", line(181, &r.join(" ")), line(181, &bad.join(" ")));
+    let text = format!(
+        "# c\n{}{}",
+        line(181, &r.join(" ")),
+        line(181, &bad.join(" "))
+    );
     let err = read(&text).unwrap_err();
     assert_eq!(err.line(), Some(3));
     let err = err.to_string();
     assert!(err.contains("line 3"), "{err}");
-    assert!(err.contains("malformed number \"2.x\" for range 7"), "{err}");
+    assert!(
+        err.contains("malformed number \"2.x\" for range 7"),
+        "{err}"
+    );
 
-    let err = read(&line(181, &r[..180].join(" "))).unwrap_err().to_string();
+    let err = read(&line(181, &r[..180].join(" ")))
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("line 1") && err.contains("n = 181"), "{err}");
 
     let mut big = r.clone();
@@ -131,6 +140,18 @@ fn the_line_layer_needs_no_allocation() {
 
 #[test]
 fn the_units_error_codes() {
-    assert_eq!((Unit::Centimetre.all_ones(), Unit::Centimetre.first_error_code()), (8191, 8183));
-    assert_eq!((Unit::Millimetre.all_ones(), Unit::Millimetre.first_error_code()), (32767, 32759));
+    assert_eq!(
+        (
+            Unit::Centimetre.all_ones(),
+            Unit::Centimetre.first_error_code()
+        ),
+        (8191, 8183)
+    );
+    assert_eq!(
+        (
+            Unit::Millimetre.all_ones(),
+            Unit::Millimetre.first_error_code()
+        ),
+        (32767, 32759)
+    );
 }
