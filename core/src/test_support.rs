@@ -89,7 +89,7 @@ pub struct Rng(pub u64);
 
 impl Rng {
     /// The next 64 random bits.
-    pub fn next(&mut self) -> u64 {
+    pub fn next_u64(&mut self) -> u64 {
         self.0 ^= self.0 >> 12;
         self.0 ^= self.0 << 25;
         self.0 ^= self.0 >> 27;
@@ -98,12 +98,12 @@ impl Rng {
 
     /// Uniform in `[0, 1)` (53 bits).
     pub fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
 
     /// In `0..n` (0 for `n` = 0).
     pub fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
+        (self.next_u64() % n.max(1) as u64) as usize
     }
 
     /// Events of probability `p` per trial: the trials until the next one
@@ -176,7 +176,7 @@ mod tests {
     #[test]
     fn the_generator_repeats_and_stays_in_range() {
         let (mut a, mut b) = (Rng(42), Rng(42));
-        assert!((0..100).all(|_| a.next() == b.next()));
+        assert!((0..100).all(|_| a.next_u64() == b.next_u64()));
         assert!((0..1000).all(|_| a.below(7) < 7 && (0.0..1.0).contains(&a.unit())));
         assert_eq!(a.below(0), 0);
         assert_eq!(a.gap(0.0), u64::MAX);

@@ -171,7 +171,7 @@ impl Injector {
                     match self.fault {
                         Fault::Drop(_) => {}
                         Fault::Duplicate(_) => out.extend([b, b]),
-                        _ => out.extend([self.rng.next() as u8, b]),
+                        _ => out.extend([self.rng.next_u64() as u8, b]),
                     }
                 }
             }
@@ -184,7 +184,7 @@ impl Injector {
                     self.bursts.push(index);
                 }
                 while self.burst_left > 0 && at < t.len() {
-                    out[start + at] = self.rng.next() as u8;
+                    out[start + at] = self.rng.next_u64() as u8;
                     at += 1;
                     self.burst_left -= 1;
                 }
@@ -202,7 +202,7 @@ impl Injector {
             } => {
                 if now_us % period_us < window_us {
                     let n = (t.len() as f64 * (0.3 + 1.4 * self.rng.unit())) as usize;
-                    out.extend((0..n).map(|_| self.rng.next() as u8));
+                    out.extend((0..n).map(|_| self.rng.next_u64() as u8));
                 } else {
                     out.extend_from_slice(t);
                 }

@@ -337,7 +337,7 @@ fn telegram_framer_random_damage_never_panics() {
                 1 => {
                     s.remove(at);
                 }
-                2 => s.insert(at, rng.next() as u8),
+                2 => s.insert(at, rng.next_u64() as u8),
                 _ => s.insert(at, 0x02),
             }
         }
@@ -359,7 +359,7 @@ fn telegram_framer_random_damage_never_panics() {
         }
     }
     // Pure noise.
-    let noise: Vec<u8> = (0..5000).map(|_| rng.next() as u8).collect();
+    let noise: Vec<u8> = (0..5000).map(|_| rng.next_u64() as u8).collect();
     for direction in [Direction::SensorToHost, Direction::HostToSensor] {
         run(
             direction,
