@@ -10,44 +10,22 @@
 //! `cargo bench -p lms-core --bench pipeline`
 
 use std::hint::black_box;
-use std::io::{BufRead, BufReader};
 use std::time::Duration;
 
 use criterion::{
     criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode, Throughput,
 };
-use lms_core::{Extractor, Frame, Invalid, Params, Variant};
+use lms_core::{test_support, Extractor, Frame, Params};
 
-const LOG: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../shared/data/carmen/csail-corrected.log.gz"
-);
-
-/// All FLASER frames of the log (361 beams; values ≥ 81.83 m are cm error codes).
+/// All FLASER frames of the CSAIL log through the one CARMEN reader
+/// (`lms_core::test_support`; 361 beams, cm error codes invalid).
 fn load_frames() -> Vec<Frame> {
-    let file = std::fs::File::open(LOG).unwrap_or_else(|e| panic!("cannot open {LOG}: {e}"));
-    let reader = BufReader::new(flate2::read::GzDecoder::new(file));
-    let mut frames = Vec::new();
-    for line in reader.lines() {
-        let line = line.expect("read error");
-        let mut fields = line.split_ascii_whitespace();
-        if fields.next() != Some("FLASER") {
-            continue;
-        }
-        let n: usize = fields.next().and_then(|s| s.parse().ok()).expect("n");
-        assert_eq!(n, 361, "the CSAIL log has 361-beam frames");
-        let ranges: Vec<f32> = fields.take(n).map(|s| s.parse().expect("range")).collect();
-        let mut frame =
-            Frame::from_metres(Variant::Fov180Res50.geometry(), &ranges).expect("frame");
-        for (j, &r) in ranges.iter().enumerate() {
-            if r >= 81.83 {
-                let cm = (r * 100.0).round() as u16;
-                frame.set_invalid(j, Invalid::from_code_offset(8191u16.saturating_sub(cm)));
-            }
-        }
-        frames.push(frame);
-    }
-    assert!(!frames.is_empty(), "no FLASER frames in {LOG}");
+    let frames = test_support::load_frames("csail-corrected", usize::MAX);
+    assert!(!frames.is_empty(), "no FLASER frames in the CSAIL log");
+    assert!(
+        frames.iter().all(|f| f.len() == 361),
+        "the CSAIL log has 361-beam frames"
+    );
     frames
 }
 

@@ -5,6 +5,14 @@
 //! byte-identical output (ALGORITHM.md §9: `std` changes no numeric path).
 //!
 //! Usage: `cargo run -p lms-core --example feature_bits [--features std] -- LOG.gz [ITERATIONS]`
+//!
+//! It parses the log itself rather than through the one reader,
+//! `lms_core::carmen`, on purpose: its output is a recorded baseline, and
+//! the reader would change it — the reader's bearing step is
+//! `Variant::geometry`'s (`0x3c0efa36` for 0.5°, `0x3c8efa36` for 1°; here
+//! `(180°/n).to_radians()`, one ulp less: `0x3c0efa35`, `0x3c8efa35`), and
+//! it reads the Örebro log in mm, where 32.759 … 32.767 m are error codes
+//! (here distances below 81.83 m).
 
 use std::io::{BufRead, BufReader, Write};
 

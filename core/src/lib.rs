@@ -20,6 +20,13 @@
 //! 4. **Devices** ([`device`]): the LMS 2xx model
 //!    ([`device::emulator`]), its client's handshake ([`device::client`])
 //!    and the co-processor ([`device::coprocessor`]), sans I/O.
+//! 5. **Recorded logs** ([`carmen`]): CARMEN `FLASER` lines → [`Frame`]
+//!    (per line without allocation; with `std` a streaming reader and the
+//!    per-file unit decision).
+//!
+//! With feature `test-support`, [`test_support`] holds what the tests,
+//! benches, examples and the fuzz crate share: an in-memory serial port, a
+//! seeded generator and `open_log` for the shared CARMEN logs.
 //!
 //! All maths is `f32` through `libm`; nothing allocates; no input panics.
 //! Capacities are constants ([`MAX_BEAMS`], [`MAX_LINES`], [`MAX_CORNERS`]);
@@ -35,6 +42,7 @@
 #[doc = include_str!("../../README.md")]
 struct ReadmeDoctests;
 
+pub mod carmen;
 pub mod device;
 pub mod features;
 pub mod frame;
@@ -42,6 +50,8 @@ pub mod maths;
 pub mod params;
 pub mod pipeline;
 pub mod telegram;
+#[cfg(feature = "test-support")]
+pub mod test_support;
 pub mod units;
 
 /// Pipeline internals for the evaluation package (`lab/`): no stability

@@ -63,6 +63,25 @@ impl Unit {
             Unit::Decimetre => 10.0,
         }
     }
+
+    /// The all-ones value of the range field of a recorded log in this unit
+    /// (PROTOCOL.md §3; `shared/data/README.md`): the last error code, "not
+    /// valid". 8191 for cm and 10 cm (13 range bits), 32 767 for mm (the
+    /// 32 m mode, 15 range bits: the Örebro log's 32.767 m).
+    pub const fn all_ones(self) -> u16 {
+        match self {
+            Unit::Centimetre | Unit::Decimetre => 0x1FFF,
+            Unit::Millimetre => 0x7FFF,
+        }
+    }
+
+    /// The first (lowest) error code of a recorded log in this unit,
+    /// `all_ones − 8` (8183 cm = 81.83 m, 32 759 mm = 32.759 m): every
+    /// reading at or above it is invalid, with the reason
+    /// [`Invalid::from_code_offset`](crate::Invalid::from_code_offset)`(all_ones − value)`.
+    pub const fn first_error_code(self) -> u16 {
+        self.all_ones() - 8
+    }
 }
 
 impl fmt::Display for Unit {

@@ -12,11 +12,11 @@ use lms_core::telegram::features::{
 use lms_core::telegram::{
     emit_telegram, Direction, Event, Framer, Handshake, MeasuredView, RangeBits, Request,
 };
+use lms_core::test_support::Port;
 use lms_core::Unit;
 use lms_core::{Extractor, Variant};
 
 mod common;
-use common::Port;
 
 /// A room: a wall 3 m ahead, side walls 2 m away, a box; mm values with a
 /// little deterministic noise and some no-echo beams.

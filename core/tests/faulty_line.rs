@@ -49,11 +49,11 @@ use lms_core::telegram::features::{Assembled, FeatureAssembler, CMD_COUNTERS, RE
 use lms_core::telegram::{
     emit_telegram, Direction, Event, Framer, FramerStats, Handshake, Request, ACK, NAK,
 };
+use lms_core::test_support::{Port, Rng};
 use lms_core::Unit;
 use lms_core::{Params, Variant};
 
 mod common;
-use common::Port;
 
 /// Scans per fault type.
 const SCANS: u32 = 300;
@@ -61,34 +61,6 @@ const SCANS: u32 = 300;
 const STEP_US: u64 = 1000;
 
 // ------------------------------------------------------------- the faults --
-
-/// xorshift64*: a small deterministic generator.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Uniform in 0..n.
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    /// Events of probability `p` per trial: trials until the next one.
-    fn gap(&mut self, p: f64) -> u64 {
-        if p <= 0.0 {
-            return u64::MAX;
-        }
-        let u = self.unit().max(f64::MIN_POSITIVE);
-        (u.ln() / (1.0 - p).ln()).floor() as u64
-    }
-}
 
 #[derive(Clone, Copy, Debug)]
 enum Fault {
@@ -199,7 +171,7 @@ impl Injector {
                     match self.fault {
                         Fault::Drop(_) => {}
                         Fault::Duplicate(_) => out.extend([b, b]),
-                        _ => out.extend([self.rng.next() as u8, b]),
+                        _ => out.extend([self.rng.next_u64() as u8, b]),
                     }
                 }
             }
@@ -212,7 +184,7 @@ impl Injector {
                     self.bursts.push(index);
                 }
                 while self.burst_left > 0 && at < t.len() {
-                    out[start + at] = self.rng.next() as u8;
+                    out[start + at] = self.rng.next_u64() as u8;
                     at += 1;
                     self.burst_left -= 1;
                 }
@@ -230,7 +202,7 @@ impl Injector {
             } => {
                 if now_us % period_us < window_us {
                     let n = (t.len() as f64 * (0.3 + 1.4 * self.rng.unit())) as usize;
-                    out.extend((0..n).map(|_| self.rng.next() as u8));
+                    out.extend((0..n).map(|_| self.rng.next_u64() as u8));
                 } else {
                     out.extend_from_slice(t);
                 }

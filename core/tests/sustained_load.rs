@@ -11,7 +11,7 @@
 //! = `B0`s the client got = feature groups it assembled, in order; no CRC
 //! error, no resync, nothing rejected; and memory is constant: a counting
 //! global allocator sees no allocation inside `poll` (the core has no
-//! allocator; the ports here are fixed rings, allocated before).
+//! allocator; the ports here have their capacity reserved before).
 //!
 //! `sustained_load_short` (300 scans) runs with `cargo test`;
 //! `sustained_load_10000_scans` is `#[ignore]`d and run in release by
@@ -20,7 +20,6 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::convert::Infallible;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
@@ -28,6 +27,7 @@ use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{Assembled, FeatureAssembler};
 use lms_core::telegram::{Direction, Event, Framer, Handshake, Request};
+use lms_core::test_support::Port;
 use lms_core::Unit;
 use lms_core::{ValidParams, Variant};
 
@@ -72,84 +72,10 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-// ------------------------------------------------------------- fixed ports --
+// ------------------------------------------------------------------ ports --
 
-/// A byte ring of fixed capacity: reading and writing never allocate.
-struct Ring {
-    buf: Box<[u8]>,
-    head: usize,
-    len: usize,
-    /// Most bytes ever held.
-    peak: usize,
-}
-
-impl Ring {
-    fn new(capacity: usize) -> Self {
-        Ring {
-            buf: vec![0; capacity].into_boxed_slice(),
-            head: 0,
-            len: 0,
-            peak: 0,
-        }
-    }
-    fn push(&mut self, bytes: &[u8]) {
-        let cap = self.buf.len();
-        assert!(self.len + bytes.len() <= cap, "ring full");
-        for &b in bytes {
-            self.buf[(self.head + self.len) % cap] = b;
-            self.len += 1;
-        }
-        self.peak = self.peak.max(self.len);
-    }
-    fn pop(&mut self, out: &mut [u8]) -> usize {
-        let n = out.len().min(self.len);
-        let cap = self.buf.len();
-        for b in out.iter_mut().take(n) {
-            *b = self.buf[self.head];
-            self.head = (self.head + 1) % cap;
-        }
-        self.len -= n;
-        n
-    }
-}
-
-/// A serial port: `rx` is what the co-processor reads, `tx` what it writes.
-struct Port {
-    rx: Ring,
-    tx: Ring,
-}
-
-impl Port {
-    fn new() -> Self {
-        Port {
-            rx: Ring::new(1 << 16),
-            tx: Ring::new(1 << 16),
-        }
-    }
-}
-
-impl embedded_io::ErrorType for Port {
-    type Error = Infallible;
-}
-impl embedded_io::Read for Port {
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
-        Ok(self.rx.pop(buf))
-    }
-}
-impl embedded_io::ReadReady for Port {
-    fn read_ready(&mut self) -> Result<bool, Infallible> {
-        Ok(self.rx.len > 0)
-    }
-}
-impl embedded_io::Write for Port {
-    fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
-        self.tx.push(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-}
+/// Bytes each port buffer holds without allocating (reserved before the run).
+const PORT_BYTES: usize = 1 << 16;
 
 // ---------------------------------------------------------------- the run --
 
@@ -191,7 +117,11 @@ fn sustained(scans: u32) -> Report {
     let mut lms = Emulator::new(source, Settings::default(), 0);
     let mut cop = Box::new(CoProcessor::new(ValidParams::DEFAULT, SensorSetup::DEFAULT));
     cop.start(0);
-    let (mut sensor, mut host) = (Port::new(), Port::new());
+    let (mut sensor, mut host) = (
+        Port::with_capacity(PORT_BYTES),
+        Port::with_capacity(PORT_BYTES),
+    );
+    let (mut sensor_peak, mut host_peak) = (0usize, 0usize);
     let mut client = Framer::new(Direction::SensorToHost, Handshake::Expected);
     let mut asm = FeatureAssembler::new();
     let mut line = [0u8; 4096];
@@ -205,7 +135,7 @@ fn sustained(scans: u32) -> Report {
     // takes is then passed on with its features.
     let mut buf = [0u8; 16];
     let n = Request::Continuous.emit(0, &mut buf).unwrap();
-    host.rx.push(&buf[..n]);
+    host.rx.extend(&buf[..n]);
     let (mut polls, mut poll_time, mut scan_poll_max) = (0u64, Duration::ZERO, Duration::ZERO);
     // The counter counts (a self-check of the test).
     ALLOCATIONS.store(0, Ordering::Relaxed);
@@ -220,7 +150,7 @@ fn sustained(scans: u32) -> Report {
     loop {
         now += STEP_US;
         // Co-processor → LMS.
-        let n = sensor.tx.pop(&mut chunk);
+        let n = sensor.pop_tx(&mut chunk);
         lms.receive(now, &chunk[..n]);
         // LMS → co-processor.
         loop {
@@ -228,7 +158,8 @@ fn sustained(scans: u32) -> Report {
             if n == 0 {
                 break;
             }
-            sensor.rx.push(&line[..n]);
+            sensor.rx.extend(&line[..n]);
+            sensor_peak = sensor_peak.max(sensor.rx.len());
         }
         while lms.next_event().is_some() {}
 
@@ -238,6 +169,7 @@ fn sustained(scans: u32) -> Report {
         let outcome = cop.poll(&mut sensor, &mut host, now).unwrap();
         let dt = t0.elapsed();
         MEASURING.with(|m| m.set(false));
+        host_peak = host_peak.max(host.tx.len());
         polls += 1;
         poll_time += dt;
         if outcome.scans > 0 {
@@ -246,7 +178,7 @@ fn sustained(scans: u32) -> Report {
 
         // The client.
         loop {
-            let n = host.tx.pop(&mut chunk);
+            let n = host.pop_tx(&mut chunk);
             if n == 0 {
                 break;
             }
@@ -307,6 +239,10 @@ fn sustained(scans: u32) -> Report {
     assert_eq!(asm.discarded(), 0);
     let allocations = ALLOCATIONS.load(Ordering::Relaxed);
     assert_eq!(allocations, 0, "allocations inside poll");
+    assert!(
+        sensor_peak <= PORT_BYTES && host_peak <= PORT_BYTES,
+        "port full: {sensor_peak} / {host_peak} B"
+    );
     Report {
         scans: groups,
         simulated_s: now as f64 / 1e6,
@@ -314,8 +250,8 @@ fn sustained(scans: u32) -> Report {
         polls,
         poll_time,
         scan_poll_max,
-        sensor_peak: sensor.rx.peak,
-        host_peak: host.tx.peak,
+        sensor_peak,
+        host_peak,
     }
 }
 

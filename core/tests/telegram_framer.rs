@@ -6,6 +6,7 @@ use lms_core::telegram::{
     Direction, Event, Framer, FramerStats, Handshake, MeasuredValues, Reply, Request, Telegram,
     ACK, NAK,
 };
+use lms_core::test_support::Rng;
 use lms_core::Unit;
 
 /// What the framer handed out, owned.
@@ -14,22 +15,6 @@ enum Seen {
     Telegram(Vec<u8>),
     Ack,
     Nak,
-}
-
-/// Small deterministic generator (xorshift64*), so runs repeat exactly.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
 }
 
 /// Feed one chunk, draining every event (including those found in the
@@ -352,7 +337,7 @@ fn telegram_framer_random_damage_never_panics() {
                 1 => {
                     s.remove(at);
                 }
-                2 => s.insert(at, rng.next() as u8),
+                2 => s.insert(at, rng.next_u64() as u8),
                 _ => s.insert(at, 0x02),
             }
         }
@@ -374,7 +359,7 @@ fn telegram_framer_random_damage_never_panics() {
         }
     }
     // Pure noise.
-    let noise: Vec<u8> = (0..5000).map(|_| rng.next() as u8).collect();
+    let noise: Vec<u8> = (0..5000).map(|_| rng.next_u64() as u8).collect();
     for direction in [Direction::SensorToHost, Direction::HostToSensor] {
         run(
             direction,

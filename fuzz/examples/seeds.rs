@@ -9,15 +9,15 @@
 //!
 //! Deterministic: the same files every run.
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
+use lms_core::carmen::{self, ReadError};
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{emit_features, EchoedParams};
 use lms_core::telegram::{MeasuredValues, RangeBits, Request, ACK};
-use lms_core::Unit;
-use lms_core::{Extractor, Params, Variant};
+use lms_core::{test_support, Unit};
+use lms_core::{Beam, Extractor, Params, Variant};
 use lms_fuzz::{
     encode_features, encode_pipeline_words, units_byte, FramerInput, Ops, Output, Port,
     FRAMER_ABANDON, FRAMER_HANDSHAKE, FRAMER_HOST_TO_SENSOR,
@@ -63,39 +63,32 @@ struct Scan {
     words: Vec<u16>,
 }
 
-/// Every `step`-th scan of a CARMEN log, at most `max`; `mm`: the log is
-/// in mm with the 32 m mode's error codes (Örebro), else cm.
-fn log_scans(path: &Path, mm: bool, step: usize, max: usize) -> Vec<Scan> {
-    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let reader = BufReader::new(flate2::read::GzDecoder::new(file));
+/// Every `step`-th scan of a CARMEN log, at most `max`, through the core's
+/// one reader: a mm log (Örebro) in the 32 m mode's 15 range bits, the cm
+/// logs in 13; error codes and zeros back to their words.
+fn log_scans(path: &Path, step: usize, max: usize) -> Vec<Scan> {
+    let fail = |e: ReadError| -> ! { panic!("{}: {e}", path.display()) };
+    let reader = test_support::open_log(path).unwrap_or_else(|e| fail(e));
+    let units = reader.unit();
+    let bits = match units {
+        Unit::Millimetre => RangeBits::Bits15,
+        _ => RangeBits::Bits13,
+    };
+    let scale = f64::from(units.per_metre());
     let mut out = Vec::new();
-    for (k, line) in reader
-        .lines()
-        .map_while(Result::ok)
-        .filter(|l| l.starts_with("FLASER "))
-        .enumerate()
-    {
-        if k % step != 0 {
-            continue;
-        }
-        let mut fields = line.split_ascii_whitespace().skip(1);
-        let n: usize = fields.next().unwrap().parse().unwrap();
-        let ranges: Vec<f64> = fields.take(n).map(|s| s.parse().unwrap()).collect();
-        // Örebro: mm in the 32 m mode (15 range bits); the others: cm.
-        let (units, bits, scale, first_code) = if mm {
-            (Unit::Millimetre, RangeBits::Bits15, 1000.0, 32759)
-        } else {
-            (Unit::Centimetre, RangeBits::Bits13, 100.0, 8183)
-        };
-        let mut words: Vec<u16> = ranges
+    for scan in reader.step_by(step).take(max) {
+        let frame = scan.unwrap_or_else(|e| fail(e)).frame;
+        let mut words: Vec<u16> = frame
+            .ranges()
             .iter()
-            .map(|&r| ((r * scale).round() as i64).clamp(0, first_code + 8) as u16)
+            .zip(frame.beams())
+            .map(|(&r, beam)| match *beam {
+                Beam::Valid => (f64::from(r) * scale).round() as u16,
+                Beam::Invalid(why) => bits.encode_invalid(why),
+            })
             .collect();
         // 180 and 360 beams miss the last one: "not valid".
-        let variant = match n {
-            180 | 181 => Variant::Fov180Res100,
-            _ => Variant::Fov180Res50,
-        };
+        let variant = carmen::variant_for_beams(frame.len()).expect("a 180° log");
         words.resize(variant.beams(), bits.mask());
         out.push(Scan {
             variant,
@@ -103,9 +96,6 @@ fn log_scans(path: &Path, mm: bool, step: usize, max: usize) -> Vec<Scan> {
             bits,
             words,
         });
-        if out.len() == max {
-            break;
-        }
     }
     out
 }
@@ -297,8 +287,7 @@ fn main() {
         ("freiburg-campus-corrected.log.gz", 997, 2),
         ("orebro-corrected.log.gz", 79, 2),
     ] {
-        let mm = log.starts_with("orebro");
-        scans.extend(log_scans(&data.join(log), mm, step, max));
+        scans.extend(log_scans(&data.join(log), step, max));
     }
     let narrowed: Vec<Scan> = scans.iter().take(3).flat_map(narrow).collect();
     scans.extend(narrowed);

@@ -6,9 +6,6 @@
 //! Every decoder reads what is there and substitutes zeros for missing
 //! bytes: any byte string is a valid input.
 
-use std::collections::VecDeque;
-use std::convert::Infallible;
-
 use lms_core::frame::MAX_BEAMS;
 use lms_core::maths::Sym2;
 use lms_core::telegram::{Direction, Event, Framer, RangeBits};
@@ -161,40 +158,9 @@ impl<'a> FramerInput<'a> {
 }
 
 /// One direction of a serial line in memory: the co-processor reads `rx`
-/// and writes `tx` (the co-processor target and the seed sessions).
-#[derive(Default)]
-pub struct Port {
-    /// Bytes waiting to be read.
-    pub rx: VecDeque<u8>,
-    /// Bytes written.
-    pub tx: Vec<u8>,
-}
-impl embedded_io::ErrorType for Port {
-    type Error = Infallible;
-}
-impl embedded_io::Read for Port {
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
-        let n = buf.len().min(self.rx.len());
-        for (b, v) in buf.iter_mut().zip(self.rx.drain(..n)) {
-            *b = v;
-        }
-        Ok(n)
-    }
-}
-impl embedded_io::ReadReady for Port {
-    fn read_ready(&mut self) -> Result<bool, Infallible> {
-        Ok(!self.rx.is_empty())
-    }
-}
-impl embedded_io::Write for Port {
-    fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
-        self.tx.extend_from_slice(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-}
+/// and writes `tx` (the co-processor target and the seed sessions); the
+/// core's `test_support` port.
+pub use lms_core::test_support::Port;
 
 /// One framer event, owned.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -2,10 +2,12 @@
 //! every float bit-exact to what `lms_core` computes; bad input fails with a
 //! message naming the file and line.
 
-use std::io::{BufRead, BufReader};
+use std::fs::File;
+use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
-use lms_core::{Extractor, Frame, Invalid, Params, Variant};
+use lms_core::carmen;
+use lms_core::{Extractor, Frame, Params, Unit};
 use serde_json::Value;
 
 mod common;
@@ -16,36 +18,18 @@ fn scratch(name: &str) -> PathBuf {
     common::scratch("extract", name)
 }
 
-/// The first `count` FLASER frames of a cm log, parsed here independently of
-/// the tool: 361 beams, codes ≥ 81.83 m invalid.
+/// The first `count` FLASER frames of a cm log through the core's CARMEN
+/// reader directly (not the tool's file handling): 361 beams, codes
+/// ≥ 81.83 m invalid.
 fn first_frames(path: &Path, count: usize) -> Vec<Frame> {
-    let file = std::fs::File::open(path).unwrap();
-    let reader = BufReader::new(flate2::read::GzDecoder::new(file));
-    let mut frames = Vec::new();
-    for line in reader.lines() {
-        let line = line.unwrap();
-        let fields: Vec<&str> = line.split_ascii_whitespace().collect();
-        if fields.first() != Some(&"FLASER") {
-            continue;
-        }
-        let n: usize = fields[1].parse().unwrap();
-        assert_eq!(n, 361);
-        let ranges: Vec<f32> = fields[2..2 + n]
-            .iter()
-            .map(|s| s.parse().unwrap())
-            .collect();
-        let mut frame = Frame::from_metres(Variant::Fov180Res50.geometry(), &ranges).unwrap();
-        for (j, &r) in ranges.iter().enumerate() {
-            if r >= 81.83 {
-                let cm = (r * 100.0).round() as u16;
-                frame.set_invalid(j, Invalid::from_code_offset(8191 - cm));
-            }
-        }
-        frames.push(frame);
-        if frames.len() == count {
-            break;
-        }
-    }
+    let text = || BufReader::new(flate2::read::MultiGzDecoder::new(File::open(path).unwrap()));
+    let unit = carmen::decide_unit(text()).unwrap();
+    assert_eq!(unit, Unit::Centimetre);
+    let frames: Vec<Frame> = carmen::Reader::new(text(), unit)
+        .take(count)
+        .map(|scan| scan.unwrap().frame)
+        .collect();
+    assert!(frames.iter().all(|f| f.len() == 361));
     frames
 }
 

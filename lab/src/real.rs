@@ -21,6 +21,8 @@ pub fn sigma_for(unit: Unit) -> f64 {
     match unit {
         Unit::Centimetre => 0.01,
         Unit::Millimetre => 0.005,
+        // A CARMEN log is read in cm or mm only.
+        Unit::Decimetre => 0.01,
     }
 }
 

@@ -1,8 +1,9 @@
 //! # lms-scene — synthetic LMS 2xx scans with ground truth
 //!
 //! Seeded, deterministic scenes for tests, the simulated sensor and the
-//! evaluation tool. Plain `std` and `f64`; independent of `lms-core`, so it
-//! can serve as the ground truth the core is checked against.
+//! evaluation tool. Plain `std` and `f64`; of `lms-core` it uses only the
+//! range unit type ([`Unit`]), so it can serve as the ground truth the core
+//! is checked against.
 //!
 //! The data flow:
 //!
@@ -27,7 +28,7 @@
 //! let truth = Scene::room_with_box().cast(&Bearings::default(), Pose::IDENTITY);
 //! assert_eq!(truth.returns(), 361);
 //! let readings = truth.noisy(&NoiseModel::lms_mm(), &mut seeded_rng(42));
-//! let raw = lms_scene::to_raw(&readings, lms_scene::RangeUnit::Millimetre);
+//! let raw = lms_scene::to_raw(&readings, lms_scene::Unit::Millimetre);
 //! assert!(raw.iter().all(|&v| v < 8183));
 //! println!("{} lines, edge points {:?}", truth.lines.len(), truth.true_edge_points());
 //! ```
@@ -47,8 +48,8 @@ mod tests;
 pub use bearings::Bearings;
 pub use geometry::{wrap_angle, Point, PolarLine, Pose};
 pub use noise::{
-    to_f32_metres, to_raw, NoiseModel, RangeUnit, Reading, NO_RETURN_F32, RAW_ABOVE_MAX,
-    RAW_NO_ECHO,
+    quantise, to_f32_metres, to_raw, NoiseModel, RangeUnit, Reading, Unit, NO_RETURN_F32,
+    RAW_ABOVE_MAX, RAW_NO_ECHO,
 };
 pub use rand_chacha::ChaCha8Rng;
 pub use scene::{

@@ -13,28 +13,21 @@ pub const RAW_ABOVE_MAX: u16 = 8183;
 /// range of 0 is invalid (ALGORITHM.md §1).
 pub const NO_RETURN_F32: f32 = 0.0;
 
-/// Unit of the LMS range values (the sensor's mm or cm mode).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum RangeUnit {
-    /// 1 mm.
-    Millimetre,
-    /// 1 cm.
-    Centimetre,
+/// Unit of the LMS range values: the core's one unit type (the sensor's
+/// mm, cm or 10 cm mode).
+pub use lms_core::Unit;
+
+/// The scene crate's former name of [`Unit`], kept while callers move over.
+pub type RangeUnit = Unit;
+
+/// Units per metre (1000, 100 or 10), exactly, as `f64`.
+fn per_metre(unit: Unit) -> f64 {
+    f64::from(unit.per_metre())
 }
 
-impl RangeUnit {
-    /// Units per metre (1000 or 100).
-    pub const fn per_metre(self) -> f64 {
-        match self {
-            RangeUnit::Millimetre => 1000.0,
-            RangeUnit::Centimetre => 100.0,
-        }
-    }
-
-    /// `metres` rounded to the nearest whole unit (m).
-    pub fn quantise(self, metres: f64) -> f64 {
-        (metres * self.per_metre()).round() / self.per_metre()
-    }
+/// `metres` rounded to the nearest whole `unit` (m).
+pub fn quantise(unit: Unit, metres: f64) -> f64 {
+    (metres * per_metre(unit)).round() / per_metre(unit)
 }
 
 /// One simulated beam.
@@ -63,10 +56,10 @@ impl Reading {
     /// The LMS raw value in `unit`: the range rounded to whole units,
     /// [`RAW_ABOVE_MAX`] if that reaches the error codes (≥ 8183, i.e. from
     /// 8.1825 m in mm mode), [`RAW_NO_ECHO`] without a return.
-    pub fn to_raw(self, unit: RangeUnit) -> u16 {
+    pub fn to_raw(self, unit: Unit) -> u16 {
         match self {
             Reading::Range(d) => {
-                let v = (d * unit.per_metre()).round();
+                let v = (d * per_metre(unit)).round();
                 if v >= f64::from(RAW_ABOVE_MAX) {
                     RAW_ABOVE_MAX
                 } else {
@@ -90,7 +83,7 @@ impl Reading {
 }
 
 /// Raw LMS values of a scan (see [`Reading::to_raw`]).
-pub fn to_raw(readings: &[Reading], unit: RangeUnit) -> Vec<u16> {
+pub fn to_raw(readings: &[Reading], unit: Unit) -> Vec<u16> {
     readings.iter().map(|r| r.to_raw(unit)).collect()
 }
 
@@ -114,7 +107,7 @@ pub struct NoiseModel {
     /// Probability that a beam with a return reports none (0 … 1).
     pub dropout: f64,
     /// Round ranges to this unit, or not at all.
-    pub quantisation: Option<RangeUnit>,
+    pub quantisation: Option<Unit>,
 }
 
 impl NoiseModel {
@@ -132,7 +125,7 @@ impl NoiseModel {
 
     /// The LMS 2xx in mm mode: σ = 5 mm (ALGORITHM.md §5), ranges in whole mm.
     pub const fn lms_mm() -> Self {
-        Self::gaussian(0.005).with_quantisation(RangeUnit::Millimetre)
+        Self::gaussian(0.005).with_quantisation(Unit::Millimetre)
     }
 
     /// The same model with dropout probability `p`.
@@ -141,7 +134,7 @@ impl NoiseModel {
     }
 
     /// The same model quantising to `unit`.
-    pub const fn with_quantisation(self, unit: RangeUnit) -> Self {
+    pub const fn with_quantisation(self, unit: Unit) -> Self {
         Self {
             quantisation: Some(unit),
             ..self
@@ -162,7 +155,7 @@ impl NoiseModel {
         }
         let mut d = d + self.sigma * z;
         if let Some(unit) = self.quantisation {
-            d = unit.quantise(d);
+            d = quantise(unit, d);
         }
         if d > 0.0 {
             Reading::Range(d)
@@ -180,19 +173,19 @@ mod tests {
 
     #[test]
     fn raw_values() {
-        assert_eq!(Reading::Range(1.2344).to_raw(RangeUnit::Millimetre), 1234);
-        assert_eq!(Reading::Range(1.2346).to_raw(RangeUnit::Millimetre), 1235);
-        assert_eq!(Reading::Range(1.2346).to_raw(RangeUnit::Centimetre), 123);
-        assert_eq!(Reading::Range(8.182).to_raw(RangeUnit::Millimetre), 8182);
+        assert_eq!(Reading::Range(1.2344).to_raw(Unit::Millimetre), 1234);
+        assert_eq!(Reading::Range(1.2346).to_raw(Unit::Millimetre), 1235);
+        assert_eq!(Reading::Range(1.2346).to_raw(Unit::Centimetre), 123);
+        assert_eq!(Reading::Range(8.182).to_raw(Unit::Millimetre), 8182);
         assert_eq!(
-            Reading::Range(8.1826).to_raw(RangeUnit::Millimetre),
+            Reading::Range(8.1826).to_raw(Unit::Millimetre),
             RAW_ABOVE_MAX
         );
-        assert_eq!(Reading::Range(30.0).to_raw(RangeUnit::Centimetre), 3000);
-        assert_eq!(Reading::NoReturn.to_raw(RangeUnit::Millimetre), RAW_NO_ECHO);
-        assert_eq!(Reading::NoReturn.to_raw(RangeUnit::Centimetre), 8191);
+        assert_eq!(Reading::Range(30.0).to_raw(Unit::Centimetre), 3000);
+        assert_eq!(Reading::NoReturn.to_raw(Unit::Millimetre), RAW_NO_ECHO);
+        assert_eq!(Reading::NoReturn.to_raw(Unit::Centimetre), 8191);
         let scan = [Reading::Range(0.5), Reading::NoReturn];
-        assert_eq!(to_raw(&scan, RangeUnit::Centimetre), vec![50, 8191]);
+        assert_eq!(to_raw(&scan, Unit::Centimetre), vec![50, 8191]);
     }
 
     #[test]
@@ -208,14 +201,14 @@ mod tests {
     #[test]
     fn quantisation_to_whole_units() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        for unit in [RangeUnit::Millimetre, RangeUnit::Centimetre] {
+        for unit in [Unit::Millimetre, Unit::Centimetre] {
             let model = NoiseModel::gaussian(0.02).with_quantisation(unit);
             for k in 0..1000 {
                 let d = model
                     .reading(Some(1.0 + k as f64 * 0.00377), &mut rng)
                     .metres()
                     .unwrap();
-                let units = d * unit.per_metre();
+                let units = d * per_metre(unit);
                 assert!((units - units.round()).abs() < 1e-9, "{d} in {unit:?}");
             }
         }

@@ -410,7 +410,7 @@ fn dropouts_at_their_rate() {
         let readings = t.noisy(&model, &mut rng);
         dropped += readings.iter().filter(|r| !r.is_return()).count();
         total += readings.len();
-        let raw = to_raw(&readings, RangeUnit::Millimetre);
+        let raw = to_raw(&readings, Unit::Millimetre);
         for (v, r) in raw.iter().zip(&readings) {
             match r {
                 Reading::Range(d) => assert_eq!(f64::from(*v), (d * 1000.0).round()),

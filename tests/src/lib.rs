@@ -1,7 +1,7 @@
 //! Shared helpers for the workspace tests: an independent `f64` reference of
-//! the smoothing and segmentation (ALGORITHM.md §2–§6) and a reader of the
-//! real CARMEN logs.
+//! the smoothing and segmentation (ALGORITHM.md §2–§6) and scenes with
+//! ground truth. The real CARMEN logs are read through the core's one
+//! reader (`lms_core::test_support::open_log`, a dev-dependency feature).
 
-pub mod carmen;
 pub mod reference;
 pub mod synth;

@@ -51,10 +51,10 @@
 //! * Invalid windows (`+inf`) must be invalid on both sides; a window that
 //!   is `+inf` on one side only fails.
 
+use lms_core::test_support;
 use lms_core::{Extractor, Frame, Geometry, Invalid, Params};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use workspace_tests::carmen;
 use workspace_tests::reference::{self, RefParams};
 use workspace_tests::synth;
 
@@ -328,17 +328,17 @@ fn random_scenes_agree_with_the_f64_reference() {
 }
 
 fn real_cases(stem: &str, frames: usize) -> Vec<Case> {
-    carmen::load_cm_log(stem, frames)
+    test_support::load_frames(stem, frames)
         .into_iter()
         .enumerate()
-        .map(|(k, scan)| {
-            let (first, step) = scan.geometry_f32();
+        .map(|(k, frame)| {
+            let g = frame.geometry();
             Case {
                 label: format!("{stem} frame {k}"),
-                ranges: scan.ranges,
-                valid: scan.valid,
-                first,
-                step,
+                ranges: frame.ranges().to_vec(),
+                valid: frame.beams().iter().map(|b| b.is_valid()).collect(),
+                first: g.first_bearing,
+                step: g.step,
                 params: Params::default(),
             }
         })

@@ -1,0 +1,309 @@
+//! CARMEN text logs (`FLASER` lines) → [`Frame`]s: the one reader of the
+//! workspace (tools, tests, benches, examples and the fuzz seeds use it).
+//!
+//! One scan per line:
+//!
+//! ```text
+//! FLASER n r_0 … r_{n-1} x y θ odom_x odom_y odom_θ ipc_timestamp hostname logger_timestamp
+//! ```
+//!
+//! Every other line (`PARAM`, `ODOM`, `NEFF`, comments, blank) is skipped.
+//!
+//! # Layers
+//!
+//! * Always (no_std, no allocation, no panic): one line at a time.
+//!   [`Flaser::parse`] checks a line's syntax and reads its pose and time
+//!   fields; [`Flaser::fill`] writes its ranges into a caller's [`Frame`]
+//!   in a given [`Unit`].
+//! * With the `std` feature: [`Reader`], a streaming iterator over any
+//!   [`std::io::BufRead`] (one line in memory at a time, frame by frame),
+//!   and [`decide_unit`], the per-file unit decision (a first pass).
+//!   Opening files and gzip are the caller's (`host-bridge`'s `carmen`
+//!   module; `test_support::open_log` for tests).
+//!
+//! # Beam counts and geometry
+//!
+//! | n   | field | first bearing | step | note |
+//! |-----|-------|---------------|------|------|
+//! | 181 | 180°  | −90°          | 1°   | LMS 180°/1° |
+//! | 361 | 180°  | −90°          | 0.5° | LMS 180°/0.5° |
+//! | 180 | 180°  | −90°          | 1°   | CARMEN drops the last beam |
+//! | 360 | 180°  | −90°          | 0.5° | CARMEN drops the last beam |
+//! | 101 | 100°  | −50°          | 1°   | LMS 100°/1° |
+//! | 201 | 100°  | −50°          | 0.5° | LMS 100°/0.5° |
+//! | 401 | 100°  | −50°          | 0.25°| LMS 100°/0.25° |
+//!
+//! The geometry is always [`Variant::geometry`], so frames read here have the
+//! same bearing bits as frames decoded from telegrams.
+//!
+//! # Units and error codes (decision)
+//!
+//! A CARMEN log stores metres, but the LMS error codes survive as values in
+//! the sensor's unit: in cm mode 8183 … 8191 cm read 81.83 … 81.91 m, in the
+//! 32 m mm mode 32759 … 32767 mm read 32.759 … 32.767 m. The two modes
+//! cannot be told apart from one value (cm logs hold genuine 32.8 m
+//! readings), so the unit is decided **per file**: in **mm** if any range
+//! value of any `FLASER` line has three or more decimals (the Örebro log;
+//! CARMEN trims trailing zeros, so most but not all of its values show
+//! three), else in **cm** (two decimals at most: CSAIL, Intel, Belgioioso,
+//! Freiburg). [`Flaser::three_decimals`] is that per-line fact; callers may
+//! also force a unit.
+//!
+//! Readings at or above the unit's [`Unit::first_error_code`] are invalid
+//! with the reason [`Invalid::from_code_offset`]`(all_ones − value)`
+//! ([`Unit::all_ones`]). A reading above `all_ones` cannot come from an LMS
+//! in that mode and is an error ([`LineError::AboveAllOnes`]; a mm log
+//! never has one, since a value above 32.767 m with three decimals would
+//! make it inconsistent). Zero readings are invalid ([`Invalid::Zero`]);
+//! negative, NaN or infinite readings are errors.
+
+use core::fmt;
+
+use crate::{Frame, Invalid, Unit, Variant};
+
+/// The beam counts [`variant_for_beams`] accepts.
+pub const SUPPORTED_BEAMS: [usize; 7] = [101, 180, 181, 201, 360, 361, 401];
+
+/// Pose and time fields after the ranges: `FLASER n`, `n` ranges, these
+/// nine (six pose values, IPC time, host name, logger time).
+const TRAILING_FIELDS: usize = 9;
+
+/// The geometry variant for a CARMEN beam count, if supported (180 and 360:
+/// the 180° variants without their last beam).
+pub fn variant_for_beams(n: usize) -> Option<Variant> {
+    match n {
+        180 => Some(Variant::Fov180Res100),
+        360 => Some(Variant::Fov180Res50),
+        other => Variant::from_beams(other),
+    }
+}
+
+/// `true` if the line's first word is `FLASER` (the only lines read).
+pub fn is_flaser(line: &[u8]) -> bool {
+    line.split(u8::is_ascii_whitespace)
+        .find(|w| !w.is_empty())
+        .is_some_and(|w| w == b"FLASER")
+}
+
+/// Pose and time stamps that follow the ranges of a `FLASER` line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Meta {
+    /// Laser pose `[x, y, θ]` (m, m, rad).
+    pub pose: [f64; 3],
+    /// Odometry pose `[x, y, θ]` (m, m, rad).
+    pub odom: [f64; 3],
+    /// IPC time stamp (s); unreliable in some logs.
+    pub ipc_timestamp: f64,
+    /// Logger time stamp (s); unreliable in some logs.
+    pub logger_timestamp: f64,
+}
+
+/// Why a `FLASER` line cannot be read; the texts borrow from the line.
+/// The line number is the caller's ([`ReadError`] adds it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum LineError<'a> {
+    /// The line does not start with `FLASER`.
+    NotFlaser,
+    /// The beam count after `FLASER` is not a number.
+    MalformedBeamCount(&'a str),
+    /// The beam count is not one of [`SUPPORTED_BEAMS`].
+    UnsupportedBeamCount(usize),
+    /// The line has `after_n` values after `n` instead of `n + 9`.
+    FieldCount {
+        /// The beam count.
+        n: usize,
+        /// Values found after the beam count.
+        after_n: usize,
+    },
+    /// A range is not a finite number.
+    MalformedRange {
+        /// Beam index.
+        beam: usize,
+        /// The text.
+        text: &'a str,
+    },
+    /// A range is negative.
+    NegativeRange {
+        /// Beam index.
+        beam: usize,
+        /// The text.
+        text: &'a str,
+    },
+    /// A pose or time field is not a number.
+    MalformedField(&'a str),
+    /// A range lies above the unit's [`Unit::all_ones`].
+    AboveAllOnes {
+        /// Beam index.
+        beam: usize,
+        /// The range (m).
+        metres: f64,
+        /// The unit the log is read in.
+        unit: Unit,
+    },
+}
+
+impl fmt::Display for LineError<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            LineError::NotFlaser => f.write_str("not a FLASER line"),
+            LineError::MalformedBeamCount(t) => write!(f, "malformed beam count {t:?} after FLASER"),
+            LineError::UnsupportedBeamCount(n) => {
+                write!(f, "unsupported beam count n = {n} (supported: {SUPPORTED_BEAMS:?})")
+            }
+            LineError::FieldCount { n, after_n } => write!(
+                f,
+                "FLASER n = {n} but the line has {after_n} values after n (expected {n} ranges + {TRAILING_FIELDS} pose/time fields = {})",
+                n + TRAILING_FIELDS
+            ),
+            LineError::MalformedRange { beam, text } => {
+                write!(f, "malformed number {text:?} for range {beam}")
+            }
+            LineError::NegativeRange { beam, text } => {
+                write!(f, "negative range {text} for beam {beam}")
+            }
+            LineError::MalformedField(t) => {
+                write!(f, "malformed number {t:?} in the pose/time fields")
+            }
+            LineError::AboveAllOnes { beam, metres, unit } => write!(
+                f,
+                "range {metres} m of beam {beam} is above the largest LMS value {} {unit} for a {unit} log",
+                unit.all_ones()
+            ),
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for LineError<'_> {}
+
+/// One `FLASER` line, its syntax checked: everything but the ranges'
+/// interpretation, which needs the log's unit ([`Flaser::fill`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Flaser<'a> {
+    /// The geometry variant of the beam count.
+    pub variant: Variant,
+    /// Number of ranges (`n`).
+    pub beams: usize,
+    /// Pose and time stamps.
+    pub meta: Meta,
+    /// The host name field.
+    pub hostname: &'a str,
+    /// `true` if a range shows three or more decimals (a mm log).
+    pub three_decimals: bool,
+    /// The whole line (the ranges are read again by [`Flaser::fill`]).
+    line: &'a str,
+}
+
+impl<'a> Flaser<'a> {
+    /// Check a `FLASER` line: beam count, field count, every range a finite
+    /// number ≥ 0, the pose and time fields numbers.
+    pub fn parse(line: &'a str) -> Result<Self, LineError<'a>> {
+        let mut fields = line.split_ascii_whitespace();
+        if fields.next() != Some("FLASER") {
+            return Err(LineError::NotFlaser);
+        }
+        let n_text = fields.next().unwrap_or("");
+        let n: usize = n_text
+            .parse()
+            .map_err(|_| LineError::MalformedBeamCount(n_text))?;
+        let variant = variant_for_beams(n).ok_or(LineError::UnsupportedBeamCount(n))?;
+        let after_n = fields.clone().count();
+        if after_n != n + TRAILING_FIELDS {
+            return Err(LineError::FieldCount { n, after_n });
+        }
+        let mut three_decimals = false;
+        for (beam, text) in fields.by_ref().take(n).enumerate() {
+            parse_range(beam, text)?;
+            three_decimals |= decimals(text) >= 3;
+        }
+        // Nine fields are left (counted above).
+        let mut num = || {
+            let text = fields.next().unwrap_or("");
+            text.parse::<f64>()
+                .map_err(|_| LineError::MalformedField(text))
+        };
+        let pose = [num()?, num()?, num()?];
+        let odom = [num()?, num()?, num()?];
+        let ipc_timestamp = num()?;
+        let hostname = fields.next().unwrap_or("");
+        let text = fields.next().unwrap_or("");
+        let logger_timestamp = text
+            .parse::<f64>()
+            .map_err(|_| LineError::MalformedField(text))?;
+        Ok(Flaser {
+            variant,
+            beams: n,
+            meta: Meta {
+                pose,
+                odom,
+                ipc_timestamp,
+                logger_timestamp,
+            },
+            hostname,
+            three_decimals,
+            line,
+        })
+    }
+
+    /// Write the ranges into `frame` (geometry of [`Flaser::variant`],
+    /// [`Flaser::beams`] beams), read in `unit`: codes at or above
+    /// [`Unit::first_error_code`] and zeros invalid with their reason, every
+    /// other range the `f32` nearest its decimal text.
+    pub fn fill(&self, unit: Unit, frame: &mut Frame) -> Result<(), LineError<'a>> {
+        // `beams` is a supported count, so the frame is always built.
+        *frame = Frame::new(self.variant.geometry(), self.beams)
+            .map_err(|_| LineError::UnsupportedBeamCount(self.beams))?;
+        let per_metre = f64::from(unit.per_metre());
+        let (all_ones, first_code) = (
+            i64::from(unit.all_ones()),
+            i64::from(unit.first_error_code()),
+        );
+        let texts = self.line.split_ascii_whitespace().skip(2).take(self.beams);
+        for (beam, text) in texts.enumerate() {
+            let metres = parse_range(beam, text)?;
+            let code = libm::round(metres * per_metre) as i64;
+            if code > all_ones {
+                return Err(LineError::AboveAllOnes { beam, metres, unit });
+            }
+            if code >= first_code {
+                // 0 ≤ all_ones − code ≤ 8 here.
+                let offset = u16::try_from(all_ones - code).unwrap_or(0);
+                frame.set_invalid(beam, Invalid::from_code_offset(offset));
+            } else {
+                // Parsed as f32 directly: the correctly rounded f32 of the decimal.
+                frame.set_metres(beam, text.parse().unwrap_or(metres as f32));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One range text as metres: finite and not negative.
+fn parse_range(beam: usize, text: &str) -> Result<f64, LineError<'_>> {
+    let v: f64 = text
+        .parse()
+        .ok()
+        .filter(|v: &f64| v.is_finite())
+        .ok_or(LineError::MalformedRange { beam, text })?;
+    if v < 0.0 {
+        return Err(LineError::NegativeRange { beam, text });
+    }
+    Ok(v)
+}
+
+/// Digits after the decimal point (before any exponent).
+fn decimals(text: &str) -> usize {
+    match text.split_once('.') {
+        Some((_, frac)) => frac.bytes().take_while(u8::is_ascii_digit).count(),
+        None => 0,
+    }
+}
+
+#[cfg(any(test, feature = "std"))]
+mod reader;
+#[cfg(any(test, feature = "std"))]
+pub use reader::{decide_unit, ReadError, Reader, Scan};
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,157 @@
+use super::*;
+use crate::Beam;
+
+fn line(n: usize, ranges: &str) -> String {
+    format!("FLASER {n} {ranges} 1 2 0.5 1 2 0.5 12.5 host 12.6\n")
+}
+
+/// The unit and the scans of a log text, as the tools read it.
+fn read(text: &str) -> Result<(Unit, Vec<Scan>), ReadError> {
+    let unit = decide_unit(text.as_bytes())?;
+    let scans = Reader::new(text.as_bytes(), unit).collect::<Result<_, _>>()?;
+    Ok((unit, scans))
+}
+
+#[test]
+fn parses_cm_codes_and_geometry() {
+    let mut r = vec!["1.00"; 181];
+    r[3] = "81.91";
+    r[4] = "81.83";
+    r[5] = "0";
+    r[6] = "32.76";
+    let text = format!("PARAM x 1\n{}", line(181, &r.join(" ")));
+    let (unit, scans) = read(&text).unwrap();
+    assert_eq!(unit, Unit::Centimetre);
+    assert_eq!(scans.len(), 1);
+    let f = &scans[0].frame;
+    assert_eq!((scans[0].index, scans[0].line), (0, 2));
+    assert_eq!(f.geometry(), Variant::Fov180Res100.geometry());
+    assert_eq!(f.beams()[3], Beam::Invalid(Invalid::NoEcho));
+    assert_eq!(f.beams()[4], Beam::Invalid(Invalid::AboveMax));
+    assert_eq!(f.beams()[5], Beam::Invalid(Invalid::Zero));
+    assert_eq!(f.beams()[6], Beam::Valid);
+    assert_eq!(f.ranges()[6], 32.76f32);
+    assert_eq!(scans[0].meta.pose, [1.0, 2.0, 0.5]);
+    assert_eq!(scans[0].meta.odom, [1.0, 2.0, 0.5]);
+    assert_eq!(
+        (scans[0].meta.ipc_timestamp, scans[0].meta.logger_timestamp),
+        (12.5, 12.6)
+    );
+    assert_eq!(scans[0].hostname, "host");
+}
+
+#[test]
+fn detects_mm_logs() {
+    let mut r = vec!["1.5"; 181];
+    r[0] = "1.234";
+    r[1] = "32.767";
+    r[2] = "32.76"; // 32760 mm = offset 7
+    r[3] = "32.759";
+    let (unit, scans) = read(&line(181, &r.join(" "))).unwrap();
+    assert_eq!(unit, Unit::Millimetre);
+    let b = scans[0].frame.beams();
+    assert_eq!(b[0], Beam::Valid);
+    assert_eq!(b[1], Beam::Invalid(Invalid::NoEcho));
+    assert_eq!(b[2], Beam::Invalid(Invalid::OtherCode(7)));
+    assert_eq!(b[3], Beam::Invalid(Invalid::AboveMax));
+    assert_eq!(b[4], Beam::Valid);
+    // The same line forced to cm: all four are distances.
+    let cm: Vec<Scan> = Reader::new(line(181, &r.join(" ")).as_bytes(), Unit::Centimetre)
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert!(cm[0].frame.beams()[..4].iter().all(|b| b.is_valid()));
+}
+
+#[test]
+fn beam_counts_and_geometry() {
+    for (n, fov) in [(180, 180), (360, 180), (101, 100), (201, 100), (401, 100)] {
+        let r = vec!["2"; n].join(" ");
+        let (_, scans) = read(&line(n, &r)).unwrap();
+        let g = scans[0].frame.geometry();
+        let first = -(fov as f32 / 2.0).to_radians();
+        assert!((g.first_bearing - first).abs() < 1e-6, "n = {n}");
+        assert_eq!(scans[0].frame.len(), n);
+    }
+    let r = vec!["2"; 182].join(" ");
+    let err = read(&line(182, &r)).unwrap_err().to_string();
+    assert!(err.contains("unsupported beam count n = 182"), "{err}");
+}
+
+#[test]
+fn errors_name_the_line() {
+    let r = vec!["2"; 181];
+    let mut bad = r.clone();
+    bad[7] = "2.x";
+    let text = format!(
+        "# c\n{}{}",
+        line(181, &r.join(" ")),
+        line(181, &bad.join(" "))
+    );
+    let err = read(&text).unwrap_err();
+    assert_eq!(err.line(), Some(3));
+    let err = err.to_string();
+    assert!(err.contains("line 3"), "{err}");
+    assert!(
+        err.contains("malformed number \"2.x\" for range 7"),
+        "{err}"
+    );
+
+    let err = read(&line(181, &r[..180].join(" ")))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("line 1") && err.contains("n = 181"), "{err}");
+
+    let mut big = r.clone();
+    big[0] = "90.00";
+    let err = read(&line(181, &big.join(" "))).unwrap_err().to_string();
+    assert!(err.contains("line 1") && err.contains("above"), "{err}");
+
+    // Syntax errors (first pass) come before the unit's range errors.
+    let text = format!("{}{}", line(181, &big.join(" ")), line(181, &bad.join(" ")));
+    assert_eq!(read(&text).unwrap_err().line(), Some(2));
+
+    let mut neg = r.clone();
+    neg[2] = "-1";
+    let err = read(&line(181, &neg.join(" "))).unwrap_err().to_string();
+    assert!(err.contains("negative range -1 for beam 2"), "{err}");
+    let err = read("FLASER many 1 2 3\n").unwrap_err().to_string();
+    assert!(err.contains("malformed beam count \"many\""), "{err}");
+    let pose = line(181, &r.join(" ")).replace(" host ", " host x");
+    let err = read(&pose).unwrap_err().to_string();
+    assert!(err.contains("in the pose/time fields"), "{err}");
+    let utf8 = b"FLASER 3 \xff\n";
+    let err = decide_unit(&utf8[..]).unwrap_err();
+    assert!(matches!(err, ReadError::NotUtf8 { line: 1 }), "{err}");
+}
+
+#[test]
+fn the_line_layer_needs_no_allocation() {
+    let text = line(361, &vec!["3.25"; 361].join(" "));
+    let flaser = Flaser::parse(&text).unwrap();
+    assert_eq!((flaser.variant, flaser.beams), (Variant::Fov180Res50, 361));
+    assert!(!flaser.three_decimals);
+    let mut frame = Frame::empty();
+    flaser.fill(Unit::Centimetre, &mut frame).unwrap();
+    assert_eq!(frame.len(), 361);
+    assert!(frame.ranges().iter().all(|&r| r == 3.25));
+    assert_eq!(Flaser::parse("ODOM 1 2"), Err(LineError::NotFlaser));
+    assert!(is_flaser(b"  FLASER 3") && !is_flaser(b"FLASERX 3") && !is_flaser(b""));
+}
+
+#[test]
+fn the_units_error_codes() {
+    assert_eq!(
+        (
+            Unit::Centimetre.all_ones(),
+            Unit::Centimetre.first_error_code()
+        ),
+        (8191, 8183)
+    );
+    assert_eq!(
+        (
+            Unit::Millimetre.all_ones(),
+            Unit::Millimetre.first_error_code()
+        ),
+        (32767, 32759)
+    );
+}
