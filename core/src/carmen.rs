@@ -15,9 +15,9 @@
 //!   [`Flaser::parse`] checks a line's syntax and reads its pose and time
 //!   fields; [`Flaser::fill`] writes its ranges into a caller's [`Frame`]
 //!   in a given [`Unit`].
-//! * With the `std` feature: [`Reader`], a streaming iterator over any
-//!   [`std::io::BufRead`] (one line in memory at a time, frame by frame),
-//!   and [`decide_unit`], the per-file unit decision (a first pass).
+//! * With the `std` feature: `Reader`, a streaming iterator over any
+//!   `std::io::BufRead` (one line in memory at a time, frame by frame),
+//!   and `decide_unit`, the per-file unit decision (a first pass).
 //!   Opening files and gzip are the caller's (`host-bridge`'s `carmen`
 //!   module; `test_support::open_log` for tests).
 //!
@@ -99,7 +99,7 @@ pub struct Meta {
 }
 
 /// Why a `FLASER` line cannot be read; the texts borrow from the line.
-/// The line number is the caller's ([`ReadError`] adds it).
+/// The line number is the caller's (the std `ReadError` adds it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum LineError<'a> {

@@ -24,7 +24,7 @@
 //!    (per line without allocation; with `std` a streaming reader and the
 //!    per-file unit decision).
 //!
-//! With feature `test-support`, [`test_support`] holds what the tests,
+//! With feature `test-support`, `test_support` holds what the tests,
 //! benches, examples and the fuzz crate share: an in-memory serial port, a
 //! seeded generator and `open_log` for the shared CARMEN logs.
 //!

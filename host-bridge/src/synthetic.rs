@@ -10,7 +10,7 @@
 use anyhow::{ensure, Result};
 use clap::{Args, ValueEnum};
 use lms_core::{Frame, Invalid, Variant};
-use lms_scene::{seeded_rng, Bearings, ChaCha8Rng, NoiseModel, Pose, RangeUnit, Reading, Scene};
+use lms_scene::{seeded_rng, Bearings, ChaCha8Rng, NoiseModel, Pose, Reading, Scene};
 
 use crate::extract::InputFrame;
 
@@ -120,7 +120,7 @@ pub fn frames(args: &SceneArgs) -> Result<Vec<InputFrame>> {
     debug_assert_eq!(bearings.n, Variant::Fov180Res50.beams());
     let truth = scene.cast(&bearings, Pose::IDENTITY);
     let noise = NoiseModel::gaussian(args.noise_sigma)
-        .with_quantisation(RangeUnit::Millimetre)
+        .with_quantisation(lms_core::Unit::Millimetre)
         .with_dropout(args.dropout);
     (0..args.count)
         .map(|index| {

@@ -24,7 +24,7 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use anyhow::Result;
 use lms_core::Frame;
-use lms_scene::{seeded_rng, Bearings, NoiseModel, Point, Pose, RangeUnit, Scene, TrueScan};
+use lms_scene::{seeded_rng, Bearings, NoiseModel, Point, Pose, Scene, TrueScan, Unit};
 use rand::Rng;
 
 use host_bridge::synthetic::frame_from_readings;
@@ -100,7 +100,7 @@ pub struct NoiseSpec {
 impl NoiseSpec {
     fn model(&self) -> NoiseModel {
         NoiseModel::gaussian(self.sigma)
-            .with_quantisation(RangeUnit::Millimetre)
+            .with_quantisation(Unit::Millimetre)
             .with_dropout(self.dropout)
     }
 }

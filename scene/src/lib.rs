@@ -48,8 +48,8 @@ mod tests;
 pub use bearings::Bearings;
 pub use geometry::{wrap_angle, Point, PolarLine, Pose};
 pub use noise::{
-    quantise, to_f32_metres, to_raw, NoiseModel, RangeUnit, Reading, Unit, NO_RETURN_F32,
-    RAW_ABOVE_MAX, RAW_NO_ECHO,
+    quantise, to_f32_metres, to_raw, NoiseModel, Reading, Unit, NO_RETURN_F32, RAW_ABOVE_MAX,
+    RAW_NO_ECHO,
 };
 pub use rand_chacha::ChaCha8Rng;
 pub use scene::{

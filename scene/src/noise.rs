@@ -17,9 +17,6 @@ pub const NO_RETURN_F32: f32 = 0.0;
 /// mm, cm or 10 cm mode).
 pub use lms_core::Unit;
 
-/// The scene crate's former name of [`Unit`], kept while callers move over.
-pub type RangeUnit = Unit;
-
 /// Units per metre (1000, 100 or 10), exactly, as `f64`.
 fn per_metre(unit: Unit) -> f64 {
     f64::from(unit.per_metre())

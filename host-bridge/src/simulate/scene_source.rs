@@ -6,15 +6,16 @@ use std::collections::HashMap;
 use anyhow::Result;
 use lms_core::device::emulator::ScanSource;
 use lms_core::{Unit, Variant};
-use lms_scene::{Bearings, NoiseModel, Pose, RangeUnit, Scene};
+use lms_scene::{Bearings, NoiseModel, Pose, Scene};
 
 use crate::synthetic::SceneArgs;
 
-/// The lms-scene unit for a sensor unit (10 cm is drawn in cm, then scaled).
-fn range_unit(units: Unit) -> RangeUnit {
+/// The unit the scene quantises in for a sensor unit (10 cm is drawn in
+/// cm, then scaled).
+fn range_unit(units: Unit) -> Unit {
     match units {
-        Unit::Millimetre => RangeUnit::Millimetre,
-        Unit::Centimetre | Unit::Decimetre => RangeUnit::Centimetre,
+        Unit::Decimetre => Unit::Centimetre,
+        other => other,
     }
 }
 
