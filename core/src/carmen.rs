@@ -279,6 +279,31 @@ impl<'a> Flaser<'a> {
     }
 }
 
+/// The per-file unit decision, one line at a time (see the module docs):
+/// [`Unit::Millimetre`] once any line shows three decimals, else
+/// [`Unit::Centimetre`]. Without allocation, for callers that read the log
+/// themselves; `decide_unit` (with `std`) runs it over a whole log.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UnitVote {
+    mm: bool,
+}
+
+impl UnitVote {
+    /// Count one `FLASER` line.
+    pub fn observe(&mut self, line: &Flaser<'_>) {
+        self.mm |= line.three_decimals;
+    }
+
+    /// The unit of the lines observed so far.
+    pub fn unit(&self) -> Unit {
+        if self.mm {
+            Unit::Millimetre
+        } else {
+            Unit::Centimetre
+        }
+    }
+}
+
 /// One range text as metres: finite and not negative.
 fn parse_range(beam: usize, text: &str) -> Result<f64, LineError<'_>> {
     let v: f64 = text

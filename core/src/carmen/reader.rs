@@ -6,7 +6,7 @@
 use std::fmt;
 use std::io::BufRead;
 
-use super::{is_flaser, Flaser, Meta};
+use super::{is_flaser, Flaser, Meta, UnitVote};
 use crate::{Frame, Unit};
 
 /// One `FLASER` scan of a log.
@@ -128,17 +128,11 @@ fn at_line(line: usize, e: super::LineError<'_>) -> ReadError {
 /// reported before the unit's range errors of [`Reader`].
 pub fn decide_unit<R: BufRead>(input: R) -> Result<Unit, ReadError> {
     let mut lines = Lines::new(input);
-    let mut mm = false;
+    let mut vote = UnitVote::default();
     while let Some((line, text)) = lines.next_flaser()? {
-        mm |= Flaser::parse(text)
-            .map_err(|e| at_line(line, e))?
-            .three_decimals;
+        vote.observe(&Flaser::parse(text).map_err(|e| at_line(line, e))?);
     }
-    Ok(if mm {
-        Unit::Millimetre
-    } else {
-        Unit::Centimetre
-    })
+    Ok(vote.unit())
 }
 
 /// The `FLASER` scans of a log in one unit, frame by frame.

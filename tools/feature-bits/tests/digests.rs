@@ -1,0 +1,64 @@
+//! The results on every shared log, pinned: the feature bits of every frame
+//! of the seven recorded logs of `../shared/data/carmen` at the
+//! ALGORITHM.md defaults (30 passes) must hash to the digests below. A
+//! change of any bit of any smoothed range, `D`, edge, segment, line,
+//! corner or counter of any frame fails this test.
+//!
+//! To re-pin after an intended change of results (say why in the commit):
+//! `cargo run --release -p feature-bits -- LOG` and FNV-1a-64 its output
+//! (`feature_bits::digest_of`), or read the digests this test prints.
+
+use std::path::{Path, PathBuf};
+
+use feature_bits::{write_log_bits, Fnv64};
+
+/// (log stem, FNV-1a-64 of the feature bits, frames).
+const PINNED: [(&str, u64, usize); 7] = [
+    ("acapulco-corrected", 0xc43a2994c06d418c, 861),
+    ("belgioioso-corrected", 0xcb14fd457de67e01, 395),
+    ("csail-corrected", 0xa67e43b450559980, 406),
+    ("freiburg-101-corrected", 0x0cad88f98b81f23c, 292),
+    ("freiburg-campus-corrected", 0xe81620ce74708a14, 2008),
+    ("intel-corrected", 0xc8d600bf69f811c9, 910),
+    ("orebro-corrected", 0x6e8d8d0373894096, 237),
+];
+
+fn log(stem: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/carmen")
+        .join(format!("{stem}.log.gz"))
+}
+
+#[test]
+fn feature_bits_of_every_shared_log_are_pinned() {
+    let mut wrong = Vec::new();
+    for (stem, digest, frames) in PINNED {
+        let path = log(stem);
+        let mut d = Fnv64::default();
+        let n = write_log_bits(&path, 30, &mut d).unwrap_or_else(|e| {
+            panic!(
+                "{}: {e} (../shared must sit beside the repo)",
+                path.display()
+            )
+        });
+        println!("{stem}: {n} frames, digest 0x{:016x}", d.0);
+        if (d.0, n) != (digest, frames) {
+            wrong.push(format!(
+                "{stem}: 0x{:016x} over {n} frames, pinned 0x{digest:016x} over {frames}",
+                d.0
+            ));
+        }
+    }
+    assert!(wrong.is_empty(), "results changed:\n{}", wrong.join("\n"));
+}
+
+#[test]
+fn a_changed_bit_changes_the_digest() {
+    // The check can fail: one more pass changes the digest of a log.
+    let path = log("orebro-corrected");
+    let (mut a, mut b) = (Fnv64::default(), Fnv64::default());
+    write_log_bits(&path, 30, &mut a).unwrap();
+    write_log_bits(&path, 31, &mut b).unwrap();
+    assert_ne!(a.0, b.0);
+    assert_eq!(a.0, PINNED[6].1);
+}
