@@ -88,10 +88,11 @@ impl Sym3 {
         }
     }
 
-    /// [`Sym3::solve_spd`] without the branch: always computes `u`, and
-    /// returns whether `det > 0` and finite.
+    /// The cofactors `c11, c12, c13, c22, c23, c33` of the adjugate and the
+    /// determinant `s11·c11 + s12·c12 + s13·c13` (one evaluation order for
+    /// every caller).
     #[inline(always)]
-    pub fn solve_spd_unchecked(&self, v: Vec3) -> (Vec3, bool) {
+    fn cofactors(&self) -> ([f32; 6], f32) {
         let c11 = self.s22 * self.s33 - self.s23 * self.s23;
         let c12 = self.s13 * self.s23 - self.s12 * self.s33;
         let c13 = self.s12 * self.s23 - self.s13 * self.s22;
@@ -99,6 +100,14 @@ impl Sym3 {
         let c23 = self.s12 * self.s13 - self.s11 * self.s23;
         let c33 = self.s11 * self.s22 - self.s12 * self.s12;
         let det = self.s11 * c11 + self.s12 * c12 + self.s13 * c13;
+        ([c11, c12, c13, c22, c23, c33], det)
+    }
+
+    /// [`Sym3::solve_spd`] without the branch: always computes `u`, and
+    /// returns whether `det > 0` and finite.
+    #[inline(always)]
+    pub fn solve_spd_unchecked(&self, v: Vec3) -> (Vec3, bool) {
+        let ([c11, c12, c13, c22, c23, c33], det) = self.cofactors();
         let ok = (det > 0.0) & (det < f32::INFINITY);
         let inv_det = 1.0 / det;
         let [x, y, z] = v.0;
@@ -119,13 +128,7 @@ impl Sym3 {
     /// finite. For the innovation covariance of §3 this always holds for
     /// finite inputs with `sigma > 0`.
     pub fn inverse_spd(&self) -> Option<Sym3> {
-        let c11 = self.s22 * self.s33 - self.s23 * self.s23;
-        let c12 = self.s13 * self.s23 - self.s12 * self.s33;
-        let c13 = self.s12 * self.s23 - self.s13 * self.s22;
-        let c22 = self.s11 * self.s33 - self.s13 * self.s13;
-        let c23 = self.s12 * self.s13 - self.s11 * self.s23;
-        let c33 = self.s11 * self.s22 - self.s12 * self.s12;
-        let det = self.s11 * c11 + self.s12 * c12 + self.s13 * c13;
+        let ([c11, c12, c13, c22, c23, c33], det) = self.cofactors();
         if !(self.s11 > 0.0 && c33 > 0.0 && det > 0.0 && det.is_finite()) {
             return None;
         }

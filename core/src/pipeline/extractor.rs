@@ -8,11 +8,11 @@
 //! paper Fig. 10).
 
 use crate::features::{Features, Stats, MAX_WINDOWS};
-use crate::frame::{Beam, Frame, Geometry, MAX_BEAMS};
+use crate::frame::{Frame, Geometry, MAX_BEAMS};
 use crate::params::{Params, ValidParams};
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
-use crate::pipeline::line_fit::{fit_line, Bearings};
+use crate::pipeline::line_fit::{fit_line, Bearings, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::segment;
 use crate::pipeline::smoothing::{smoothing_pass, valid_windows};
@@ -110,14 +110,7 @@ impl Extractor {
             beams: frame.beams(),
         };
         if params.split_depth > 0 {
-            split_before_reject(
-                bearings,
-                scan.ranges,
-                scan.beams,
-                params,
-                &mut f.segments,
-                &mut stats,
-            );
+            split_before_reject(&scan, params, &mut f.segments, &mut stats);
         }
         fit_lines(f, &scan, params, &mut stats);
 
@@ -185,14 +178,6 @@ impl Extractor {
         let _ = n;
         self.geometry = Some(geometry);
     }
-}
-
-/// The raw ranges of a frame with its bearing tables and beam status (§7
-/// fits the raw, not the smoothed, ranges).
-struct RawScan<'a> {
-    bearings: Bearings<'a>,
-    ranges: &'a [f32],
-    beams: &'a [Beam],
 }
 
 /// §7: a line per segment, χ²-gated, merged with its predecessor where §7.6

@@ -59,6 +59,19 @@ pub struct Bearings<'a> {
     pub sin: &'a [f32],
 }
 
+/// The raw ranges of a frame with its bearing tables and beam status: what
+/// the fits of §7 (and split before reject) read. §7 fits the raw, not the
+/// smoothed, ranges.
+#[derive(Clone, Copy, Debug)]
+pub struct RawScan<'a> {
+    /// `cos phi_j`, `sin phi_j` per beam.
+    pub bearings: Bearings<'a>,
+    /// Raw ranges (m).
+    pub ranges: &'a [f32],
+    /// Status per beam (invalid beams are skipped).
+    pub beams: &'a [Beam],
+}
+
 /// Fit a line to the valid beams of `first..=last` of `ranges` (m), with
 /// range noise `sigma` (m). Beams outside the slices are ignored.
 pub fn fit_line(

@@ -27,9 +27,8 @@
 use heapless::Vec;
 
 use crate::features::{Segment, Stats, MAX_SEGMENTS};
-use crate::frame::Beam;
 use crate::params::{Params, MAX_SPLIT_DEPTH};
-use crate::pipeline::line_fit::{fit_line, Bearings};
+use crate::pipeline::line_fit::{fit_line, RawScan};
 
 /// Upper 0.1 % quantile of χ² with `nu` degrees of freedom (Wilson–Hilferty:
 /// 1.8 % above the exact value at ν = 3, 0.6 % at ν = 10, 0.04 % at ν = 100).
@@ -49,14 +48,8 @@ pub fn chi2_quantile_999(nu: f32) -> f32 {
 /// `Σe²` of the fit is at least the least sum of squared perpendicular
 /// distances, the smaller eigenvalue of the points' scatter matrix. If that
 /// alone is above the quantile, so is the fit's.
-fn not_straight(
-    bearings: Bearings<'_>,
-    ranges: &[f32],
-    beams: &[Beam],
-    piece: Segment,
-    sigma: f32,
-) -> bool {
-    let points = || valid_points(bearings, ranges, beams, piece);
+fn not_straight(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> bool {
+    let points = || scan.valid_points(piece);
     let (m, cx, cy) = centroid(points());
     if m >= 3 {
         let mf = m as f32;
@@ -74,7 +67,14 @@ fn not_straight(
             return true;
         }
     }
-    match fit_line(bearings, ranges, beams, piece.first, piece.last, sigma) {
+    match fit_line(
+        scan.bearings,
+        scan.ranges,
+        scan.beams,
+        piece.first,
+        piece.last,
+        sigma,
+    ) {
         Ok(line) => {
             let dof = f32::from(line.points.saturating_sub(2)).max(1.0);
             line.chi2 * dof > chi2_quantile_999(dof)
@@ -83,28 +83,24 @@ fn not_straight(
     }
 }
 
-/// The point of beam `j` (m), if it is valid and inside the slices.
-fn point(bearings: &Bearings<'_>, ranges: &[f32], beams: &[Beam], j: usize) -> Option<(f32, f32)> {
-    match (
-        beams.get(j),
-        ranges.get(j),
-        bearings.cos.get(j),
-        bearings.sin.get(j),
-    ) {
-        (Some(b), Some(&d), Some(&c), Some(&s)) if b.is_valid() => Some((d * c, d * s)),
-        _ => None,
+impl<'a> RawScan<'a> {
+    /// The point of beam `j` (m), if it is valid and inside the slices.
+    fn point(&self, j: usize) -> Option<(f32, f32)> {
+        match (
+            self.beams.get(j),
+            self.ranges.get(j),
+            self.bearings.cos.get(j),
+            self.bearings.sin.get(j),
+        ) {
+            (Some(b), Some(&d), Some(&c), Some(&s)) if b.is_valid() => Some((d * c, d * s)),
+            _ => None,
+        }
     }
-}
 
-/// The valid points of `piece` (m), in beam order.
-fn valid_points<'a>(
-    bearings: Bearings<'a>,
-    ranges: &'a [f32],
-    beams: &'a [Beam],
-    piece: Segment,
-) -> impl Iterator<Item = (f32, f32)> + 'a {
-    (usize::from(piece.first)..=usize::from(piece.last))
-        .filter_map(move |j| point(&bearings, ranges, beams, j))
+    /// The valid points of `piece` (m), in beam order.
+    fn valid_points(&self, piece: Segment) -> impl Iterator<Item = (f32, f32)> + '_ {
+        (usize::from(piece.first)..=usize::from(piece.last)).filter_map(move |j| self.point(j))
+    }
 }
 
 /// How many `points` there are and their centroid (m); `(0, 0, 0)` for none.
@@ -126,14 +122,8 @@ fn centroid(points: impl Iterator<Item = (f32, f32)>) -> (u32, f32, f32) {
 /// `sigma` (m): the algebraic (Kåsa) fit of `x² + y² + D·x + E·y + F = 0`
 /// on centred, scaled points, then `Σ(‖p − c‖ − R)²/σ²` against
 /// [`chi2_quantile_999`] of `m − 3`. Fewer than 5 points: no.
-pub fn circle_explains(
-    bearings: Bearings<'_>,
-    ranges: &[f32],
-    beams: &[Beam],
-    piece: Segment,
-    sigma: f32,
-) -> bool {
-    let points = || valid_points(bearings, ranges, beams, piece);
+pub fn circle_explains(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> bool {
+    let points = || scan.valid_points(piece);
     // Centroid and RMS spread: the fit runs on O(1) coordinates.
     let (m, cx, cy) = centroid(points());
     if m < 5 {
@@ -203,23 +193,11 @@ pub fn circle_explains(
 
 /// The valid beam of `piece` farthest from the chord of its first and last
 /// valid points, strictly between them; `None` if there is none.
-fn farthest_from_chord(
-    bearings: &Bearings<'_>,
-    ranges: &[f32],
-    beams: &[Beam],
-    piece: Segment,
-) -> Option<u16> {
+fn farthest_from_chord(scan: &RawScan<'_>, piece: Segment) -> Option<u16> {
     let span = usize::from(piece.first)..=usize::from(piece.last);
-    let a = span
-        .clone()
-        .find(|&j| point(bearings, ranges, beams, j).is_some())?;
-    let b = span
-        .rev()
-        .find(|&j| point(bearings, ranges, beams, j).is_some())?;
-    let (pa, pb) = (
-        point(bearings, ranges, beams, a)?,
-        point(bearings, ranges, beams, b)?,
-    );
+    let a = span.clone().find(|&j| scan.point(j).is_some())?;
+    let b = span.rev().find(|&j| scan.point(j).is_some())?;
+    let (pa, pb) = (scan.point(a)?, scan.point(b)?);
     let (ex, ey) = (pb.0 - pa.0, pb.1 - pa.1);
     let len = libm::sqrtf(ex * ex + ey * ey);
     if !(len > 0.0) {
@@ -227,7 +205,7 @@ fn farthest_from_chord(
     }
     let mut best: Option<(f32, usize)> = None;
     for j in a + 1..b {
-        if let Some(p) = point(bearings, ranges, beams, j) {
+        if let Some(p) = scan.point(j) {
             let dist = libm::fabsf(ex * (p.1 - pa.1) - ey * (p.0 - pa.0)) / len;
             if best.is_none_or(|(d, _)| dist > d) {
                 best = Some((dist, j));
@@ -241,9 +219,7 @@ fn farthest_from_chord(
 /// `stats`. `ranges` are the raw ranges (m) the lines are fitted to.
 #[inline(never)] // its buffers live on the stack only while it runs
 pub fn split_before_reject(
-    bearings: Bearings<'_>,
-    ranges: &[f32],
-    beams: &[Beam],
+    scan: &RawScan<'_>,
     params: &Params,
     segments: &mut Vec<Segment, MAX_SEGMENTS>,
     stats: &mut Stats,
@@ -256,16 +232,14 @@ pub fn split_before_reject(
         todo.clear();
         let _ = todo.push((segment, 0));
         while let Some((piece, level)) = todo.pop() {
-            if !not_straight(bearings, ranges, beams, piece, params.sigma) {
+            if !not_straight(scan, piece, params.sigma) {
                 if out.push(piece).is_err() {
                     stats.segment_overflow = stats.segment_overflow.saturating_add(1);
                 }
                 continue;
             }
-            let split_at = if level < depth
-                && !circle_explains(bearings, ranges, beams, piece, params.sigma)
-            {
-                farthest_from_chord(&bearings, ranges, beams, piece)
+            let split_at = if level < depth && !circle_explains(scan, piece, params.sigma) {
+                farthest_from_chord(scan, piece)
             } else {
                 None
             };

@@ -11,14 +11,10 @@ use lms_core::{Extractor, Features, Params};
 use super::compare::{differences, Value};
 use super::source::{PlaySource, Tag};
 
-/// Checks every scan that comes back and keeps the tally.
-pub(super) struct Checker {
-    /// Parameters for what the summary does not echo.
-    base: Params,
-    recompute_tau: Option<f32>,
-    extractor: Box<Extractor>,
-    /// Draws before this index have been matched or passed over.
-    cursor: usize,
+/// What came back and how it compared: kept by the [`Checker`], reported
+/// in the run's outcome.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Tally {
     /// Scans of the selection back and checked, and of those identical.
     pub(super) play_back: usize,
     pub(super) play_identical: usize,
@@ -27,8 +23,20 @@ pub(super) struct Checker {
     pub(super) other_identical: usize,
     /// Lines printed for failures.
     pub(super) problems: usize,
+    /// Lines and corners compared.
     pub(super) lines: u64,
     pub(super) corners: u64,
+}
+
+/// Checks every scan that comes back and keeps the tally.
+pub(super) struct Checker {
+    /// Parameters for what the summary does not echo.
+    base: Params,
+    recompute_tau: Option<f32>,
+    extractor: Box<Extractor>,
+    /// Draws before this index have been matched or passed over.
+    cursor: usize,
+    pub(super) tally: Tally,
     /// The parameters echoed by the first summary.
     echoed: Option<EchoedParams>,
 }
@@ -40,20 +48,14 @@ impl Checker {
             recompute_tau,
             extractor: Box::new(Extractor::new()),
             cursor: 0,
-            play_back: 0,
-            play_identical: 0,
-            other_back: 0,
-            other_identical: 0,
-            problems: 0,
-            lines: 0,
-            corners: 0,
+            tally: Tally::default(),
             echoed: None,
         }
     }
 
     /// Report a failure (one line on stdout).
     pub(super) fn problem(&mut self, msg: impl fmt::Display) {
-        self.problems += 1;
+        self.tally.problems += 1;
         println!("MISMATCH {msg}");
     }
 
@@ -134,12 +136,12 @@ impl Checker {
         let identical = self.compare(&name, &view, summary, got, tag.is_none());
         match tag {
             Some(Tag::Play(_)) => {
-                self.play_back += 1;
-                self.play_identical += usize::from(identical);
+                self.tally.play_back += 1;
+                self.tally.play_identical += usize::from(identical);
             }
             _ => {
-                self.other_back += 1;
-                self.other_identical += usize::from(identical);
+                self.tally.other_back += 1;
+                self.tally.other_identical += usize::from(identical);
             }
         }
     }
@@ -185,8 +187,8 @@ impl Checker {
                 return false;
             }
         };
-        self.lines += got.lines().len() as u64;
-        self.corners += got.corners().len() as u64;
+        self.tally.lines += got.lines().len() as u64;
+        self.tally.corners += got.corners().len() as u64;
         let diffs = differences(got, want);
         match diffs.first() {
             None => true,

@@ -85,7 +85,7 @@ impl Session {
     /// are late, not lost).
     fn await_rest(&mut self, deadline: Instant) -> Result<Missing> {
         let timed_out = loop {
-            if self.checker.play_back >= self.play_sent {
+            if self.checker.tally.play_back >= self.play_sent {
                 break false;
             }
             if Instant::now() >= deadline {
@@ -96,7 +96,7 @@ impl Session {
             }
             self.pump(TICK)?;
         };
-        let missing = self.play_sent.saturating_sub(self.checker.play_back);
+        let missing = self.play_sent.saturating_sub(self.checker.tally.play_back);
         Ok(if timed_out {
             Missing {
                 lost: 0,
@@ -149,13 +149,7 @@ impl Session {
             lost: missing.lost,
             late: missing.late,
             play_sent: self.play_sent,
-            play_back: c.play_back,
-            play_identical: c.play_identical,
-            other_back: c.other_back,
-            other_identical: c.other_identical,
-            problems: c.problems,
-            lines: c.lines,
-            corners: c.corners,
+            tally: c.tally,
             counters,
             counters_error,
             firmware_report: None,

@@ -5,6 +5,8 @@ use std::time::Duration;
 use anyhow::{bail, Result};
 use lms_core::telegram::features::Counters;
 
+use super::checker::Tally;
+
 /// The run's outcome.
 #[derive(Debug)]
 pub(super) struct Outcome {
@@ -15,13 +17,7 @@ pub(super) struct Outcome {
     /// Scans of the selection sent and not back yet at `--timeout`.
     pub(super) late: usize,
     pub(super) play_sent: usize,
-    pub(super) play_back: usize,
-    pub(super) play_identical: usize,
-    pub(super) other_back: usize,
-    pub(super) other_identical: usize,
-    pub(super) problems: usize,
-    pub(super) lines: u64,
-    pub(super) corners: u64,
+    pub(super) tally: Tally,
     pub(super) counters: Option<Counters>,
     pub(super) counters_error: Option<String>,
     pub(super) firmware_report: Option<String>,
@@ -31,12 +27,12 @@ pub(super) struct Outcome {
 
 impl Outcome {
     pub(super) fn ok(&self) -> bool {
-        self.problems == 0
+        self.tally.problems == 0
             && self.lost == 0
             && self.late == 0
-            && self.play_back >= self.wanted
-            && self.play_identical == self.play_back
-            && self.other_identical == self.other_back
+            && self.tally.play_back >= self.wanted
+            && self.tally.play_identical == self.tally.play_back
+            && self.tally.other_identical == self.tally.other_back
             && self.counters.is_some()
     }
 
@@ -46,16 +42,16 @@ impl Outcome {
             return Ok(());
         }
         let mut why = Vec::new();
-        if self.problems > 0 {
-            why.push(format!("{} mismatches", self.problems));
+        if self.tally.problems > 0 {
+            why.push(format!("{} mismatches", self.tally.problems));
         }
         if self.lost > 0 {
             why.push(format!("{} scans lost", self.lost));
         }
-        if self.play_back < self.wanted {
+        if self.tally.play_back < self.wanted {
             why.push(format!(
                 "{} of {} scans checked before --timeout",
-                self.play_back, self.wanted
+                self.tally.play_back, self.wanted
             ));
         }
         if let Some(e) = &self.counters_error {
@@ -69,21 +65,21 @@ impl Outcome {
 pub(super) fn report(o: &Outcome) {
     let mut line = format!(
         "host-bridge verify: {}/{} scans bit-identical; {} lost ({} sent by the sensor side, {} back with features)",
-        o.play_identical, o.play_back, o.lost, o.play_sent, o.play_back
+        o.tally.play_identical, o.tally.play_back, o.lost, o.play_sent, o.tally.play_back
     );
     if o.late > 0 {
         line.push_str(&format!("; {} still on their way at --timeout", o.late));
     }
-    if o.other_back > 0 {
+    if o.tally.other_back > 0 {
         line.push_str(&format!(
             "; scans outside the selection (warm-up): {}/{} bit-identical",
-            o.other_identical, o.other_back
+            o.tally.other_identical, o.tally.other_back
         ));
     }
     println!("{line}");
     println!(
         "host-bridge verify: compared {} lines and {} corners; {} mismatch lines",
-        o.lines, o.corners, o.problems
+        o.tally.lines, o.tally.corners, o.tally.problems
     );
     match (&o.counters, &o.counters_error) {
         (Some(c), _) => println!(
@@ -112,7 +108,7 @@ pub(super) fn report(o: &Outcome) {
         o.elapsed.as_secs_f64(),
         secs,
         if secs > 0.0 {
-            (o.play_back + o.other_back) as f64 / secs
+            (o.tally.play_back + o.tally.other_back) as f64 / secs
         } else {
             0.0
         }

@@ -199,7 +199,7 @@ impl Session {
     /// docs).
     fn update_hold(&mut self) {
         let armed = self.emu.source().armed();
-        let in_flight = self.play_sent.saturating_sub(self.checker.play_back);
+        let in_flight = self.play_sent.saturating_sub(self.checker.tally.play_back);
         let hold = self.finished
             || (self.sensor_streaming && !armed)
             || (armed && self.play_sent >= self.wanted)
