@@ -25,6 +25,8 @@ pub struct Config {
     bytes: [u8; CONFIG_LEN],
 }
 
+byte_block!(Config, CONFIG_LEN, "34");
+
 impl Default for Config {
     /// All bytes 0: no blanking, no real-time indices, mode 0, cm.
     fn default() -> Self {
@@ -45,30 +47,6 @@ impl Config {
     pub const MEASURING_MODE: usize = 5;
     /// Byte offset of the units byte.
     pub const UNITS: usize = 6;
-
-    /// A block from its 34 bytes.
-    #[inline]
-    pub const fn from_bytes(bytes: [u8; CONFIG_LEN]) -> Self {
-        Config { bytes }
-    }
-
-    /// A block from a slice of exactly 34 bytes.
-    pub fn from_slice(bytes: &[u8]) -> Option<Self> {
-        let bytes: [u8; CONFIG_LEN] = bytes.try_into().ok()?;
-        Some(Config { bytes })
-    }
-
-    /// The 34 bytes.
-    #[inline]
-    pub const fn as_bytes(&self) -> &[u8; CONFIG_LEN] {
-        &self.bytes
-    }
-
-    /// The 34 bytes, for fields this type does not name.
-    #[inline]
-    pub fn as_bytes_mut(&mut self) -> &mut [u8; CONFIG_LEN] {
-        &mut self.bytes
-    }
 
     /// Blanking, `[0..=1]` (u16 LE, raw sensor units).
     #[inline]

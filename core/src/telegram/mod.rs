@@ -68,6 +68,38 @@
 //! assert_eq!(seen, 2);
 //! ```
 
+/// The byte-array constructors and accessors of a fixed-size block of
+/// telegram data ([`Config`], [`StatusBlock`]): one definition for both.
+macro_rules! byte_block {
+    ($block:ident, $len:expr, $what:literal) => {
+        impl $block {
+            #[doc = concat!("A block from its ", $what, " bytes.")]
+            #[inline]
+            pub const fn from_bytes(bytes: [u8; $len]) -> Self {
+                $block { bytes }
+            }
+
+            #[doc = concat!("A block from a slice of exactly ", $what, " bytes.")]
+            pub fn from_slice(bytes: &[u8]) -> Option<Self> {
+                let bytes: [u8; $len] = bytes.try_into().ok()?;
+                Some($block { bytes })
+            }
+
+            #[doc = concat!("The ", $what, " bytes.")]
+            #[inline]
+            pub const fn as_bytes(&self) -> &[u8; $len] {
+                &self.bytes
+            }
+
+            #[doc = concat!("The ", $what, " bytes, for fields this type does not name.")]
+            #[inline]
+            pub fn as_bytes_mut(&mut self) -> &mut [u8; $len] {
+                &mut self.bytes
+            }
+        }
+    };
+}
+
 pub mod config;
 pub mod crc;
 pub mod features;

@@ -110,6 +110,8 @@ pub struct StatusBlock {
     bytes: [u8; STATUS_BLOCK_LEN],
 }
 
+byte_block!(StatusBlock, STATUS_BLOCK_LEN, "152");
+
 impl Default for StatusBlock {
     /// All bytes 0.
     fn default() -> Self {
@@ -132,18 +134,6 @@ impl StatusBlock {
     pub const ADDRESS: usize = 119;
     /// Data offset of the units code (payload 122).
     pub const UNITS: usize = 121;
-
-    /// A block from its 152 bytes.
-    #[inline]
-    pub const fn from_bytes(bytes: [u8; STATUS_BLOCK_LEN]) -> Self {
-        StatusBlock { bytes }
-    }
-
-    /// A block from a slice of exactly 152 bytes.
-    pub fn from_slice(bytes: &[u8]) -> Option<Self> {
-        let bytes: [u8; STATUS_BLOCK_LEN] = bytes.try_into().ok()?;
-        Some(StatusBlock { bytes })
-    }
 
     /// A block with the named fields set and every other byte 0.
     pub fn from_fields(fields: &StatusFields) -> Self {
@@ -172,18 +162,6 @@ impl StatusBlock {
             address: self.address(),
             units_code: self.units_code(),
         })
-    }
-
-    /// The 152 bytes.
-    #[inline]
-    pub const fn as_bytes(&self) -> &[u8; STATUS_BLOCK_LEN] {
-        &self.bytes
-    }
-
-    /// The 152 bytes, for fields this type does not name.
-    #[inline]
-    pub fn as_bytes_mut(&mut self) -> &mut [u8; STATUS_BLOCK_LEN] {
-        &mut self.bytes
     }
 
     /// Operating mode code (payload `[8]`).
