@@ -14,7 +14,7 @@
 
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -32,21 +32,25 @@ use lms_core::telegram::{Baud, MeasuredValues};
 use lms_core::Unit;
 use lms_core::Variant;
 
-const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
-
-fn run(args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .output()
-        .expect("cannot start host-bridge")
-}
+mod common;
+use common::{run, BIN};
 
 /// A fresh scratch directory for this test process and `name`.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("host-bridge-scan-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch("scan", name)
+}
+
+/// Run `plan` on `client`, keeping the values of every scan.
+fn collect<L: Link>(
+    client: &mut Client<L>,
+    plan: &Plan,
+) -> anyhow::Result<(host_bridge::scan::Summary, Vec<MeasuredValues>)> {
+    let mut got = Vec::new();
+    let summary = run_session(client, plan, |_, _, scan| {
+        got.push(scan.values.clone());
+        Ok(())
+    })?;
+    Ok((summary, got))
 }
 
 /// The emulated sensor with the pattern source, on a line at 9600 Bd.
@@ -600,12 +604,8 @@ fn pty_case(name: &str, target: Baud, variant: Variant, units: Unit, scans: usiz
         restore_9600: false,
         ..Plan::default()
     };
-    let mut got = Vec::new();
-    let summary = run_session(&mut client, &plan, |_, _, scan| {
-        got.push(scan.values.clone());
-        Ok(())
-    })
-    .unwrap_or_else(|e| panic!("{name}: {e:#}\nsimulator log:\n{}", sim.log()));
+    let (summary, got) = collect(&mut client, &plan)
+        .unwrap_or_else(|e| panic!("{name}: {e:#}\nsimulator log:\n{}", sim.log()));
     assert_eq!(summary.found_baud, Baud::B9600, "{name}");
     assert_eq!(summary.baud, target, "{name}");
     let expected = scene_scans(variant, units, scans);
@@ -737,12 +737,8 @@ fn pty_noisy_line_damaged_scans_are_counted_never_recorded() {
         restore_9600: false,
         ..Plan::default()
     };
-    let mut got = Vec::new();
-    let summary = run_session(&mut client, &plan, |_, _, scan| {
-        got.push(scan.values.clone());
-        Ok(())
-    })
-    .unwrap_or_else(|e| panic!("{e:#}\nsimulator log:\n{}", sim.log()));
+    let (summary, got) = collect(&mut client, &plan)
+        .unwrap_or_else(|e| panic!("{e:#}\nsimulator log:\n{}", sim.log()));
     // 5856 bits per B0: about 11 % of them are hit at 2e-5 per bit.
     assert_eq!(got.len(), scans);
     assert!(
