@@ -136,6 +136,7 @@ pub fn describe(request: &Request<'_>) -> String {
         Request::WriteConfig(_) => "77 (write configuration)".into(),
         Request::Reset => "10 (reset)".into(),
         Request::Unknown { command, .. } => format!("{command:02X}"),
+        other => format!("{:02X}", other.command()),
     }
 }
 

@@ -157,6 +157,7 @@ impl From<MeasuredError> for ReplyError {
 /// A reply from the sensor (see the [module table](self)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum Reply<'a> {
     /// `A0`: answer to a `20` mode change.
     ModeChanged(ModeResult),

@@ -154,6 +154,7 @@ impl std::error::Error for RequestError {}
 /// A request from the host (see the [module table](self)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum Request<'a> {
     /// `20 00` + password: enter installation mode.
     InstallationMode {

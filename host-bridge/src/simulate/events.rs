@@ -46,6 +46,7 @@ fn describe(h: Handled) -> String {
         Handled::Unknown { command, data_len } => {
             format!("{command:02X} with {data_len} data bytes: unknown, answered 92")
         }
+        other => format!("{other:?}"),
     }
 }
 
@@ -76,6 +77,7 @@ pub(super) fn handle_events<S: ScanSource>(
             Event::StreamStarted => line.log("continuous output started"),
             Event::StreamStopped => line.log("continuous output stopped"),
             Event::Restarting => line.log(format!("reset: power-on telegram in {restart_delay} s")),
+            other => line.log(format!("{other:?}")),
         }
     }
 }

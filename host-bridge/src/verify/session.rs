@@ -252,6 +252,7 @@ impl Session {
                     EmuEvent::PowerOnSent
                     | EmuEvent::IgnoredAddress { .. }
                     | EmuEvent::Restarting => {}
+                    other => self.log(format!("sensor side: {other:?}")),
                 }
             }
             if n == 0 {

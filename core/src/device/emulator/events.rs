@@ -5,6 +5,7 @@ use super::*;
 /// A correctly received request and what the emulator made of it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum Handled {
     /// `20 00`: installation mode, entered if the password was right.
     InstallationMode {
@@ -60,6 +61,7 @@ pub enum Handled {
 /// Something the caller may want to know or log.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum Event {
     /// The `90` power-on telegram has been sent.
     PowerOnSent,
