@@ -64,6 +64,12 @@ impl EmuClock {
 }
 
 /// Both ends of the co-processor and everything verify keeps.
+/// Scans out at once with `--qemu`: whole 361-value `B0`s (732 bytes) that
+/// fit the firmware's 4096-byte sensor receive queue (5 × 732 = 3660). QEMU
+/// drains a UART at about 10 KB/s, a third of the line rate; 8 in flight
+/// (5856 bytes) overflowed the queue and lost 3–4 of 200 scans.
+const QEMU_MAX_IN_FLIGHT: usize = 5;
+
 pub(super) struct Session {
     /// First, so that it is dropped first: QEMU is killed before its peers
     /// disconnect (it spins when they do).
@@ -110,9 +116,11 @@ impl Session {
         let clock = EmuClock::new();
         let wanted = source.len();
         let emu = Emulator::new(source, Settings::default(), clock.now_us());
-        let max_in_flight = args
-            .max_in_flight
-            .unwrap_or(if args.qemu.is_some() { 8 } else { 0 });
+        let max_in_flight = args.max_in_flight.unwrap_or(if args.qemu.is_some() {
+            QEMU_MAX_IN_FLIGHT
+        } else {
+            0
+        });
         Session {
             dut: lines.dut,
             sensor: lines.sensor,
