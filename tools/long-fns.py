@@ -22,36 +22,33 @@ def strip(line):
     return line.split('//', 1)[0]
 
 
+def item_end(lines, start):
+    """The last line of the item starting at `start`, and whether it has a
+    body (a `{` before any `;`)."""
+    j, depth, opened = start, 0, False
+    while j < len(lines):
+        s = strip(lines[j])
+        depth += s.count('{') - s.count('}')
+        opened = opened or '{' in s
+        if opened and depth <= 0:
+            break
+        if not opened and s.rstrip().endswith(';'):
+            break
+        j += 1
+    return j, opened
+
+
 def functions(path):
     lines = open(path, encoding='utf-8').read().split('\n')
     i, n = 0, len(lines)
     while i < n:
         if re.match(r'\s*#\[cfg\(test\)\]', lines[i]):
             # Skip the item that follows (a test module or function).
-            j, depth, opened = i + 1, 0, False
-            while j < n:
-                s = strip(lines[j])
-                depth += s.count('{') - s.count('}')
-                opened = opened or '{' in s
-                if opened and depth <= 0:
-                    break
-                if not opened and s.rstrip().endswith(';'):
-                    break
-                j += 1
-            i = j + 1
+            i = item_end(lines, i + 1)[0] + 1
             continue
         m = FN.match(lines[i])
         if m:
-            j, depth, opened = i, 0, False
-            while j < n:
-                s = strip(lines[j])
-                depth += s.count('{') - s.count('}')
-                opened = opened or '{' in s
-                if opened and depth <= 0:
-                    break
-                if not opened and s.rstrip().endswith(';'):
-                    break
-                j += 1
+            j, opened = item_end(lines, i)
             if opened:
                 yield m.group(6), i + 1, j - i + 1
             i += 1
