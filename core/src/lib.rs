@@ -1,7 +1,7 @@
 //! # lms-core — SLAM features from SICK LMS 2xx scans, without an allocator
 //!
-//! The crate is in layers; each imports only the layers above it in this
-//! list, never one below (section numbers refer to `ALGORITHM.md`):
+//! The crate is in layers; each imports only the layers before it in this
+//! list, never a later one (section numbers refer to `ALGORITHM.md`):
 //!
 //! 1. **Shared types**, used by every layer:
 //!    [`frame`] (one scan: ranges in metres with a status per beam, §1),
