@@ -272,3 +272,18 @@ pub struct Corner {
     /// Index of the second line.
     pub line_b: u8,
 }
+
+impl Corner {
+    /// Every `f32` of the corner in the order of the `D2` record: x, y,
+    /// cov xx, xy, yy, angle.
+    pub fn floats(&self) -> [f32; 6] {
+        [
+            self.x,
+            self.y,
+            self.cov.a,
+            self.cov.b,
+            self.cov.c,
+            self.angle_deg,
+        ]
+    }
+}

@@ -364,7 +364,7 @@ fn decode_line(r: &mut Reader<'_>) -> Option<Line> {
 /// Corner record, 27 bytes: x, y, cov xx, xy, yy, angle (6 × f32), flags
 /// (bit 0 = well conditioned), line a, line b (u8 each).
 fn encode_corner(w: &mut Writer<'_>, c: &Corner) {
-    for v in [c.x, c.y, c.cov.a, c.cov.b, c.cov.c, c.angle_deg] {
+    for v in c.floats() {
         w.f32(v);
     }
     w.u8(u8::from(c.well_conditioned));

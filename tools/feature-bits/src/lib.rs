@@ -16,7 +16,7 @@ use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read, Write};
 use std::path::Path;
 
-use lms_core::carmen::{Flaser, UnitVote};
+use lms_core::carmen::{is_flaser, Flaser, UnitVote};
 use lms_core::{Extractor, Frame, Params, Unit, Variant};
 
 /// Open a log, gzip-compressed (by its magic bytes) or plain.
@@ -44,7 +44,7 @@ fn for_each_flaser(
             return Ok(());
         }
         number += 1;
-        if !line.starts_with("FLASER ") {
+        if !is_flaser(line.as_bytes()) {
             continue;
         }
         let flaser = Flaser::parse(line.trim_end()).map_err(|e| bad_line(path, number, e))?;
@@ -116,7 +116,7 @@ pub fn write_frame_bits(
         writeln!(out, "line {} {} {} {bits:08x?}", l.first, l.last, l.points)?;
     }
     for c in f.corners() {
-        let bits = [c.x, c.y, c.cov.a, c.cov.b, c.cov.c, c.angle_deg].map(f32::to_bits);
+        let bits = c.floats().map(f32::to_bits);
         writeln!(
             out,
             "corner {} {} {} {bits:08x?}",

@@ -97,7 +97,7 @@ impl<S: ScanSource> Emulator<S> {
     }
 
     /// Answer one request.
-    pub(super) fn handle(
+    fn handle(
         &mut self,
         now_us: u64,
         incoming: Incoming,
@@ -123,7 +123,7 @@ impl<S: ScanSource> Emulator<S> {
 
     /// The reply to `request`, what happens after it, and what to report;
     /// applies the request's effect on the sensor's state.
-    pub(super) fn answer(
+    fn answer(
         &mut self,
         now_us: u64,
         request: Request<'static>,
@@ -186,7 +186,7 @@ impl<S: ScanSource> Emulator<S> {
 
     /// `20 00` + password: installation mode (stops a stream) if the
     /// password is right, else `A0 01`.
-    pub(super) fn installation_mode(&mut self, password: [u8; 8]) -> (ReplyKind, Done, Handled) {
+    fn installation_mode(&mut self, password: [u8; 8]) -> (ReplyKind, Done, Handled) {
         let accepted = password == DEFAULT_PASSWORD;
         let result = if accepted {
             self.mode = OperatingMode::Installation;
@@ -204,7 +204,7 @@ impl<S: ScanSource> Emulator<S> {
 
     /// `3B`: switch to the variant if it exists and the source supports it;
     /// the `BB` reply names the variant in force either way.
-    pub(super) fn variant_request(
+    fn variant_request(
         &mut self,
         now_us: u64,
         angle_deg: u16,
@@ -233,7 +233,7 @@ impl<S: ScanSource> Emulator<S> {
 
     /// `77`: taken in installation mode with known units; the `F7` reply
     /// carries the configuration in force either way.
-    pub(super) fn config_write(&mut self, c: Config) -> (ReplyKind, Done, Handled) {
+    fn config_write(&mut self, c: Config) -> (ReplyKind, Done, Handled) {
         let accepted = self.mode == OperatingMode::Installation && c.units().is_some();
         if accepted {
             self.config = c;
@@ -249,7 +249,7 @@ impl<S: ScanSource> Emulator<S> {
     }
 
     /// Change the variant; a running stream restarts its scan clock.
-    pub(super) fn set_variant(&mut self, now_us: u64, v: Variant) {
+    fn set_variant(&mut self, now_us: u64, v: Variant) {
         self.variant = v;
         if let Some(stream) = self.stream.as_mut() {
             *stream = Stream {
@@ -259,7 +259,7 @@ impl<S: ScanSource> Emulator<S> {
         }
     }
 
-    pub(super) fn stop_stream(&mut self) {
+    fn stop_stream(&mut self) {
         let external = core::mem::replace(&mut self.external_stream, false);
         if self.stream.take().is_some() || external {
             self.event(Event::StreamStopped);

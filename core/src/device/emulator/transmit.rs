@@ -67,7 +67,7 @@ pub(super) struct Stream {
 
 impl Stream {
     /// Time scan `k` is complete (µs).
-    pub(super) fn tick_us(&self, k: u64, turns: u64) -> u64 {
+    fn tick_us(&self, k: u64, turns: u64) -> u64 {
         let offset = k.saturating_mul(turns * TURN_US_TIMES_3) / 3;
         self.start_us.saturating_add(offset)
     }
@@ -75,7 +75,7 @@ impl Stream {
     /// The scan to send next when the line is free from `free_us` on: the
     /// newest complete by then if it has not been sent, else the one after
     /// the last sent. Returns its index and completion time.
-    pub(super) fn next(&self, free_us: u64, turns: u64) -> (u64, u64) {
+    fn next(&self, free_us: u64, turns: u64) -> (u64, u64) {
         let free = free_us.max(self.start_us);
         let elapsed = free.saturating_sub(self.start_us);
         let newest = elapsed.saturating_mul(3) / (turns * TURN_US_TIMES_3);
@@ -122,7 +122,7 @@ impl<S: ScanSource> Emulator<S> {
     }
 
     /// Bytes of the current frame whose stop bit has passed at `now_us`.
-    pub(super) fn bytes_due(&self, now_us: u64) -> usize {
+    fn bytes_due(&self, now_us: u64) -> usize {
         if self.settings.external_scans {
             return self.tx_len;
         }
@@ -141,7 +141,7 @@ impl<S: ScanSource> Emulator<S> {
 
     /// The frame's last byte has been handed out: free the line and do what
     /// follows. Returns `true` if the line switched rate.
-    pub(super) fn finish_frame(&mut self) -> bool {
+    fn finish_frame(&mut self) -> bool {
         let end = self
             .tx_start_us
             .saturating_add(line_time_us(self.tx_len, self.baud));
@@ -191,7 +191,7 @@ impl<S: ScanSource> Emulator<S> {
 
     /// Timers: the restart after a reset, the receive time-out; and the
     /// next frame when the line is free.
-    pub(super) fn advance(&mut self, now_us: u64) {
+    fn advance(&mut self, now_us: u64) {
         if let Some(at) = self.restart_at_us {
             if now_us >= at {
                 self.power_on(at);
@@ -244,7 +244,7 @@ impl<S: ScanSource> Emulator<S> {
     }
 
     /// Put a frame on the line, starting when both it and the line are ready.
-    pub(super) fn start_frame(&mut self, ready_us: u64, what: Outgoing) {
+    fn start_frame(&mut self, ready_us: u64, what: Outgoing) {
         let address = self.settings.address;
         let status = self.settings.status;
         match what {
@@ -317,7 +317,7 @@ impl<S: ScanSource> Emulator<S> {
     }
 
     /// A `B0` with the source's next scan, with `ACK` before it for `30 01`.
-    pub(super) fn start_scan(&mut self, ready_us: u64, ack: bool, done: Done) {
+    fn start_scan(&mut self, ready_us: u64, ack: bool, done: Done) {
         let variant = self.variant;
         let units = self.units();
         let beams = variant.beams().min(MAX_VALUES);
@@ -338,7 +338,7 @@ impl<S: ScanSource> Emulator<S> {
 
     /// Start the frame of `len` bytes in `tx` (`None`: it could not be
     /// written; nothing is sent and `done` is not carried out).
-    pub(super) fn set_frame(&mut self, ready_us: u64, len: Option<usize>, done: Done) {
+    fn set_frame(&mut self, ready_us: u64, len: Option<usize>, done: Done) {
         match len {
             Some(len) if len > 0 => {
                 self.tx_len = len.min(TX_CAPACITY);
