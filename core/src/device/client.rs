@@ -512,6 +512,18 @@ impl<'r> BaudProbe<'r> {
         self.rates
     }
 
+    /// A search over `rates` that has already handed out `tried` of them
+    /// (a driver that keeps only the count, e.g. to stay all-zero in a
+    /// `static`, rebuilds its probe with this).
+    pub const fn resume(rates: &'r [Baud], tried: usize) -> Self {
+        BaudProbe { rates, next: tried }
+    }
+
+    /// Rates handed out so far by [`next_rate`](BaudProbe::next_rate).
+    pub fn tried(&self) -> usize {
+        self.next
+    }
+
     /// The next rate to try (`None`: every rate went unanswered). A probe
     /// that ends in [`Outcome::Timeout`] or [`Outcome::NakLimit`] means
     /// "not this rate": take the next.

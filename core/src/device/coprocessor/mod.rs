@@ -249,12 +249,17 @@ impl CoProcessor {
             }
         }
 
-        // 3. The next bring-up request, if one is due.
-        if let Some(request) = self
-            .link
-            .due_request(now_us, &mut buf)
-            .and_then(|n| buf.get(..n))
-        {
+        // 3. Time-outs: the baud search's next rate, a silent stream.
+        if let Some(LinkEvent::SwitchBaud(b)) = self.link.poll(now_us) {
+            outcome.sensor_baud = Some(b);
+        }
+        // 4. The next bring-up request, if one is due (none in a poll that
+        // switches the sensor UART: the board switches after it returns).
+        let due = match outcome.sensor_baud {
+            Some(_) => None,
+            None => self.link.due_request(now_us, &mut buf),
+        };
+        if let Some(request) = due.and_then(|n| buf.get(..n)) {
             sensor.write_all(request).map_err(PollError::Sensor)?;
         }
         self.sync_counters();
