@@ -211,10 +211,19 @@ impl Client {
     /// A client for the sensor at `address` (0..=0x7F; replies carry
     /// `0x80 | address`), with nothing to send yet.
     pub const fn new(address: u8) -> Self {
+        let mut client = Client::zeroed();
+        client.framer.set_direction(Direction::SensorToHost);
+        client.x.address = address & 0x7F;
+        client
+    }
+
+    /// [`Client::new`] with every byte zero (its framer's direction not set:
+    /// [`Client::set_sensor_side`] before use), for an all-zero `static`.
+    pub(crate) const fn zeroed() -> Self {
         Client {
-            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
+            framer: Framer::new(Direction::HostToSensor, Handshake::Expected),
             x: Exchange {
-                address: address & 0x7F,
+                address: 0,
                 request: [0; REQUEST_CAPACITY],
                 request_len: 0,
                 expected: 0,
@@ -234,6 +243,12 @@ impl Client {
                 stats: ClientStats::ZERO,
             },
         }
+    }
+
+    /// Make a [`Client::zeroed`] client what [`Client::new`] makes.
+    pub(crate) const fn set_sensor_side(&mut self, address: u8) {
+        self.framer.set_direction(Direction::SensorToHost);
+        self.x.address = address & 0x7F;
     }
 
     /// The sensor's address.

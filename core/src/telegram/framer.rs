@@ -217,10 +217,17 @@ impl Framer {
         self.handshake
     }
 
+    /// Frame telegrams travelling in `direction` from now on (a framer built
+    /// all-zero in a `static` is given its direction at start-up).
+    #[inline]
+    pub const fn set_direction(&mut self, direction: Direction) {
+        self.direction = direction;
+    }
+
     /// Report `ACK`/`NAK` bytes from now on (or stop, e.g. in continuous
     /// mode, where the sensor sends none).
     #[inline]
-    pub fn set_handshake(&mut self, handshake: Handshake) {
+    pub const fn set_handshake(&mut self, handshake: Handshake) {
         self.handshake = handshake;
     }
 

@@ -45,11 +45,13 @@ pub struct LatestScan {
 }
 
 impl LatestScan {
+    /// Every byte zero (no scan yet; the variant is set by
+    /// [`CoProcessor::configure`]).
     const fn new() -> Self {
         LatestScan {
-            values: [8191; MAX_VALUES],
+            values: [0; MAX_VALUES],
             count: 0,
-            variant: Variant::Fov180Res50,
+            variant: Variant::Fov180Res100,
             counters: Counters {
                 scans_in: 0,
                 feature_scans_out: 0,
@@ -142,6 +144,8 @@ pub struct CoProcessor {
     beams: u16,
     /// The latest scan in metres, decoded in place.
     frame: Frame,
+    /// [`CoProcessor::configure`] has run.
+    configured: bool,
 }
 
 impl CoProcessor {
@@ -150,22 +154,43 @@ impl CoProcessor {
     /// passing through the stack; call [`CoProcessor::start`] before the
     /// first poll.
     pub const fn new(params: ValidParams, setup: SensorSetup) -> Self {
-        let mut settings = Settings::DEFAULT;
-        settings.variant = setup.variant;
-        settings.external_scans = true;
-        let mut latest = LatestScan::new();
-        latest.variant = setup.variant;
+        let mut cop = CoProcessor::unconfigured();
+        cop.configure(params, setup);
+        cop
+    }
+
+    /// A co-processor with nothing set: every byte zero, so that a `static`
+    /// of it lands in `.bss` (no flash image, nothing copied at boot).
+    /// [`configure`](CoProcessor::configure) it before
+    /// [`start`](CoProcessor::start); until then [`poll`](CoProcessor::poll)
+    /// touches no port.
+    pub const fn unconfigured() -> Self {
         CoProcessor {
-            params,
-            link: SensorLink::new(setup),
+            params: ValidParams::UNSET,
+            link: SensorLink::zeroed(),
             extractor: Extractor::new(),
-            host: Emulator::off(latest, settings),
+            host: Emulator::unpowered(LatestScan::new()),
             counters: LatestScan::new().counters,
             scan_counter: 0,
             have_features: false,
             beams: 0,
-            frame: Frame::empty(),
+            frame: Frame::zeroed(),
+            configured: false,
         }
+    }
+
+    /// Set the parameters and the sensor set-up of an
+    /// [`unconfigured`](CoProcessor::unconfigured) co-processor (in place,
+    /// no copy through the stack).
+    pub const fn configure(&mut self, params: ValidParams, setup: SensorSetup) {
+        let mut settings = Settings::DEFAULT;
+        settings.variant = setup.variant;
+        settings.external_scans = true;
+        self.params = params;
+        self.link.configure(setup);
+        self.host.set_settings(settings);
+        self.host.source_mut().variant = setup.variant;
+        self.configured = true;
     }
 
     /// Switch the host-side face on at `now_us`: like an LMS at power-on it
@@ -210,6 +235,9 @@ impl CoProcessor {
         H: Read + ReadReady + Write,
     {
         let mut outcome = PollOutcome::default();
+        if !self.configured {
+            return Ok(outcome);
+        }
         let mut buf = [0u8; MAX_TELEGRAM_LEN];
 
         // 1. Host requests into the emulator; its replies out.

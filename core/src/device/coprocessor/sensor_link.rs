@@ -194,9 +194,22 @@ impl SensorLink {
     /// A link that will bring the sensor up with `setup`; the UART starts
     /// at 9600 Bd.
     pub const fn new(setup: SensorSetup) -> Self {
+        let mut link = SensorLink::zeroed();
+        link.configure(setup);
+        link
+    }
+
+    /// A link with every byte zero, for an all-zero `static`: give it its
+    /// set-up with [`SensorLink::configure`] before use.
+    pub(crate) const fn zeroed() -> Self {
         SensorLink {
-            setup,
-            client: Client::new(DEFAULT_ADDRESS),
+            // All variants first in their enums: 180°/1°, cm, 9600 Bd.
+            setup: SensorSetup {
+                variant: Variant::Fov180Res100,
+                units: Unit::Centimetre,
+                baud: Baud::B9600,
+            },
+            client: Client::zeroed(),
             step: Step::StopStream,
             requested: false,
             nak: false,
@@ -207,6 +220,12 @@ impl SensorLink {
             restarts: 0,
             scan_timeouts: 0,
         }
+    }
+
+    /// Bring the sensor up with `setup` (before the first poll).
+    pub(crate) const fn configure(&mut self, setup: SensorSetup) {
+        self.setup = setup;
+        self.client.set_sensor_side(DEFAULT_ADDRESS);
     }
 
     /// The bytes of the last `B0` telegram reported by [`LinkEvent::Scan`]
