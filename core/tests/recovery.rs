@@ -17,7 +17,7 @@
 //! `faulty_line`).
 
 use lms_core::device::coprocessor::sensor_link::{
-    probe_wait_us, search_order, stream_wait_us, PROBE_GRACE_US,
+    probe_wait_us, search_order, stream_wait_us, PROBE_GRACE_US, STREAM_SILENCE_US,
 };
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::device::emulator::{line_time_us, Emulator, Event as LmsEvent, FnSource, Settings};
@@ -60,6 +60,11 @@ struct Rig {
     switches: Vec<(u64, Baud)>,
     /// The sensor cable is in.
     connected: bool,
+    /// Stream bytes still to be lost before the co-processor reads them,
+    /// as a receive queue overflow loses them (and the board reports).
+    lose: usize,
+    /// `B0`s the LMS completed.
+    lms_scans: u32,
     /// The LMS has power.
     powered: bool,
     noise: Rng,
@@ -84,6 +89,8 @@ impl Rig {
             uart: Baud::B9600,
             switches: Vec::new(),
             connected: true,
+            lose: 0,
+            lms_scans: 0,
             powered: true,
             noise: Rng(7),
             now: 0,
@@ -138,11 +145,18 @@ impl Rig {
                     }
                     if self.connected {
                         let heard = self.over_line(&buf[..n], rate, self.uart);
-                        self.sensor.rx.extend(heard);
+                        let lost = heard.len().min(self.lose);
+                        self.lose -= lost;
+                        if lost > 0 {
+                            self.cop.note_sensor_lost(lost as u32);
+                        }
+                        self.sensor.rx.extend(&heard[lost..]);
                     }
                 }
                 while let Some(e) = self.lms.next_event() {
-                    let _: LmsEvent = e;
+                    if let LmsEvent::ScanSent { .. } = e {
+                        self.lms_scans += 1;
+                    }
                 }
             }
             let outcome = self
@@ -238,7 +252,9 @@ fn lms_power_cycle_mid_stream_recovers_within_a_second() {
         rig.lms.power_on(on);
         rig.run(2_000_000);
 
-        // The stream went silent: one time-out, the UART back to 9600 first.
+        // One time-out, the UART back to 9600 first: once the 90's noise
+        // has come (within its 30 ms at 9600 Bd) and the stream has been
+        // without a good scan for stream_wait_us.
         assert_eq!(rig.cop.link().scan_timeouts(), 1, "off {off_ms} ms");
         assert!(rig.cop.link().restarts() > restarts);
         let after = rig.switches_after(cut);
@@ -248,10 +264,10 @@ fn lms_power_cycle_mid_stream_recovers_within_a_second() {
             "off {off_ms} ms: {after:?}"
         );
         let timeout_at = rig.switches.iter().find(|(t, _)| *t > cut).unwrap().0;
+        let due = (last_scan + stream_wait_us(&SensorSetup::DEFAULT)).max(on);
         assert!(
-            timeout_at >= last_scan + stream_wait_us(&SensorSetup::DEFAULT)
-                && timeout_at < last_scan + stream_wait_us(&SensorSetup::DEFAULT) + 2 * STEP_US,
-            "time-out at {timeout_at}, last scan {last_scan}"
+            timeout_at >= due && timeout_at < due + 31_000,
+            "off {off_ms} ms: time-out at {timeout_at}, last scan {last_scan}, on at {on}"
         );
         assert_eq!(after.last(), Some(&Baud::B500000), "{after:?}");
         assert_eq!(rig.cop.link().step(), Step::Streaming);
@@ -311,11 +327,19 @@ fn coprocessor_reset_mid_stream_finds_the_lms_at_500k() {
 fn cable_pulled_and_put_back_streams_again_within_a_second() {
     let mut rig = Rig::streaming();
     let pulled = rig.now;
+    let last_scan = *rig.scans.last().unwrap();
     rig.connected = false;
-    rig.run(3_000_000);
-    // Round and round the search while the line is dead; never streaming.
+    rig.run(4_000_000);
+    // A silent line: the time-out after STREAM_SILENCE_US, then round and
+    // round the search; never streaming.
     let during = rig.switches_after(pulled);
     assert_eq!(during.first(), Some(&Baud::B9600));
+    let timeout_at = rig.switches.iter().find(|(t, _)| *t > pulled).unwrap().0;
+    assert!(
+        timeout_at >= last_scan + STREAM_SILENCE_US
+            && timeout_at < last_scan + STREAM_SILENCE_US + 2 * STEP_US,
+        "time-out at {timeout_at}, last scan {last_scan}"
+    );
     assert!(during.len() >= 8, "{during:?}");
     assert_eq!(rig.cop.link().scan_timeouts(), 1);
     assert_ne!(rig.cop.link().step(), Step::Streaming);
@@ -335,4 +359,39 @@ fn cable_pulled_and_put_back_streams_again_within_a_second() {
         "cable back: the client has scans again {} µs later",
         first - back
     );
+}
+
+#[test]
+fn scans_dropped_counts_every_scan_a_queue_overflow_cuts() {
+    for seed in 1..=8 {
+        let mut rig = Rig::streaming();
+        let mut rng = Rng(seed);
+        let (sent_before, in_before) = (rig.lms_scans, rig.cop.counters().scans_in);
+        assert_eq!(rig.cop.counters().scans_dropped, 0);
+        // 40 losses of 1 B .. 3 kB (up to 4 whole scans), at random places,
+        // far enough apart for good scans between them (no time-out).
+        let mut lost_bytes = 0;
+        for _ in 0..40 {
+            rig.run(150_000 + rng.below(100_000) as u64);
+            rig.lose = 1 + rng.below(3_000);
+            lost_bytes += rig.lose;
+        }
+        rig.run(200_000);
+        assert_eq!(rig.lose, 0);
+        let c = rig.cop.counters();
+        let sent = rig.lms_scans - sent_before;
+        let got = c.scans_in - in_before;
+        assert!(sent - got > 40, "{sent} sent, {got} in");
+        // Every scan the LMS sent is either processed or counted as dropped.
+        assert_eq!(
+            c.scans_dropped,
+            sent - got,
+            "seed {seed}, {lost_bytes} B lost: {c:?}"
+        );
+        assert_eq!(rig.cop.link().scan_timeouts(), 0);
+        println!(
+            "seed {seed}: {lost_bytes} bytes lost in 40 bursts: {} of {sent} scans dropped, all counted",
+            sent - got
+        );
+    }
 }

@@ -12,10 +12,14 @@ use super::report::Outcome;
 use super::session::Session;
 use super::{CLOSING, QUIET, TICK};
 
-/// The scans of the selection not back at the end: (`lost`, `late`).
+/// The scans not back at the end.
 struct Missing {
+    /// Of the selection, given up once the host line was quiet.
     lost: usize,
+    /// Of the selection, still on their way at `--timeout`.
     late: usize,
+    /// Outside the selection (the warm-up scan), not back.
+    other_lost: usize,
 }
 
 impl Session {
@@ -85,7 +89,8 @@ impl Session {
     /// are late, not lost).
     fn await_rest(&mut self, deadline: Instant) -> Result<Missing> {
         let timed_out = loop {
-            if self.checker.tally.play_back >= self.play_sent {
+            let t = &self.checker.tally;
+            if t.play_back + t.other_back >= self.sent {
                 break false;
             }
             if Instant::now() >= deadline {
@@ -96,17 +101,18 @@ impl Session {
             }
             self.pump(TICK)?;
         };
-        let missing = self.play_sent.saturating_sub(self.checker.tally.play_back);
-        Ok(if timed_out {
-            Missing {
-                lost: 0,
-                late: missing,
-            }
+        let t = &self.checker.tally;
+        let missing = self.play_sent.saturating_sub(t.play_back);
+        let other_lost = (self.sent.saturating_sub(self.play_sent)).saturating_sub(t.other_back);
+        let (lost, late) = if timed_out {
+            (0, missing)
         } else {
-            Missing {
-                lost: missing,
-                late: 0,
-            }
+            (missing, 0)
+        };
+        Ok(Missing {
+            lost,
+            late,
+            other_lost,
         })
     }
 
@@ -148,7 +154,10 @@ impl Session {
             wanted: self.wanted,
             lost: missing.lost,
             late: missing.late,
+            other_lost: missing.other_lost,
             play_sent: self.play_sent,
+            sensor_restarts: self.sensor_restarts,
+            timeout: self.timeout,
             tally: c.tally,
             counters,
             counters_error,

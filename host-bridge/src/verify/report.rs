@@ -6,17 +6,25 @@ use anyhow::{bail, Result};
 use lms_core::telegram::features::Counters;
 
 use super::checker::Tally;
+use super::QUIET;
 
 /// The run's outcome.
 #[derive(Debug)]
 pub(super) struct Outcome {
     pub(super) wanted: usize,
     /// Scans of the selection sent and not back although the host line
-    /// went quiet.
+    /// went quiet for [`QUIET`].
     pub(super) lost: usize,
     /// Scans of the selection sent and not back yet at `--timeout`.
     pub(super) late: usize,
+    /// Scans outside the selection (the warm-up) sent and not back.
+    pub(super) other_lost: usize,
     pub(super) play_sent: usize,
+    /// Times the co-processor stopped the sensor's stream while the
+    /// selection played.
+    pub(super) sensor_restarts: usize,
+    /// `--timeout`.
+    pub(super) timeout: Duration,
     pub(super) tally: Tally,
     pub(super) counters: Option<Counters>,
     pub(super) counters_error: Option<String>,
@@ -26,14 +34,29 @@ pub(super) struct Outcome {
 }
 
 impl Outcome {
+    /// Every scan the sensor side sent and never got back with features.
+    pub(super) fn all_lost(&self) -> usize {
+        self.lost + self.other_lost
+    }
+
+    /// The co-processor's `scans_dropped` disagrees with verify's own count
+    /// of lost scans (only when both are known: no scan still late).
+    fn dropped_miscounted(&self) -> Option<u32> {
+        let c = self.counters.as_ref()?;
+        let counted = usize::try_from(c.scans_dropped).ok()?;
+        (self.late == 0 && counted != self.all_lost()).then_some(c.scans_dropped)
+    }
+
     pub(super) fn ok(&self) -> bool {
         self.tally.problems == 0
-            && self.lost == 0
+            && self.all_lost() == 0
             && self.late == 0
+            && self.sensor_restarts == 0
             && self.tally.play_back >= self.wanted
             && self.tally.play_identical == self.tally.play_back
             && self.tally.other_identical == self.tally.other_back
             && self.counters.is_some()
+            && self.dropped_miscounted().is_none()
     }
 
     /// `Ok` if the run passed, else an error naming why it failed.
@@ -45,13 +68,36 @@ impl Outcome {
         if self.tally.problems > 0 {
             why.push(format!("{} mismatches", self.tally.problems));
         }
-        if self.lost > 0 {
-            why.push(format!("{} scans lost", self.lost));
-        }
-        if self.tally.play_back < self.wanted {
+        if self.all_lost() > 0 {
             why.push(format!(
-                "{} of {} scans checked before --timeout",
-                self.tally.play_back, self.wanted
+                "{} scans lost (sent by the sensor side, not back although the host line \
+                 was quiet for {} s)",
+                self.all_lost(),
+                QUIET.as_secs()
+            ));
+        }
+        if let Some(counted) = self.dropped_miscounted() {
+            why.push(format!(
+                "the co-processor counted scans_dropped={counted}, verify {} lost",
+                self.all_lost()
+            ));
+        }
+        if self.sensor_restarts > 0 {
+            why.push(format!(
+                "the co-processor restarted the sensor {} times during the run",
+                self.sensor_restarts
+            ));
+        }
+        let secs = self.timeout.as_secs_f64();
+        if self.play_sent < self.wanted {
+            why.push(format!(
+                "--timeout ({secs} s) ran out after {} of {} scans were sent",
+                self.play_sent, self.wanted
+            ));
+        } else if self.late > 0 {
+            why.push(format!(
+                "--timeout ({secs} s) ran out with {} scans still on their way",
+                self.late
             ));
         }
         if let Some(e) = &self.counters_error {
@@ -65,8 +111,14 @@ impl Outcome {
 pub(super) fn report(o: &Outcome) {
     let mut line = format!(
         "host-bridge verify: {}/{} scans bit-identical; {} lost ({} sent by the sensor side, {} back with features)",
-        o.tally.play_identical, o.tally.play_back, o.lost, o.play_sent, o.tally.play_back
+        o.tally.play_identical, o.tally.play_back, o.all_lost(), o.play_sent, o.tally.play_back
     );
+    if o.all_lost() > 0 {
+        line.push_str(&match &o.counters {
+            Some(c) => format!("; the co-processor counted {} dropped", c.scans_dropped),
+            None => "; the co-processor's count is unknown".into(),
+        });
+    }
     if o.late > 0 {
         line.push_str(&format!("; {} still on their way at --timeout", o.late));
     }

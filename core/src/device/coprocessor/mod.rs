@@ -215,9 +215,18 @@ impl CoProcessor {
     }
 
     /// Count bytes the board lost before they reached [`CoProcessor::poll`]
-    /// (receive queue overflow): the scan they belonged to is dropped.
+    /// (receive queue overflow), when it does not know how many: one scan
+    /// dropped. Prefer [`note_sensor_lost`](CoProcessor::note_sensor_lost).
     pub fn note_sensor_overflow(&mut self) {
         self.counters.scans_dropped = self.counters.scans_dropped.wrapping_add(1);
+    }
+
+    /// `bytes` from the sensor were lost before they reached
+    /// [`CoProcessor::poll`] (receive queue overflow, overrun): every scan
+    /// they cut is counted in `scans_dropped` (see
+    /// [`SensorLink::take_missed`]).
+    pub fn note_sensor_lost(&mut self, bytes: u32) {
+        self.link.note_lost(bytes);
     }
 
     /// Move bytes both ways, process every complete scan, answer the host.
@@ -381,6 +390,8 @@ impl CoProcessor {
 
     /// Copy the framer counters into [`Counters`] and the host-visible copy.
     fn sync_counters(&mut self) {
+        let missed = self.link.take_missed();
+        self.counters.scans_dropped = self.counters.scans_dropped.wrapping_add(missed);
         let s = self.link.framer_stats();
         self.counters.sensor_crc_errors = s.crc_errors;
         self.counters.sensor_resyncs = s.resyncs;

@@ -25,11 +25,16 @@
 //!
 //! # Recovery
 //!
-//! * The stream goes silent (no good `B0` for [`stream_wait_us`], 353 ms
-//!   at 180°/0.5° and 500 kBd: e.g. the LMS was switched off and on, and
-//!   its `90` came at 9600 Bd while the UART listens at 500 k): counted in
+//! * A scan time-out: no good `B0` for [`stream_wait_us`] (353 ms at
+//!   180°/0.5° and 500 kBd) while bytes that frame nothing come (e.g. the
+//!   LMS was switched off and on and its `90` came at 9600 Bd while the
+//!   UART listens at 500 k: noise), or for [`STREAM_SILENCE_US`] (2 s) of
+//!   any kind (a dead line, or a sensor that stopped by itself): counted in
 //!   [`SensorLink::scan_timeouts`], and the bring-up starts again with the
-//!   baud search at 9600 Bd.
+//!   baud search at 9600 Bd. A line merely silent for a while (a cable
+//!   pulled, or a test bench holding its sensor) is given the longer time:
+//!   nothing has changed at the sensor's end that a restart would mend
+//!   sooner.
 //! * The `90` power-on telegram (the sensor restarted, seen when the UART is
 //!   at its rate): the bring-up starts again at once.
 //! * The co-processor itself restarts (reset, power): the search finds the
@@ -95,8 +100,8 @@ pub const fn probe_wait_us(rate: Baud, wanted: Baud) -> u64 {
     PROBE_GRACE_US + line_time_us(PROBE_BYTES, rate) + stream
 }
 
-/// The longest gap between two scans of the stream before the link starts
-/// again (µs): two scan times (the mirror's period or a `B0`'s line time,
+/// The longest gap between two good scans of the stream, with noise on the
+/// line, before the link starts again (µs): two scan times (the mirror's period or a `B0`'s line time,
 /// whichever is longer) plus [`STREAM_GRACE_US`]. 180°/0.5° at 500 kBd:
 /// 353 ms; at 9600 Bd: 2.0 s.
 pub const fn stream_wait_us(setup: &SensorSetup) -> u64 {
@@ -105,6 +110,10 @@ pub const fn stream_wait_us(setup: &SensorSetup) -> u64 {
     let scan = if mirror > line { mirror } else { line };
     STREAM_GRACE_US + 2 * scan
 }
+
+/// The longest silence in the stream (no good scan and no noise) before the
+/// link starts again (µs; at least [`stream_wait_us`]).
+pub const STREAM_SILENCE_US: u64 = 2_000_000;
 
 /// What the link wants from the sensor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -188,6 +197,17 @@ pub struct SensorLink {
     probe_index: u8,
     restarts: u32,
     scan_timeouts: u32,
+    /// Stream bytes (received and lost before reaching the link) since the
+    /// last good scan, less the whole scans already accounted for.
+    stream_bytes: i32,
+    /// Length of the last good scan's telegram (bytes; 0 before the first).
+    scan_len: u16,
+    /// Scans lost in the stream, not yet taken by [`SensorLink::take_missed`].
+    missed: u32,
+    /// When the last good scan (or the stream's start) came (µs), and the
+    /// framer's skipped bytes then.
+    scan_us: u64,
+    skipped_at_scan: u32,
 }
 
 impl SensorLink {
@@ -219,6 +239,11 @@ impl SensorLink {
             probe_index: 0,
             restarts: 0,
             scan_timeouts: 0,
+            stream_bytes: 0,
+            scan_len: 0,
+            missed: 0,
+            scan_us: 0,
+            skipped_at_scan: 0,
         }
     }
 
@@ -254,7 +279,8 @@ impl SensorLink {
         self.restarts
     }
 
-    /// Streams that went silent for [`stream_wait_us`].
+    /// Scan time-outs ([`stream_wait_us`] with noise, or
+    /// [`STREAM_SILENCE_US`]).
     pub fn scan_timeouts(&self) -> u32 {
         self.scan_timeouts
     }
@@ -262,6 +288,49 @@ impl SensorLink {
     /// The rate the UART should be at now.
     pub fn line_baud(&self) -> Baud {
         self.line
+    }
+
+    /// `bytes` of the sensor's stream were lost before they reached
+    /// [`feed`](SensorLink::feed) (the board's receive queue overflowed):
+    /// they count towards the scans lost (see [`take_missed`]).
+    ///
+    /// [`take_missed`]: SensorLink::take_missed
+    pub fn note_lost(&mut self, bytes: u32) {
+        if self.step == Step::Streaming {
+            let bytes = i32::try_from(bytes).unwrap_or(i32::MAX);
+            self.stream_bytes = self.stream_bytes.saturating_add(bytes);
+        }
+    }
+
+    /// Scans of the stream lost since the last call: the stream's bytes
+    /// between two good scans (received and [lost](SensorLink::note_lost))
+    /// held this many more whole scans than arrived intact (damaged on the
+    /// line, cut by a queue overflow, or missing). Only `B0`s are on the
+    /// line while it streams, so the count is exact up to rounding, and
+    /// the rounding is carried over.
+    pub fn take_missed(&mut self) -> u32 {
+        core::mem::take(&mut self.missed)
+    }
+
+    /// A good scan of `len` bytes ended the stream bytes counted so far:
+    /// the whole scans among them, less this one, were lost.
+    fn account_scan(&mut self, len: usize) {
+        let len = u16::try_from(len).unwrap_or(u16::MAX);
+        self.scan_len = len;
+        let whole = self.whole_scans().max(1);
+        self.missed = self.missed.wrapping_add(whole.unsigned_abs() - 1);
+        self.stream_bytes = self
+            .stream_bytes
+            .saturating_sub(whole.saturating_mul(i32::from(len)));
+    }
+
+    /// Whole scans in the stream bytes counted (rounded to nearest).
+    fn whole_scans(&self) -> i32 {
+        let len = i32::from(self.scan_len);
+        if len == 0 {
+            return 0;
+        }
+        self.stream_bytes.saturating_add(len / 2).max(0) / len
     }
 
     /// Start the bring-up again (e.g. after the sensor reset): the baud
@@ -293,8 +362,10 @@ impl SensorLink {
     pub fn poll(&mut self, now_us: u64) -> Option<LinkEvent> {
         if !self.switch_due {
             match self.step {
-                Step::Streaming if self.client.expired(now_us) => {
+                Step::Streaming if self.stream_timed_out(now_us) => {
                     self.scan_timeouts = self.scan_timeouts.wrapping_add(1);
+                    let lost = self.whole_scans().unsigned_abs();
+                    self.missed = self.missed.wrapping_add(lost);
                     self.restart();
                 }
                 Step::StopStream if self.requested && self.client.expired(now_us) => {
@@ -308,6 +379,20 @@ impl SensorLink {
         }
         self.switch_due = false;
         Some(LinkEvent::SwitchBaud(self.line))
+    }
+
+    /// No good scan for [`stream_wait_us`] with noise since, or for
+    /// [`STREAM_SILENCE_US`] (the client's stream deadline).
+    fn stream_timed_out(&self, now_us: u64) -> bool {
+        let noise = self.client.framer_stats().bytes_skipped != self.skipped_at_scan;
+        let late = now_us >= self.scan_us.saturating_add(stream_wait_us(&self.setup));
+        (noise && late) || self.client.expired(now_us)
+    }
+
+    /// Note a good scan (or the stream's start) at `now_us`.
+    fn mark_scan(&mut self, now_us: u64) {
+        self.scan_us = now_us;
+        self.skipped_at_scan = self.client.framer_stats().bytes_skipped;
     }
 
     /// The probe at this rate went unanswered: the next rate of
@@ -396,8 +481,16 @@ impl SensorLink {
     /// until it returns `None` with nothing left.
     pub fn feed<'i>(&mut self, input: &'i [u8], now_us: u64) -> (Option<LinkEvent>, &'i [u8]) {
         let (outcome, rest) = self.client.feed(input, now_us);
+        if self.step == Step::Streaming {
+            let fed = i32::try_from(input.len().saturating_sub(rest.len())).unwrap_or(i32::MAX);
+            self.stream_bytes = self.stream_bytes.saturating_add(fed);
+        }
         let event = match outcome {
-            Some(Outcome::Scan) => Some(LinkEvent::Scan),
+            Some(Outcome::Scan) => {
+                self.account_scan(self.client.telegram_bytes().len());
+                self.mark_scan(now_us);
+                Some(LinkEvent::Scan)
+            }
             Some(Outcome::Reply) => self.on_reply(now_us),
             // Our request was damaged: resend at once.
             Some(Outcome::Resend) => {
@@ -470,8 +563,15 @@ impl SensorLink {
             Step::StartStream | Step::Streaming => Step::Streaming,
         };
         if self.step == Step::Streaming {
-            self.client
-                .await_stream(now_us, Some(stream_wait_us(&self.setup)));
+            let noisy = stream_wait_us(&self.setup);
+            let silent = if noisy > STREAM_SILENCE_US {
+                noisy
+            } else {
+                STREAM_SILENCE_US
+            };
+            self.client.await_stream(now_us, Some(silent));
+            self.stream_bytes = 0;
+            self.mark_scan(now_us);
         }
         self.requested = false;
         self.nak = false;
