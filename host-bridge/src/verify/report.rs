@@ -6,6 +6,7 @@ use anyhow::{bail, Result};
 use lms_core::telegram::features::Counters;
 
 use super::checker::Tally;
+use super::session::PowerCycle;
 use super::QUIET;
 
 /// The run's outcome.
@@ -25,6 +26,8 @@ pub(super) struct Outcome {
     pub(super) sensor_restarts: usize,
     /// `--timeout`.
     pub(super) timeout: Duration,
+    /// `--power-cycle-sensor-after`, if given: what happened.
+    pub(super) power_cycle: Option<PowerCycle>,
     pub(super) tally: Tally,
     pub(super) counters: Option<Counters>,
     pub(super) counters_error: Option<String>,
@@ -57,6 +60,30 @@ impl Outcome {
             && self.tally.other_identical == self.tally.other_back
             && self.counters.is_some()
             && self.dropped_miscounted().is_none()
+            && self.power_cycle_problem().is_none()
+    }
+
+    /// Longest time from the LMS's power-on to the first scan back (µs).
+    pub(super) const POWER_CYCLE_LIMIT_US: u64 = 1_000_000;
+
+    /// What went wrong with `--power-cycle-sensor-after`, if anything.
+    fn power_cycle_problem(&self) -> Option<String> {
+        let pc = self.power_cycle?;
+        let Some(on) = pc.on_us else {
+            return Some(format!(
+                "the sensor was never power-cycled (fewer than {} scans back)",
+                pc.after
+            ));
+        };
+        match pc.back_us {
+            None => Some("no scan came back after the sensor's power cycle".into()),
+            Some(back) if back - on > Self::POWER_CYCLE_LIMIT_US => Some(format!(
+                "the first scan came back {} ms after the sensor's power cycle (limit {} ms)",
+                (back - on) / 1000,
+                Self::POWER_CYCLE_LIMIT_US / 1000
+            )),
+            Some(_) => None,
+        }
     }
 
     /// `Ok` if the run passed, else an error naming why it failed.
@@ -102,6 +129,9 @@ impl Outcome {
         }
         if let Some(e) = &self.counters_error {
             why.push(format!("no counters at the end: {e}"));
+        }
+        if let Some(p) = self.power_cycle_problem() {
+            why.push(p);
         }
         bail!("verify failed: {}", why.join(", "));
     }
@@ -150,6 +180,19 @@ pub(super) fn report(o: &Outcome) {
         ),
         (None, Some(e)) => println!("host-bridge verify: no counters at the end: {e}"),
         (None, None) => {}
+    }
+    if let Some(pc) = o.power_cycle {
+        let ms = |t: Option<u64>| match (t, pc.on_us) {
+            (Some(t), Some(on)) => format!("{:.1} ms", (t - on) as f64 / 1000.0),
+            _ => "never".into(),
+        };
+        println!(
+            "host-bridge verify: sensor power-cycled after {} scans: streaming again after {}, \
+             first scan back after {} (sensor clock)",
+            pc.after,
+            ms(pc.streaming_us),
+            ms(pc.back_us)
+        );
     }
     if let Some(r) = &o.firmware_report {
         println!("host-bridge verify: firmware report: {r}");

@@ -44,7 +44,7 @@ impl EmuClock {
         }
     }
 
-    fn now_us(&self) -> u64 {
+    pub(super) fn now_us(&self) -> u64 {
         let now = self.held_since.unwrap_or_else(Instant::now);
         let t = now.duration_since(self.origin).saturating_sub(self.held);
         u64::try_from(t.as_micros()).unwrap_or(u64::MAX)
@@ -56,7 +56,7 @@ impl EmuClock {
         }
     }
 
-    fn release(&mut self) {
+    pub(super) fn release(&mut self) {
         if let Some(t) = self.held_since.take() {
             self.held += t.elapsed();
         }
@@ -79,6 +79,19 @@ pub(super) fn qemu_max_in_flight() -> usize {
     let data = 2 + 2 * lms_core::Variant::Fov180Res50.beams();
     let b0 = lms_core::telegram::buffer_len(data, Direction::SensorToHost);
     (FIRMWARE_SENSOR_QUEUE / b0).max(1)
+}
+
+/// The LMS power cycle of `--power-cycle-sensor-after` (emulator clock, µs).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct PowerCycle {
+    /// Scans of the selection back when it was switched off and on.
+    pub(super) after: usize,
+    /// When it was switched on again.
+    pub(super) on_us: Option<u64>,
+    /// When the co-processor had started its stream again.
+    pub(super) streaming_us: Option<u64>,
+    /// When the first scan of the selection came back after it.
+    pub(super) back_us: Option<u64>,
 }
 
 /// Both ends of the co-processor and everything verify keeps.
@@ -107,6 +120,11 @@ pub(super) struct Session {
     pub(super) sensor_restarts: usize,
     /// `--timeout`.
     pub(super) timeout: Duration,
+    /// `--power-cycle-sensor-after`: wanted, and what happened.
+    pub(super) power_cycle_after: Option<usize>,
+    pub(super) power_cycle: Option<PowerCycle>,
+    /// Hold the sensor until nothing is in flight (before the power cycle).
+    pub(super) quiesce: bool,
     pub(super) framer: Framer,
     pub(super) assembler: FeatureAssembler,
     /// The last `B0` on the host line, waiting for its features.
@@ -154,6 +172,9 @@ impl Session {
             finished: false,
             sensor_restarts: 0,
             timeout: Duration::from_secs_f64(args.timeout),
+            power_cycle_after: args.power_cycle_sensor_after,
+            power_cycle: None,
+            quiesce: false,
             framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
             assembler: FeatureAssembler::new(),
             pending_b0: None,
@@ -231,6 +252,7 @@ impl Session {
         let tally = &self.checker.tally;
         let in_flight = self.sent.saturating_sub(tally.play_back + tally.other_back);
         let hold = self.finished
+            || self.quiesce
             || (self.sensor_streaming && !armed)
             || (armed && self.play_sent >= self.wanted)
             || (armed && self.max_in_flight > 0 && in_flight >= self.max_in_flight);
@@ -261,6 +283,9 @@ impl Session {
                     }
                     EmuEvent::StreamStarted => {
                         self.sensor_streaming = true;
+                        if let Some(pc) = self.power_cycle.as_mut() {
+                            pc.streaming_us.get_or_insert(self.clock.now_us());
+                        }
                         // Held until the client's stream is on.
                         self.update_hold();
                         self.log("sensor stream started (bring-up done)");
