@@ -195,9 +195,9 @@ struct Exchange {
     /// Stream: the allowed gap between scans (µs) and the wait's start.
     stream_wait_us: Option<u64>,
     stream_since_us: u64,
-    /// The last reply or scan, `STX` … `CRC`.
-    telegram: [u8; MAX_TELEGRAM_LEN],
-    telegram_len: usize,
+    /// The last outcome was a reply or scan: its bytes are still the
+    /// framer's [`Framer::delivered`] (no copy of the scan is kept here).
+    kept: bool,
     stats: ClientStats,
 }
 
@@ -238,8 +238,7 @@ impl Client {
                 acked_us: None,
                 stream_wait_us: None,
                 stream_since_us: 0,
-                telegram: [0; MAX_TELEGRAM_LEN],
-                telegram_len: 0,
+                kept: false,
                 stats: ClientStats::ZERO,
             },
         }
@@ -287,6 +286,7 @@ impl Client {
     /// Drop every byte received and not framed yet (e.g. after a baud-rate
     /// change; counted as skipped).
     pub fn discard(&mut self) {
+        self.x.kept = false;
         self.framer.discard();
     }
 
@@ -294,6 +294,7 @@ impl Client {
     /// time-out: a late reply's start would hold the next one back).
     /// `false` if none was being collected.
     pub fn abandon(&mut self) -> bool {
+        self.x.kept = false;
         self.framer.abandon()
     }
 
@@ -358,12 +359,15 @@ impl Client {
     }
 
     /// The last reply or scan reported, `STX` … `CRC` (until the next
-    /// [`feed`](Client::feed)).
+    /// [`feed`](Client::feed), [`poll`](Client::poll),
+    /// [`abandon`](Client::abandon) or [`discard`](Client::discard); read in
+    /// place in the framer).
     pub fn telegram_bytes(&self) -> &[u8] {
-        self.x
-            .telegram
-            .get(..self.x.telegram_len)
-            .unwrap_or_default()
+        if self.x.kept {
+            self.framer.delivered()
+        } else {
+            &[]
+        }
     }
 
     /// [`telegram_bytes`](Client::telegram_bytes) as a telegram.
@@ -396,7 +400,11 @@ impl Client {
     /// The time-out, if the wait is over at `now_us` (see the
     /// [module docs](self) for the `None` after a false `STX`).
     pub fn poll(&mut self, now_us: u64) -> Option<Outcome> {
-        if !self.expired(now_us) || self.framer.abandon() {
+        if !self.expired(now_us) {
+            return None;
+        }
+        self.x.kept = false;
+        if self.framer.abandon() {
             return None;
         }
         let awaited = match self.x.phase {
@@ -413,6 +421,7 @@ impl Client {
     /// input was taken without an outcome.
     pub fn feed<'i>(&mut self, input: &'i [u8], now_us: u64) -> (Option<Outcome>, &'i [u8]) {
         let mut input = input;
+        self.x.kept = false;
         // Each round consumes input or takes an event; the bound only
         // guards against a framer bug.
         for _ in 0..input.len().saturating_add(MAX_TELEGRAM_LEN) {
@@ -491,12 +500,9 @@ impl Exchange {
         }
     }
 
-    /// Copy the telegram out of the framer.
-    fn keep(&mut self, t: &Telegram<&[u8]>) {
-        let bytes = t.as_bytes();
-        let n = bytes.len().min(MAX_TELEGRAM_LEN);
-        crate::telegram::copy_into(&mut self.telegram, bytes);
-        self.telegram_len = n;
+    /// The telegram (still in the framer) is the outcome's.
+    fn keep(&mut self, _t: &Telegram<&[u8]>) {
+        self.kept = true;
     }
 }
 

@@ -243,6 +243,15 @@ impl Framer {
         self.stats = FramerStats::default();
     }
 
+    /// The telegram handed out by the last [`feed`](Framer::feed), until the
+    /// next `feed`, [`abandon`](Framer::abandon) or
+    /// [`discard`](Framer::discard) (empty if that call found none): read
+    /// it here rather than copy it out.
+    #[inline]
+    pub fn delivered(&self) -> &[u8] {
+        self.buf.get(..self.delivered).unwrap_or_default()
+    }
+
     /// Bytes held for a telegram not complete yet (not counting a telegram
     /// already delivered).
     #[inline]
