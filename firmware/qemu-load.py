@@ -62,6 +62,7 @@ def main():
         lms.start()
         reader = smoke.HostReader(host)
         reader.start()
+        smoke.opt_in(host, reader)
         host.sendall(smoke.telegram(0x00, bytes([0x20, 0x24])))
         smoke.check("sensor bring-up", lms.streaming.wait(15), " ".join(lms.requests))
 
@@ -75,14 +76,22 @@ def main():
         for t in want:
             lms.send(t)
 
+        # Done when all are back, or the host line has been quiet for 5 s
+        # (scans dropped whole by the host-line budget, counted: 2c).
+        seen = {"n": 0, "at": time.monotonic()}
+
         def done(ts):
+            if len(ts) != seen["n"]:
+                seen["n"], seen["at"] = len(ts), time.monotonic()
             n = sum(1 for t in ts if smoke.cmd(t) == 0xD0)
-            return n >= scans
+            return n >= scans or (n > 0 and time.monotonic() - seen["at"] > 5)
         ok = reader.wait_for(done, timeout - 30)
         elapsed = time.monotonic() - start
         b0 = [t for t in reader.telegrams if smoke.cmd(t) == 0xB0]
-        smoke.check(f"{scans} scans passed through byte for byte", b0 == want,
-                    f"{len(b0)} B0 back, {sum(1 for a, b in zip(b0, want) if a == b)} identical")
+        it = iter(want)
+        in_order = all(any(g == w for w in it) for g in b0)
+        smoke.check(f"{scans} scans passed through byte for byte (or dropped whole and counted)",
+                    b0 and in_order, f"{len(b0)} B0 back, in order: {in_order}")
         seq = [smoke.cmd(t) for t in reader.telegrams if smoke.cmd(t) is not None]
         groups = 0
         i = seq.index(0xB0) if 0xB0 in seq else len(seq)
@@ -94,18 +103,19 @@ def main():
                sorted(set(seq[i + 1:j])) == [0xD0, 0xD1, 0xD3, 0xD4]:
                 groups += 1
             i = j
-        smoke.check("features after every scan", groups == scans, f"{groups} feature groups")
+        smoke.check("features after every scan", groups == len(b0), f"{groups} feature groups")
         smoke.check("host stream intact", reader.deframer.bad == 0,
                     f"{reader.raw} bytes, {reader.deframer.bad} skipped")
 
         r, _ = smoke.report(control)
         smoke.check("console counters", int(r["scans_in"]) == scans
-                    and int(r["feature_scans_out"]) == scans
+                    and int(r["feature_scans_out"]) == len(b0)
+                    and int(r["host_scans_dropped"]) == scans - len(b0)
                     and int(r["scans_dropped"]) == 0 and int(r["scans_rejected"]) == 0
                     and int(r["sensor_crc_errors"]) == 0,
                     " ".join(f"{k}={r[k]}" for k in ("scans_in", "feature_scans_out",
-                                                      "scans_dropped", "scans_rejected",
-                                                      "sensor_crc_errors")))
+                                                      "host_scans_dropped", "scans_dropped",
+                                                      "scans_rejected", "sensor_crc_errors")))
         lost = sum(int(r[f"{side}_{k}"]) for side in ("host", "sensor")
                    for k in ("dropped", "overrun", "line_errors"))
         smoke.check("no byte lost", lost == 0,

@@ -310,15 +310,29 @@ def plumbing(host, sensor, control):
     check("scans counted", n == 4, f"{n} telegrams (3 B0 + 1 A0)")
 
 
+def opt_in(host, reader):
+    """The host line to 500 kBd (20 48 -> A0 00), then the feature telegrams
+    on (56 01 -> D6 01; docs/PROTOCOL.md): by default the co-processor sends
+    only what an LMS would, and at 9600 Bd only every ~30th scan fits."""
+    host.sendall(telegram(0x00, bytes([0x20, 0x48])))
+    ok = reader.wait_for(lambda ts: any(cmd(t) == 0xA0 for t in ts), 10)
+    check("host face answers 20 48", ok, "ACK + A0")
+    host.sendall(telegram(0x00, bytes([0x56, 0x01])))
+    ok = reader.wait_for(lambda ts: any(cmd(t) == 0xD6 and t[5] == 1 for t in ts), 10)
+    check("features switched on (56 01)", ok, "ACK + D6 01")
+
+
 def coprocessor(host, sensor, control, n_scans=5):
     lms = FakeSensor(sensor)
     lms.start()
     reader = HostReader(host)
     reader.start()
 
-    # The client: continuous output, as an LMS client would ask the sensor.
+    # The client: 500 kBd, features on, then continuous output, as an LMS
+    # client would ask the sensor.
+    opt_in(host, reader)
     host.sendall(telegram(0x00, bytes([0x20, 0x24])))
-    ok = reader.wait_for(lambda ts: any(cmd(t) == 0xA0 for t in ts), 10)
+    ok = reader.wait_for(lambda ts: sum(1 for t in ts if cmd(t) == 0xA0) >= 2, 10)
     check("host face answers 20 24", ok, "ACK + A0")
 
     up = lms.streaming.wait(15)
@@ -329,15 +343,22 @@ def coprocessor(host, sensor, control, n_scans=5):
     scans = [room_scan(k) for k in range(n_scans)]
     for s in scans:
         lms.send(s)
-        time.sleep(0.03)
+        time.sleep(0.25)  # spaced: the host-line budget drops scans that arrive bunched (docs/PROTOCOL.md §2c)
     b0 = lambda ts: [t for t in ts if cmd(t) == 0xB0]
     def all_in(ts):
         cmds = [cmd(t) for t in ts]
         starts = [i for i, c in enumerate(cmds) if c == 0xB0]
         return len(starts) >= n_scans and len(cmds) - starts[-1] > 5
-    reader.wait_for(all_in, 30)
+    # A scan that arrives while the host line (500 kBd, modelled on the
+    # firmware's clock) is still busy by more than a scan period is dropped
+    # whole and counted (host_scans_dropped, docs/PROTOCOL.md 2c): under a
+    # loaded QEMU the scans can reach the firmware bunched.
+    reader.wait_for(all_in, 8)
     got = b0(reader.telegrams)
-    check("every scan passed through byte for byte", got == scans, f"{len(got)} of {n_scans} B0")
+    it = iter(scans)
+    in_order = all(any(g == s for s in it) for g in got)
+    check("every scan passed through byte for byte (or dropped whole and counted)",
+          got and in_order, f"{len(got)} of {n_scans} B0")
 
     # After each B0: its feature telegrams D0..D4, in order.
     seq = [cmd(t) for t in reader.telegrams if cmd(t) is not None]
@@ -354,7 +375,7 @@ def coprocessor(host, sensor, control, n_scans=5):
         else:
             i += 1
     want = [0xD0, 0xD1, 0xD2, 0xD3, 0xD4]
-    check("features after every scan", len(per_scan) == n_scans and all(sorted(p[:5]) == want for p in per_scan),
+    check("features after every scan", len(per_scan) == len(got) and all(sorted(p[:5]) == want for p in per_scan),
           " ".join("+".join(f"{c:02X}" for c in p) for p in per_scan[:2]) + " ...")
     lines = [t for t in reader.telegrams if cmd(t) == 0xD1]
     check("lines found in the room", lines and len(lines[-1]) > 20, f"D1 of {len(lines[-1]) if lines else 0} bytes")
@@ -365,10 +386,12 @@ def coprocessor(host, sensor, control, n_scans=5):
     check("counters request 55 answered", ok, "D5")
 
     r, _ = report(control)
-    check("console counters", int(r["scans_in"]) == n_scans and int(r["feature_scans_out"]) == n_scans
+    check("console counters", int(r["scans_in"]) == n_scans and int(r["feature_scans_out"]) == len(got)
+          and int(r["host_scans_dropped"]) == n_scans - len(got)
           and int(r["scans_rejected"]) == 0 and int(r["scans_dropped"]) == 0,
           f"scans_in={r['scans_in']} feature_scans_out={r['feature_scans_out']} "
-          f"feature_telegrams_out={r['feature_telegrams_out']} rejected={r['scans_rejected']} dropped={r['scans_dropped']}")
+          f"feature_telegrams_out={r['feature_telegrams_out']} rejected={r['scans_rejected']} dropped={r['scans_dropped']} "
+          f"host_scans_dropped={r['host_scans_dropped']}")
 
 
 def main():

@@ -1,16 +1,20 @@
 //! The co-processor end to end in memory: a simulated LMS 2xx (the core's
 //! emulator) on the sensor port, a minimal client on the host port. The
-//! co-processor must bring the sensor up, pass every scan through, and send
+//! co-processor must bring the sensor up, pass every scan through, send
+//! nothing an LMS would not unless the client opts in (`56 01`), then send
 //! features that are bit-identical to running the extractor on the scan the
-//! client received.
+//! client received; its status and configuration replies tell the truth
+//! about the scans, and a client's variant and units are applied on the
+//! sensor.
 
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{
-    Assembled, Counters, FeatureAssembler, CMD_COUNTERS, REQ_COUNTERS,
+    Assembled, Counters, FeatureAssembler, CMD_COUNTERS, CMD_FEATURES, REQ_COUNTERS, REQ_FEATURES,
 };
 use lms_core::telegram::{
-    emit_telegram, Direction, Event, Framer, Handshake, MeasuredView, RangeBits, Request,
+    emit_telegram, Baud, Direction, Event, Framer, Handshake, MeasuredView, RangeBits, Reply,
+    Request, Telegram, DEFAULT_PASSWORD,
 };
 use lms_core::test_support::Port;
 use lms_core::Unit;
@@ -100,6 +104,179 @@ impl Bench {
         let n = request.emit(0, &mut buf).unwrap();
         self.host.rx.extend(&buf[..n]);
     }
+
+    /// Send a raw request, run `us`, return the reply telegram's bytes
+    /// after the ACK (the host port is emptied first).
+    fn ask(&mut self, command: u8, data: &[u8], us: u64) -> Vec<u8> {
+        self.host.tx.clear();
+        let mut buf = [0u8; 64];
+        let n = emit_telegram(&mut buf, 0, command, data, None).unwrap();
+        self.host.rx.extend(&buf[..n]);
+        self.run(us);
+        let reply = std::mem::take(&mut self.host.tx);
+        assert_eq!(reply.first(), Some(&0x06), "ACK first: {reply:02X?}");
+        reply[1..].to_vec()
+    }
+
+    /// Send `request`, run `us`, return the reply telegram's bytes after
+    /// the ACK.
+    fn request(&mut self, request: Request, us: u64) -> Vec<u8> {
+        let mut buf = [0u8; 64];
+        let n = request.emit(0, &mut buf).unwrap();
+        let t = Telegram::new_checked(&buf[..n], Direction::HostToSensor).unwrap();
+        let (command, data) = (t.command(), t.data().to_vec());
+        self.ask(command, &data, us)
+    }
+
+    /// The host line to 500 kBd (`20 48`), as a client would switch it.
+    fn host_500k(&mut self) {
+        let reply = self.request(Request::SetBaud(Baud::B500000), 10_000);
+        assert_eq!(&reply[..7], &[0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10]);
+        assert_eq!(self.cop.host_face().baud(), Baud::B500000);
+    }
+}
+
+/// The telegrams (command codes) on `wire`, and the ACK count.
+fn commands(wire: &[u8]) -> (Vec<u8>, usize) {
+    let mut framer = Framer::new(Direction::SensorToHost, Handshake::Expected);
+    let (mut codes, mut acks) = (Vec::new(), 0);
+    let mut input = wire;
+    loop {
+        let fed = framer.feed(input);
+        input = fed.remaining;
+        match fed.event {
+            Some(Event::Ack) => acks += 1,
+            Some(Event::Telegram(t)) => codes.push(t.command()),
+            Some(Event::Nak) => panic!("no NAK expected"),
+            None if input.is_empty() => break,
+            None => {}
+        }
+    }
+    assert_eq!(framer.stats().crc_errors, 0);
+    (codes, acks)
+}
+
+#[test]
+fn by_default_the_host_line_carries_only_what_an_lms_would() {
+    let mut bench = Bench::new();
+    bench.run(2_000_000);
+    bench.host_500k();
+    bench.send_host(Request::Continuous);
+    bench.run(1_000_000);
+    let (codes, acks) = commands(&std::mem::take(&mut bench.host.tx));
+    assert_eq!(acks, 1);
+    assert_eq!(codes[0], 0xA0);
+    assert!(codes.len() > 30, "{codes:02X?}");
+    assert!(
+        codes[1..].iter().all(|&c| c == 0xB0),
+        "only B0 after the A0: {codes:02X?}"
+    );
+    // A 30 01 gets one B0 and nothing after it.
+    bench.send_host(Request::OnRequest);
+    bench.run(50_000);
+    bench.host.tx.clear();
+    let reply = bench.request(Request::OneScan, 50_000);
+    assert_eq!(commands(&reply).0, vec![0xB0]);
+    let c = bench.cop.counters();
+    assert_eq!((c.feature_scans_out, c.host_scans_dropped), (0, 0), "{c:?}");
+}
+
+#[test]
+fn status_and_configuration_replies_tell_the_sensors_units() {
+    let mut bench = Bench::new();
+    bench.run(2_000_000);
+    // The sensor was set to mm: F4 says so (units byte [6] = 1), as does B1.
+    let reply = bench.request(Request::ReadConfig, 20_000);
+    let t = Telegram::new_checked(&reply[..], Direction::SensorToHost).unwrap();
+    let Ok(Reply::Config(c)) = Reply::parse(&t) else {
+        panic!("{reply:02X?}")
+    };
+    assert_eq!(c.units(), Some(Unit::Millimetre));
+    let reply = bench.request(Request::Status, 300_000);
+    let t = Telegram::new_checked(&reply[..], Direction::SensorToHost).unwrap();
+    let Ok(Reply::Status(s)) = Reply::parse(&t) else {
+        panic!("{reply:02X?}")
+    };
+    let f = s.fields().unwrap();
+    assert_eq!(
+        (f.units_code, f.scan_angle_deg, f.resolution_centideg),
+        (1, 180, 50)
+    );
+}
+
+#[test]
+fn the_clients_variant_and_units_are_applied_on_the_sensor() {
+    let mut bench = Bench::new();
+    bench.run(2_000_000);
+    bench.host_500k();
+    // 100°/0.25° (not what the co-processor brought up): BB 01 64 00 19 00.
+    let reply = bench.request(Request::set_variant(Variant::Fov100Res25), 10_000);
+    assert_eq!(&reply[4..10], &[0xBB, 0x01, 0x64, 0x00, 0x19, 0x00]);
+    // cm: installation mode, read, write the units byte 0.
+    let reply = bench.request(
+        Request::InstallationMode {
+            password: DEFAULT_PASSWORD,
+        },
+        10_000,
+    );
+    assert_eq!(&reply[4..6], &[0xA0, 0x00]);
+    let reply = bench.request(Request::ReadConfig, 10_000);
+    let t = Telegram::new_checked(&reply[..], Direction::SensorToHost).unwrap();
+    let Ok(Reply::Config(mut c)) = Reply::parse(&t) else {
+        panic!("{reply:02X?}")
+    };
+    c.set_units_code(0);
+    let reply = bench.request(Request::WriteConfig(c), 10_000);
+    assert_eq!(&reply[4..6], &[0xF7, 0x01]);
+    bench.send_host(Request::Continuous);
+    bench.run(2_000_000);
+    let wire = std::mem::take(&mut bench.host.tx);
+    let mut framer = Framer::new(Direction::SensorToHost, Handshake::Expected);
+    let mut input = &wire[..];
+    let mut scans = 0;
+    loop {
+        let fed = framer.feed(input);
+        input = fed.remaining;
+        match fed.event {
+            Some(Event::Telegram(t)) if t.command() == 0xB0 => {
+                let m = MeasuredView::parse(&t).unwrap();
+                assert_eq!((m.count(), m.units()), (401, Unit::Centimetre));
+                scans += 1;
+            }
+            Some(Event::Telegram(t)) => assert_eq!(t.command(), 0xA0),
+            Some(_) => {}
+            None if input.is_empty() => break,
+            None => {}
+        }
+    }
+    // 53.3 ms a scan at 0.25°: ~30 in the 2 s, less the sensor's new bring-up.
+    assert!(scans >= 20, "{scans}");
+    assert_eq!(bench.cop.link().setup().variant, Variant::Fov100Res25);
+    assert_eq!(
+        bench.lms.variant(),
+        Variant::Fov100Res25,
+        "the sensor itself"
+    );
+    assert_eq!(bench.lms.units(), Unit::Centimetre, "the sensor itself");
+}
+
+#[test]
+fn the_feature_opt_in_request_is_answered_and_refuses_other_values() {
+    let mut bench = Bench::new();
+    bench.run(1_000_000);
+    // 56 01 → D6 01; 56 00 → D6 00; 56 02 → 92 (unknown), state kept.
+    let on = bench.ask(REQ_FEATURES, &[1], 10_000);
+    assert_eq!(
+        &on[..7],
+        &[0x02, 0x80, 0x03, 0x00, CMD_FEATURES, 0x01, 0x10]
+    );
+    assert!(bench.cop.features_on());
+    let bad = bench.ask(REQ_FEATURES, &[2], 10_000);
+    assert_eq!(bad[4], 0x92);
+    assert!(bench.cop.features_on());
+    let off = bench.ask(REQ_FEATURES, &[0], 10_000);
+    assert_eq!(&off[4..6], &[CMD_FEATURES, 0x00]);
+    assert!(!bench.cop.features_on());
 }
 
 #[test]
@@ -122,7 +299,10 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
     assert_eq!(boot.len(), 29, "{boot:02X?}");
     assert_eq!(&boot[..5], &[0x02, 0x80, 0x17, 0x00, 0x90]);
 
-    // The client asks for the stream.
+    // The client opts in to the features, at 500 kBd, and asks for the stream.
+    bench.host_500k();
+    let on = bench.ask(REQ_FEATURES, &[1], 10_000);
+    assert_eq!(on[4], CMD_FEATURES);
     bench.send_host(Request::Continuous);
     bench.run(1_000_000);
     let wire = std::mem::take(&mut bench.host.tx);
@@ -208,8 +388,13 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
     assert!(c.scans_in >= 55, "{c:?}");
     assert_eq!(c.feature_scans_out, checked as u32);
     assert_eq!(
-        (c.sensor_crc_errors, c.scans_dropped, c.scans_rejected),
-        (0, 0, 0)
+        (
+            c.sensor_crc_errors,
+            c.scans_dropped,
+            c.scans_rejected,
+            c.host_scans_dropped
+        ),
+        (0, 0, 0, 0)
     );
 }
 
@@ -235,4 +420,19 @@ fn answers_like_an_lms_and_nak_on_a_bad_checksum() {
     bench.run(5_000);
     assert_eq!(std::mem::take(&mut bench.host.tx), vec![0x15]);
     assert_eq!(bench.cop.counters().host_crc_errors, 1);
+}
+
+#[test]
+fn a_variant_chosen_during_the_bring_up_is_applied_after_it() {
+    // At every moment of the bring-up (9600 Bd, then the switch to
+    // 500 kBd), a client's 3B must end with the sensor streaming that variant.
+    for at_ms in (20..400).step_by(20) {
+        let mut bench = Bench::new();
+        bench.run(at_ms * 1000);
+        bench.send_host(Request::set_variant(Variant::Fov100Res100));
+        bench.run(3_000_000);
+        assert_eq!(bench.cop.link().step(), Step::Streaming, "at {at_ms} ms");
+        assert_eq!(bench.lms.variant(), Variant::Fov100Res100, "at {at_ms} ms");
+        assert_eq!(bench.lms.baud(), Baud::B500000, "at {at_ms} ms");
+    }
 }

@@ -388,6 +388,19 @@ fn bring_up(bench: &mut Bench, client: &mut Vec<u8>) {
         bench.step(&mut pass, &mut pass2, client);
     }
     assert_eq!(bench.cop.link().step(), Step::Streaming);
+    // The host line at 500 kBd with the features on (`56 01`), then the stream.
+    bench.send_host(&request(Request::SetBaud(
+        lms_core::telegram::Baud::B500000,
+    )));
+    for _ in 0..50 {
+        bench.step(&mut pass, &mut pass2, client);
+    }
+    let mut on = [0u8; 16];
+    let n = lms_core::telegram::emit_telegram(&mut on, 0, 0x56, &[1], None).unwrap();
+    bench.send_host(&on[..n]);
+    for _ in 0..50 {
+        bench.step(&mut pass, &mut pass2, client);
+    }
     bench.send_host(&request(Request::Continuous));
     for _ in 0..50 {
         bench.step(&mut pass, &mut pass2, client);

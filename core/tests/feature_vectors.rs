@@ -3,7 +3,8 @@
 
 use lms_core::maths::Sym2;
 use lms_core::telegram::features::{
-    emit_features, Assembled, Counters, EchoedParams, FeatureAssembler, REQ_COUNTERS,
+    emit_features, Assembled, Counters, EchoedParams, FeatureAssembler, CMD_FEATURES, REQ_COUNTERS,
+    REQ_FEATURES,
 };
 use lms_core::telegram::{crc16, emit_telegram, Direction, Telegram};
 use lms_core::Corner;
@@ -16,7 +17,11 @@ const EDGES: &str = "02 80 0A 00 D3 2A 00 00 00 01 00 3C 00 10 62 F6";
 const LINES: &str = "02 80 65 00 D1 2A 00 00 00 00 01 02 00 00 00 00 00 00 00 40 BD 37 86 35 00 00 00 00 BD 37 86 36 00 00 80 3F 00 00 00 40 00 00 C0 BF 00 00 00 40 00 00 00 3F 0A 00 3C 00 33 00 DB 0F C9 3F 00 00 00 3F BD 37 86 35 00 00 00 00 BD 37 86 36 00 00 00 3F 00 00 00 40 00 00 00 3F 00 00 00 3F 00 00 00 3F 3C 00 78 00 3D 00 10 CC B0";
 const CORNERS: &str = "02 80 24 00 D2 2A 00 00 00 00 01 01 00 00 00 40 00 00 00 3F BD 37 86 36 00 00 00 00 BD 37 86 36 00 00 B4 42 01 00 01 10 67 F6";
 const SUMMARY: &str = "02 80 33 00 D0 2A 00 00 00 69 01 02 02 01 01 00 69 01 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 1E 00 0A D7 A3 3B 00 00 00 00 00 00 10 41 10 F8 F5";
-const COUNTERS: &str = "02 80 26 00 D5 E8 03 00 00 E8 03 00 00 88 13 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 10 77 83";
+const COUNTERS: &str = "02 80 32 00 D5 E8 03 00 00 E8 03 00 00 88 13 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 E8 03 00 00 10 7B 31";
+const FEATURES_ON: &str = "02 00 02 00 56 01 FD 7E";
+const FEATURES_OFF: &str = "02 00 02 00 56 00 FC 7E";
+const FEATURES_ON_REPLY: &str = "02 80 03 00 D6 01 10 CC E6";
+const FEATURES_OFF_REPLY: &str = "02 80 03 00 D6 00 10 CE E7";
 const COUNTERS_REQUEST: &str = "02 00 01 00 55 71 12";
 
 fn bytes(hex: &str) -> Vec<u8> {
@@ -141,8 +146,23 @@ fn counters_request_and_reply_are_byte_exact() {
         scans_in: 1000,
         feature_scans_out: 1000,
         feature_telegrams_out: 5000,
+        scans_out: 1000,
         ..Counters::default()
     };
     let n = c.emit(0, &mut buf).unwrap();
     assert_eq!(buf[..n], bytes(COUNTERS)[..]);
+}
+
+#[test]
+fn feature_opt_in_request_and_reply_are_byte_exact() {
+    let mut buf = [0u8; 16];
+    for (state, request, reply) in [
+        (1u8, FEATURES_ON, FEATURES_ON_REPLY),
+        (0, FEATURES_OFF, FEATURES_OFF_REPLY),
+    ] {
+        let n = emit_telegram(&mut buf, 0x00, REQ_FEATURES, &[state], None).unwrap();
+        assert_eq!(buf[..n], bytes(request)[..]);
+        let n = emit_telegram(&mut buf, 0x80, CMD_FEATURES, &[state], Some(0x10)).unwrap();
+        assert_eq!(buf[..n], bytes(reply)[..]);
+    }
 }

@@ -25,8 +25,10 @@ use std::time::{Duration, Instant};
 
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
-use lms_core::telegram::features::{Assembled, FeatureAssembler};
-use lms_core::telegram::{Direction, Event, Framer, Handshake, Request};
+use lms_core::telegram::features::{Assembled, FeatureAssembler, REQ_FEATURES};
+use lms_core::telegram::{
+    emit_telegram, Baud, Direction, Event, Framer, Handshake, MeasuredView, Request,
+};
 use lms_core::test_support::Port;
 use lms_core::Unit;
 use lms_core::{ValidParams, Variant};
@@ -133,9 +135,19 @@ fn sustained(scans: u32) -> Report {
     let mut last_counter = 0u32;
     // The client asks for the stream at once: every scan the co-processor
     // takes is then passed on with its features.
+    // The client switches its line to 500 kBd, opts in to the features
+    // (`56 01`) and asks for the stream at once: every scan the
+    // co-processor takes is then passed on with its features.
     let mut buf = [0u8; 16];
-    let n = Request::Continuous.emit(0, &mut buf).unwrap();
-    host.rx.extend(&buf[..n]);
+    for request in [Request::SetBaud(Baud::B500000), Request::Continuous] {
+        let n = request.emit(0, &mut buf).unwrap();
+        host.rx.extend(&buf[..n]);
+        if request == Request::Continuous {
+            break;
+        }
+        let n = emit_telegram(&mut buf, 0, REQ_FEATURES, &[1], None).unwrap();
+        host.rx.extend(&buf[..n]);
+    }
     let (mut polls, mut poll_time, mut scan_poll_max) = (0u64, Duration::ZERO, Duration::ZERO);
     // The counter counts (a self-check of the test).
     ALLOCATIONS.store(0, Ordering::Relaxed);
@@ -288,4 +300,192 @@ fn sustained_load_10000_scans() {
     let r = sustained(10_000);
     print(&r);
     assert!(r.scans >= 10_000);
+}
+
+// ------------------------------------------------------ host-line budget --
+
+/// What the paced client of [`host_budget`] saw.
+#[derive(Debug)]
+struct Budget {
+    /// Scans the co-processor took while the client streamed.
+    sensor_scans: u32,
+    /// `B0`s the client got (whole: framed, CRC checked).
+    delivered: u32,
+    /// The co-processor's count of scans it did not send (`D5`).
+    dropped: u32,
+    /// Scans the client missed: gaps in the scan numbers it got, and the
+    /// scans after its last one.
+    missed: u32,
+    /// Longest time from a scan's arrival at the co-processor to its first
+    /// byte leaving on the host line (µs).
+    max_age_us: u64,
+    /// Longest wait of written bytes for the line (µs).
+    max_backlog_us: u64,
+}
+
+/// The sensor's scans with their number (1000 + k) in the first value.
+fn numbered_source() -> impl FnMut(Variant, Unit, &mut [u16]) -> usize {
+    let mut seed = 0x00DD_BA11_u64;
+    let mut k = 0u16;
+    move |_: Variant, _: Unit, out: &mut [u16]| {
+        let n = room(&mut seed, out);
+        out[0] = 1000 + k;
+        k = k.wrapping_add(1);
+        n
+    }
+}
+
+/// The number of every `B0` in `bytes`, with the offset of its first byte.
+fn numbered_b0s(framer: &mut Framer, bytes: &[u8]) -> Vec<(u16, usize)> {
+    let mut found = Vec::new();
+    let mut input = bytes;
+    loop {
+        let fed = framer.feed(input);
+        input = fed.remaining;
+        match fed.event {
+            Some(Event::Telegram(t)) if t.command() == 0xB0 => {
+                let len = usize::from(t.length()) + 6;
+                let m = MeasuredView::parse(&t).expect("a whole B0");
+                let at = (bytes.len() - input.len()).saturating_sub(len);
+                found.push((m.word(0).unwrap(), at));
+            }
+            Some(_) => {}
+            None => break,
+        }
+    }
+    found
+}
+
+/// The client's requests: its rate, the features, the stream.
+fn client_requests(baud: Baud, features: bool) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut buf = [0u8; 16];
+    if baud != Baud::B9600 {
+        let n = Request::SetBaud(baud).emit(0, &mut buf).unwrap();
+        out.extend_from_slice(&buf[..n]);
+    }
+    if features {
+        let n = emit_telegram(&mut buf, 0, REQ_FEATURES, &[1], None).unwrap();
+        out.extend_from_slice(&buf[..n]);
+    }
+    let n = Request::Continuous.emit(0, &mut buf).unwrap();
+    out.extend_from_slice(&buf[..n]);
+    out
+}
+
+/// The co-processor with its client at `baud` (features on or off) for
+/// `seconds` of simulated time after the bring-up; the host line is paced
+/// at its real byte rate (a byte leaves 10 bit times after the previous
+/// one, or when written if the line is idle).
+fn host_budget(baud: Baud, features: bool, seconds: u64) -> Budget {
+    const STEP_US: u64 = 500;
+    let mut lms = Emulator::new(FnSource::new(numbered_source()), Settings::default(), 0);
+    let mut cop = Box::new(CoProcessor::new(ValidParams::DEFAULT, SensorSetup::DEFAULT));
+    cop.start(0);
+    let (mut sensor, mut host) = (Port::default(), Port::default());
+    let mut sensor_view = Framer::new(Direction::SensorToHost, Handshake::Expected);
+    let mut client = Framer::new(Direction::SensorToHost, Handshake::Expected);
+    let mut arrived = std::collections::HashMap::new();
+    let (mut line, mut chunk) = ([0u8; 4096], [0u8; 8192]);
+    let (mut now, mut line_free) = (0u64, 0u64);
+    let mut started: Option<(u64, u32)> = None;
+    let byte_us = 10_000_000.0 / f64::from(baud.bits_per_second());
+    let (mut got, mut max_age, mut max_backlog) = (Vec::new(), 0u64, 0u64);
+    loop {
+        now += STEP_US;
+        if started.is_some_and(|(t, _)| now > t + seconds * 1_000_000) {
+            break;
+        }
+        let n = sensor.pop_tx(&mut chunk);
+        lms.receive(now, &chunk[..n]);
+        loop {
+            let n = lms.transmit(now, &mut line);
+            if n == 0 {
+                break;
+            }
+            sensor.rx.extend(&line[..n]);
+            for (tag, _) in numbered_b0s(&mut sensor_view, &line[..n]) {
+                arrived.insert(tag, now);
+            }
+        }
+        while lms.next_event().is_some() {}
+        cop.poll(&mut sensor, &mut host, now).unwrap();
+        if started.is_none() && cop.link().step() == Step::Streaming {
+            host.rx.extend(client_requests(baud, features));
+            started = Some((now, cop.counters().scans_in));
+        }
+        // Written now: queued behind what is still on the line.
+        let n = host.pop_tx(&mut chunk);
+        if n == 0 {
+            continue;
+        }
+        let start = line_free.max(now);
+        max_backlog = max_backlog.max(start - now);
+        line_free = start + (n as f64 * byte_us).ceil() as u64;
+        for (tag, at) in numbered_b0s(&mut client, &chunk[..n]) {
+            let first_byte = start + (at as f64 * byte_us) as u64;
+            max_age = max_age.max(first_byte.saturating_sub(arrived[&tag]));
+            got.push(tag);
+        }
+    }
+    let c = cop.counters();
+    let (_, scans_before) = started.expect("the client started");
+    assert_eq!(client.stats().crc_errors, 0);
+    assert_eq!(client.stats().bytes_skipped, 0, "only whole telegrams");
+    let (first, last) = (got[0], *arrived.keys().max().unwrap());
+    let missed = u32::from(last - first + 1) - got.len() as u32;
+    Budget {
+        sensor_scans: c.scans_in - scans_before,
+        delivered: got.len() as u32,
+        dropped: c.host_scans_dropped,
+        missed,
+        max_age_us: max_age,
+        max_backlog_us: max_backlog,
+    }
+}
+
+/// Assert the budget's promises and print the figures.
+fn check_budget(baud: Baud, features: bool, seconds: u64) {
+    let b = host_budget(baud, features, seconds);
+    let period = lms_core::device::emulator::scan_period_us(Variant::Fov180Res50);
+    println!(
+        "host line {} Bd, features {}: {} s simulated, {} scans from the sensor, {} delivered \
+         ({:.2}/s), {} dropped (counted) = {} missed; oldest scan at its first byte {:.1} ms \
+         (period {:.1} ms); longest backlog {:.1} ms",
+        baud.bits_per_second(),
+        if features { "on" } else { "off" },
+        seconds,
+        b.sensor_scans,
+        b.delivered,
+        f64::from(b.delivered) / seconds as f64,
+        b.dropped,
+        b.missed,
+        b.max_age_us as f64 / 1e3,
+        period as f64 / 1e3,
+        b.max_backlog_us as f64 / 1e3,
+    );
+    assert_eq!(b.sensor_scans, b.delivered + b.dropped, "{b:?}");
+    assert_eq!(
+        b.dropped, b.missed,
+        "every scan the client missed is counted: {b:?}"
+    );
+    // One poll step of slack: the co-processor sees a scan at the first
+    // poll after its last byte.
+    assert!(b.max_age_us <= period + 500, "{b:?}");
+    assert!(b.max_backlog_us <= period + 500, "no backlog: {b:?}");
+    assert!(b.delivered > 0, "{b:?}");
+}
+
+#[test]
+fn host_line_budget_38400_for_60_s() {
+    check_budget(Baud::B38400, true, 60);
+}
+
+#[test]
+fn host_line_budget_every_speed() {
+    for baud in [Baud::B9600, Baud::B19200, Baud::B38400, Baud::B500000] {
+        for features in [false, true] {
+            check_budget(baud, features, 10);
+        }
+    }
 }

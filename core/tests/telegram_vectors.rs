@@ -359,3 +359,64 @@ fn telegram_baud_words() {
         assert_eq!(u32::from(word), 1_000_000 / baud.bits_per_second() - 1);
     }
 }
+
+/// The value modes (docs/PROTOCOL.md §2d): requests and stream telegrams.
+#[test]
+fn value_mode_telegrams_are_byte_exact() {
+    use lms_core::device::emulator::ValueMode;
+    use lms_core::telegram::emit_telegram;
+    let hex = |s: &str| -> Vec<u8> {
+        s.split(' ')
+            .map(|b| u8::from_str_radix(b, 16).unwrap())
+            .collect()
+    };
+    let mut buf = [0u8; 64];
+    for (data, text, mode) in [
+        (
+            &[0x26, 5][..],
+            "02 00 03 00 20 26 05 79 3E",
+            ValueMode::Mean { samples: 5 },
+        ),
+        (
+            &[0x27, 1, 0, 22, 0][..],
+            "02 00 06 00 20 27 01 00 16 00 54 AB",
+            ValueMode::Subrange { first: 1, last: 22 },
+        ),
+        (
+            &[0x28, 3, 10, 0, 20, 0][..],
+            "02 00 07 00 20 28 03 0A 00 14 00 4D A6",
+            ValueMode::MeanSubrange {
+                samples: 3,
+                first: 10,
+                last: 20,
+            },
+        ),
+    ] {
+        let n = emit_telegram(&mut buf, 0, 0x20, data, None).unwrap();
+        assert_eq!(buf[..n], hex(text)[..]);
+        assert_eq!(ValueMode::parse(0x20, data), Some(mode));
+    }
+    for (mode, text) in [
+        (
+            ValueMode::Mean { samples: 5 },
+            "02 80 09 00 B6 05 02 00 64 00 C8 00 10 B4 08",
+        ),
+        (
+            ValueMode::Subrange { first: 1, last: 2 },
+            "02 80 0C 00 B7 01 00 02 00 02 00 64 00 C8 00 10 60 A4",
+        ),
+        (
+            ValueMode::MeanSubrange {
+                samples: 5,
+                first: 1,
+                last: 2,
+            },
+            "02 80 0D 00 BF 05 01 00 02 00 02 00 64 00 C8 00 10 E2 B5",
+        ),
+    ] {
+        let n = mode
+            .emit(0, 0x10, lms_core::Unit::Centimetre, &[100, 200], &mut buf)
+            .unwrap();
+        assert_eq!(buf[..n], hex(text)[..], "{mode:?}");
+    }
+}

@@ -10,10 +10,10 @@
 //! The report line, all values decimal:
 //!
 //! ```text
-//! now_us=… scans=… stack_peak=… stack_size=… emulator_us=… host_rx=… host_dropped=… host_overrun=… host_line_errors=… host_peak=… sensor_rx=… sensor_dropped=… sensor_overrun=… sensor_line_errors=… sensor_peak=… scans_in=… feature_scans_out=… feature_telegrams_out=… sensor_crc_errors=… sensor_resyncs=… sensor_bytes_skipped=… host_crc_errors=… scans_dropped=… scans_rejected=…
+//! now_us=… scans=… stack_peak=… stack_size=… emulator_us=… host_rx=… host_dropped=… host_overrun=… host_line_errors=… host_peak=… sensor_rx=… sensor_dropped=… sensor_overrun=… sensor_line_errors=… sensor_peak=… scans_in=… feature_scans_out=… feature_telegrams_out=… sensor_crc_errors=… sensor_resyncs=… sensor_bytes_skipped=… host_crc_errors=… scans_dropped=… scans_rejected=… host_scans_dropped=… scans_other_setting=… scans_out=…
 //! ```
 //!
-//! The last nine are the co-processor's [`Counters`] (also readable by the
+//! The last twelve are the co-processor's [`Counters`] (also readable by the
 //! host with request `55`).
 //!
 //! `emulator_us` is the emulator's own clock read at the same moment
@@ -107,6 +107,9 @@ impl Report {
             ("host_crc_errors", c.host_crc_errors),
             ("scans_dropped", c.scans_dropped),
             ("scans_rejected", c.scans_rejected),
+            ("host_scans_dropped", c.host_scans_dropped),
+            ("scans_other_setting", c.scans_other_setting),
+            ("scans_out", c.scans_out),
         ] {
             w.field(name, v.into());
         }

@@ -25,17 +25,7 @@ impl Forwarder {
     pub const fn new() -> Self {
         Forwarder {
             framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
-            counters: Counters {
-                scans_in: 0,
-                feature_scans_out: 0,
-                feature_telegrams_out: 0,
-                sensor_crc_errors: 0,
-                sensor_resyncs: 0,
-                sensor_bytes_skipped: 0,
-                host_crc_errors: 0,
-                scans_dropped: 0,
-                scans_rejected: 0,
-            },
+            counters: Counters::ZERO,
         }
     }
 

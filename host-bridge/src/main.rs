@@ -7,6 +7,7 @@
 //! * `scan` — record scans from a sensor into a capture file (see `host_bridge::scan`).
 //! * `simulate` — a simulated LMS 2xx on a pseudo-terminal (see `host_bridge::simulate`).
 //! * `verify` — check a co-processor's features bit for bit (see `host_bridge::verify`).
+//! * `coprocessor` — the co-processor natively between a sensor port and a pty (see `host_bridge::coprocessor`).
 //!
 //! The accuracy evaluation is not here: `lms-lab evaluate` (lab/).
 
@@ -54,6 +55,9 @@ enum Command {
     /// ports): play the sensor, be its client, recompute every scan's
     /// features and compare them bit for bit
     Verify(host_bridge::verify::VerifyArgs),
+    /// Run the co-processor on this computer: an LMS 2xx on a serial port,
+    /// the client on a pseudo-terminal symlinked at --link
+    Coprocessor(host_bridge::coprocessor::CoprocessorArgs),
 }
 
 #[derive(Args, Debug)]
@@ -83,6 +87,7 @@ fn main() -> ExitCode {
         Command::Scan(args) => host_bridge::scan::run(&args),
         Command::Simulate(args) => host_bridge::simulate::run(&args),
         Command::Verify(args) => host_bridge::verify::run(&args),
+        Command::Coprocessor(args) => host_bridge::coprocessor::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

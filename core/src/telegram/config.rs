@@ -101,6 +101,14 @@ impl Config {
     pub fn set_units_code(&mut self, code: u8) {
         self.bytes[Self::UNITS] = code;
     }
+
+    /// This block with the units code `code` (0 cm, 1 mm); `const`.
+    #[inline]
+    pub const fn with_units_code(self, code: u8) -> Config {
+        let mut bytes = self.bytes;
+        bytes[Self::UNITS] = code;
+        Config { bytes }
+    }
 }
 
 #[cfg(test)]

@@ -49,6 +49,10 @@ pub const CMD_SEGMENTS: u8 = 0xD4;
 pub const REQ_COUNTERS: u8 = 0x55;
 /// Co-processor → host: the counters.
 pub const CMD_COUNTERS: u8 = 0xD5;
+/// Host → co-processor: feature output off (data `00`) or on (`01`).
+pub const REQ_FEATURES: u8 = 0x56;
+/// Co-processor → host: the feature output now in force (`00` off, `01` on).
+pub const CMD_FEATURES: u8 = 0xD6;
 
 /// Lines per `D1` telegram (16 × 46 bytes + 7 = 743 data bytes).
 pub const LINES_PER_TELEGRAM: usize = 16;
@@ -60,8 +64,8 @@ pub const LINE_RECORD_LEN: usize = 46;
 pub const CORNER_RECORD_LEN: usize = 27;
 /// Bytes of the summary's data.
 pub const SUMMARY_LEN: usize = 49;
-/// Bytes of the counters' data.
-pub const COUNTERS_LEN: usize = 36;
+/// Bytes of the counters' data (12 × u32).
+pub const COUNTERS_LEN: usize = 48;
 
 /// Counters the co-processor reports (`D5`); all wrap at `u32::MAX`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -88,10 +92,34 @@ pub struct Counters {
     pub scans_dropped: u32,
     /// Scans that could not be processed (unsupported value count, …).
     pub scans_rejected: u32,
+    /// Scans not sent to a streaming host because its line was still busy
+    /// with an earlier scan (the host-line drop policy, docs/PROTOCOL.md).
+    pub host_scans_dropped: u32,
+    /// Scans of another variant or unit than the client's, not passed on
+    /// (the sensor was being set up for the client's new choice).
+    pub scans_other_setting: u32,
+    /// `B0` scans passed on to the host (stream and `30 01`).
+    pub scans_out: u32,
 }
 
 impl Counters {
-    fn fields(&self) -> [u32; 9] {
+    /// All counters at zero (`const`).
+    pub const ZERO: Counters = Counters {
+        scans_in: 0,
+        feature_scans_out: 0,
+        feature_telegrams_out: 0,
+        sensor_crc_errors: 0,
+        sensor_resyncs: 0,
+        sensor_bytes_skipped: 0,
+        host_crc_errors: 0,
+        scans_dropped: 0,
+        scans_rejected: 0,
+        host_scans_dropped: 0,
+        scans_other_setting: 0,
+        scans_out: 0,
+    };
+
+    fn fields(&self) -> [u32; 12] {
         [
             self.scans_in,
             self.feature_scans_out,
@@ -102,10 +130,13 @@ impl Counters {
             self.host_crc_errors,
             self.scans_dropped,
             self.scans_rejected,
+            self.host_scans_dropped,
+            self.scans_other_setting,
+            self.scans_out,
         ]
     }
 
-    /// Write the `D5` data (9 × u32 LE, in field order) into `out`.
+    /// Write the `D5` data (12 × u32 LE, in field order) into `out`.
     pub fn encode(&self, out: &mut [u8]) {
         let mut w = Writer::new(out);
         for v in self.fields() {
@@ -129,6 +160,9 @@ impl Counters {
             host_crc_errors: r.u32()?,
             scans_dropped: r.u32()?,
             scans_rejected: r.u32()?,
+            host_scans_dropped: r.u32()?,
+            scans_other_setting: r.u32()?,
+            scans_out: r.u32()?,
         })
     }
 
@@ -859,6 +893,9 @@ mod tests {
             host_crc_errors: 7,
             scans_dropped: 8,
             scans_rejected: 9,
+            host_scans_dropped: 10,
+            scans_other_setting: 11,
+            scans_out: 12,
         };
         let mut buf = [0u8; 64];
         let n = c.emit(0, &mut buf).unwrap();

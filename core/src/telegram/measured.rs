@@ -54,6 +54,17 @@ pub enum RangeBits {
 }
 
 impl RangeBits {
+    /// The range bits of a configuration's measuring-mode byte (`F4`
+    /// `[5]`): codes `03`/`04` (16 m modes) 14 bits, `05`/`06`/`0F` (32 m
+    /// modes) 15 bits, everything else (`00`–`02`, the 8 m / 80 m modes) 13.
+    pub const fn from_measuring_mode(code: u8) -> RangeBits {
+        match code {
+            0x03 | 0x04 => RangeBits::Bits14,
+            0x05 | 0x06 | 0x0F => RangeBits::Bits15,
+            _ => RangeBits::Bits13,
+        }
+    }
+
     /// Mask of the range bits; also the all-ones value (error code "not
     /// valid").
     pub const fn mask(self) -> u16 {

@@ -7,7 +7,16 @@
 //!                      [--replay LOG]
 //!                      [--scans N] [--quit-after SECONDS] [--restart-delay SECONDS]
 //!                      [--bit-error-rate P] [--drop-rate P] [--fault-seed N]
+//!                      [--variant FOV/RES] [--units cm|mm] [--range-mode 8|16|32]
 //! ```
+//!
+//! `--variant`, `--units` and `--range-mode` are the sensor's stored
+//! (power-on) configuration, as a real LMS keeps them in EEPROM: a client
+//! that sets nothing gets scans of that variant in those units, with 13
+//! (8 m), 14 (16 m) or 15 (32 m) range bits (default 180°/1°, cm, 8 m, the
+//! LMS's factory setting); `10` (reset) returns to them. The range mode is
+//! the configuration's measuring-mode byte (`00`, `04`, `06`); the scene's
+//! values are encoded with its range bits (a replayed log keeps 13).
 //!
 //! It opens a pseudo-terminal ([`crate::pty`]), prints the slave device
 //! (e.g. `/dev/pts/7`) as one line on stdout, optionally links `--link` to
@@ -94,7 +103,7 @@ mod line;
 mod replay;
 mod scene_source;
 mod source;
-mod symlink;
+pub(crate) mod symlink;
 
 use std::fmt::Write as _;
 use std::io::{self, Write};
@@ -103,6 +112,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::{ensure, Result};
+use clap::builder::TypedValueParser as _;
 use clap::Args;
 use lms_core::device::emulator::{Emulator, Settings};
 use lms_core::telegram::Baud;
@@ -161,6 +171,45 @@ pub struct SimulateArgs {
     /// Seed of the line faults
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub fault_seed: u64,
+    /// Stored (power-on) variant, FOV/RES: a real LMS keeps it in EEPROM
+    #[arg(long, default_value = "180/1", value_name = "FOV/RES")]
+    pub variant: crate::scan::VariantChoice,
+    /// Stored (power-on) units of the range values
+    #[arg(long, default_value = "cm", value_parser = crate::options::UnitArg::sensor_parser())]
+    pub units: crate::options::UnitArg,
+    /// Stored (power-on) range mode in metres (with mm: 8 → measuring mode 00,
+    /// 13 range bits; 16 → 04, 14 bits; 32 → 06, 15 bits)
+    #[arg(long, default_value_t = 8, value_name = "8|16|32",
+          value_parser = clap::builder::PossibleValuesParser::new(["8", "16", "32"])
+              .map(|s: String| s.parse::<u8>().unwrap_or(8)))]
+    pub range_mode: u8,
+}
+
+impl SimulateArgs {
+    /// The measuring-mode byte (`F4` `[5]`) of `--range-mode`.
+    pub fn measuring_mode(&self) -> u8 {
+        match self.range_mode {
+            16 => 0x04,
+            32 => 0x06,
+            _ => 0x00,
+        }
+    }
+
+    /// The power-on settings: variant, units and measuring mode in the
+    /// configuration.
+    fn settings(&self) -> Settings {
+        let mut config = lms_core::telegram::Config::ZERO;
+        config.set_units_code(u8::from(
+            self.units.unit() == Some(lms_core::Unit::Millimetre),
+        ));
+        config.set_measuring_mode(self.measuring_mode());
+        Settings {
+            restart_us: (self.restart_delay * 1e6) as u64,
+            variant: self.variant.0,
+            config,
+            ..Settings::default()
+        }
+    }
 }
 
 /// An error naming the first option out of range.
@@ -213,7 +262,12 @@ fn announce(args: &SimulateArgs, pty: &Pty, link: Option<&Symlink>, about: &str)
             args.bit_error_rate, args.drop_rate, args.fault_seed
         );
     }
-    eprintln!("{banner}; 9600 Bd, values on request; scans from {about}");
+    eprintln!(
+        "{banner}; 9600 Bd, values on request, {} in {} ({} m range mode); scans from {about}",
+        crate::scan::variant_name(args.variant.0),
+        args.units.unit().unwrap_or(lms_core::Unit::Centimetre),
+        args.range_mode
+    );
     Ok(())
 }
 
@@ -232,10 +286,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     announce(args, &pty, link.as_ref(), &about)?;
 
     let clock = Instant::now();
-    let settings = Settings {
-        restart_us: (args.restart_delay * 1e6) as u64,
-        ..Settings::default()
-    };
+    let settings = args.settings();
     let mut lms = Emulator::new(source, settings, micros_since(clock));
     let mut line = PtyLine::new(pty, args, clock);
     let reason = serve(args, &mut lms, &mut line, &stop, clock)?;

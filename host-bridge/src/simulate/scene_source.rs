@@ -5,6 +5,7 @@ use std::collections::HashMap;
 
 use anyhow::Result;
 use lms_core::device::emulator::ScanSource;
+use lms_core::telegram::RangeBits;
 use lms_core::{Unit, Variant};
 use lms_scene::{Bearings, NoiseModel, Pose, Scene};
 
@@ -30,6 +31,25 @@ fn bearings(variant: Variant) -> Bearings {
     }
 }
 
+/// Value words with 14 or 15 range bits: the range rounded to `units`,
+/// at most the first error code ("above the maximum range"), no return as
+/// the all-ones value ("not valid").
+fn wide_raw(readings: &[lms_scene::Reading], units: Unit, bits: RangeBits) -> Vec<u16> {
+    let per_metre = match units {
+        Unit::Millimetre => 1000.0,
+        Unit::Decimetre => 10.0,
+        _ => 100.0,
+    };
+    let above = f64::from(bits.first_error_code());
+    readings
+        .iter()
+        .map(|r| match r.metres() {
+            Some(d) => (d * per_metre).round().clamp(0.0, above) as u16,
+            None => bits.mask(),
+        })
+        .collect()
+}
+
 /// The built-in synthetic scene as a scan source (see the module docs).
 #[derive(Debug)]
 pub struct SceneSource {
@@ -39,6 +59,8 @@ pub struct SceneSource {
     draws: HashMap<(Variant, Unit), Vec<Vec<u16>>>,
     /// Scans handed out so far.
     sent: usize,
+    /// Range bits of the values (the power-on measuring mode, `--range-mode`).
+    bits: RangeBits,
 }
 
 impl SceneSource {
@@ -51,13 +73,22 @@ impl SceneSource {
             scene,
             draws: HashMap::new(),
             sent: 0,
+            bits: RangeBits::Bits13,
         })
+    }
+
+    /// Values with `bits` range bits (14: 16 m modes, 15: 32 m modes; error
+    /// codes below the all-ones value likewise, PROTOCOL.md §3).
+    pub fn with_range_bits(mut self, bits: RangeBits) -> Self {
+        self.bits = bits;
+        self.draws.clear();
+        self
     }
 
     /// The `count` noisy scans of a variant in these units (drawn on first
     /// use).
     fn draws(&mut self, variant: Variant, units: Unit) -> &[Vec<u16>] {
-        let (args, scene) = (&self.args, &self.scene);
+        let (args, scene, bits) = (&self.args, &self.scene, self.bits);
         self.draws.entry((variant, units)).or_insert_with(|| {
             let (_, mut rng) = args.scene_and_rng();
             let truth = scene.cast(&bearings(variant), Pose::IDENTITY);
@@ -67,7 +98,11 @@ impl SceneSource {
                 .with_dropout(args.dropout);
             (0..args.count)
                 .map(|_| {
-                    let raw = lms_scene::to_raw(&truth.noisy(&noise, &mut rng), unit);
+                    let readings = truth.noisy(&noise, &mut rng);
+                    if bits != RangeBits::Bits13 {
+                        return wide_raw(&readings, units, bits);
+                    }
+                    let raw = lms_scene::to_raw(&readings, unit);
                     if units == Unit::Decimetre {
                         raw.into_iter()
                             .map(|v| if v < 8183 { (v + 5) / 10 } else { v })
@@ -78,6 +113,13 @@ impl SceneSource {
                 })
                 .collect()
         })
+    }
+
+    /// The `count` scans (raw value words) this source sends, in turn, for
+    /// `variant` in `units`: what a client through any number of hops must
+    /// receive unchanged.
+    pub fn scans_for(&mut self, variant: Variant, units: Unit) -> Vec<Vec<u16>> {
+        self.draws(variant, units).to_vec()
     }
 
     /// One line for the log.

@@ -29,7 +29,13 @@ impl Source {
     pub fn open(args: &SimulateArgs) -> Result<Self> {
         match &args.log {
             Some(path) => Ok(Source::Replay(ReplaySource::open(path)?)),
-            None => Ok(Source::Scene(SceneSource::new(&args.scene)?)),
+            None => {
+                let bits =
+                    lms_core::telegram::RangeBits::from_measuring_mode(args.measuring_mode());
+                Ok(Source::Scene(
+                    SceneSource::new(&args.scene)?.with_range_bits(bits),
+                ))
+            }
         }
     }
 

@@ -5,13 +5,13 @@ use std::path::{Path, PathBuf};
 use anyhow::{ensure, Context, Result};
 
 /// A symbolic link to the slave device, removed when dropped.
-pub(super) struct Symlink {
-    pub(super) path: PathBuf,
+pub(crate) struct Symlink {
+    pub(crate) path: PathBuf,
     target: PathBuf,
 }
 
 impl Symlink {
-    pub(super) fn create(path: &Path, target: &Path) -> Result<Symlink> {
+    pub(crate) fn create(path: &Path, target: &Path) -> Result<Symlink> {
         if let Ok(meta) = std::fs::symlink_metadata(path) {
             ensure!(
                 meta.file_type().is_symlink(),

@@ -3,7 +3,9 @@
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, ensure, Context, Result};
-use lms_core::telegram::features::{Counters, CMD_COUNTERS, REQ_COUNTERS};
+use lms_core::telegram::features::{
+    Counters, CMD_COUNTERS, CMD_FEATURES, REQ_COUNTERS, REQ_FEATURES,
+};
 use lms_core::telegram::{emit_telegram, Request};
 
 use super::session::Session;
@@ -44,7 +46,7 @@ impl Session {
                 if self.replies.iter().any(|r| r.command == 0x92) {
                     bail!(
                         "{what}: the host line answered 92 (unknown command){}",
-                        if request.get(4) == Some(&REQ_COUNTERS) {
+                        if matches!(request.get(4), Some(&(REQ_COUNTERS | REQ_FEATURES))) {
                             ": not the co-processor (the firmware's stand-in, or an LMS?)"
                         } else {
                             ""
@@ -79,6 +81,20 @@ impl Session {
         let n = emit_telegram(&mut buf, 0, REQ_COUNTERS, &[], None)?;
         let data = self.exchange(&buf[..n], CMD_COUNTERS, "55 (counters)", deadline)?;
         Counters::decode(&data).context("malformed D5 counters")
+    }
+
+    /// Switch the co-processor's feature telegrams on (`56 01` → `D6 01`):
+    /// off by default, so that the host line carries only what an LMS would.
+    pub(super) fn features_on(&mut self, deadline: Instant) -> Result<()> {
+        let mut buf = [0u8; 16];
+        let n = emit_telegram(&mut buf, 0, REQ_FEATURES, &[1], None)?;
+        let data = self.exchange(&buf[..n], CMD_FEATURES, "56 01 (features on)", deadline)?;
+        ensure!(
+            data == [1],
+            "56 01: the co-processor answered D6 {:02X?}",
+            data
+        );
+        Ok(())
     }
 
     /// The firmware's console report (`s`), then `q`.

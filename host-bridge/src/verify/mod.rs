@@ -136,6 +136,36 @@ use lms_core::telegram::Baud;
 use lms_core::Params;
 
 pub use args::{VerifyArgs, DEFAULT_ELF};
+
+/// The firmware under QEMU with its host, sensor and console UARTs as
+/// [`crate::serial::Link`]s; QEMU is stopped when this is dropped (for
+/// `host-bridge coprocessor --qemu`).
+pub struct QemuLines {
+    /// USART1, the host line.
+    pub host: Box<dyn crate::serial::Link>,
+    /// USART2, the sensor line.
+    pub sensor: Box<dyn crate::serial::Link>,
+    /// USART3, the console.
+    pub console: Option<Box<dyn crate::serial::Link>>,
+    /// Last, so that QEMU goes after its lines.
+    _dut: dut::Dut,
+}
+
+/// Start the firmware `elf` (default [`DEFAULT_ELF`]) under QEMU, bounded
+/// by `bound`, and connect to its UARTs.
+pub fn qemu_lines(
+    elf: Option<&std::path::Path>,
+    bound: Duration,
+    stop: &std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> Result<QemuLines> {
+    let lines = qemu::connect(elf, bound, stop)?;
+    Ok(QemuLines {
+        host: lines.host,
+        sensor: lines.sensor,
+        console: lines.console,
+        _dut: lines.dut,
+    })
+}
 pub use compare::{differences, Difference, Value};
 pub use host::run_coprocessor;
 pub use source::{play_source, Drawn, PlaySource, Tag};

@@ -71,6 +71,8 @@ impl Session {
             )?;
             self.host.set_baud(host_baud)?;
         }
+        self.host_rate = host_baud;
+        self.features_on(deadline)?;
         self.mode(Request::Continuous, "20 24 (continuous output)", deadline)
     }
 

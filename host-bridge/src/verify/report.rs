@@ -167,7 +167,8 @@ pub(super) fn report(o: &Outcome) {
         (Some(c), _) => println!(
             "host-bridge verify: co-processor counters: scans_in={} feature_scans_out={} \
              feature_telegrams_out={} sensor_crc_errors={} sensor_resyncs={} \
-             sensor_bytes_skipped={} host_crc_errors={} scans_dropped={} scans_rejected={}",
+             sensor_bytes_skipped={} host_crc_errors={} scans_dropped={} scans_rejected={} \
+             host_scans_dropped={} scans_other_setting={}",
             c.scans_in,
             c.feature_scans_out,
             c.feature_telegrams_out,
@@ -176,7 +177,9 @@ pub(super) fn report(o: &Outcome) {
             c.sensor_bytes_skipped,
             c.host_crc_errors,
             c.scans_dropped,
-            c.scans_rejected
+            c.scans_rejected,
+            c.host_scans_dropped,
+            c.scans_other_setting
         ),
         (None, Some(e)) => println!("host-bridge verify: no counters at the end: {e}"),
         (None, None) => {}

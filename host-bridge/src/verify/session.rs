@@ -13,7 +13,7 @@ use lms_core::device::emulator::{Emulator, Event as EmuEvent, Settings};
 use lms_core::telegram::features::{
     Assembled, FeatureAssembler, CMD_CORNERS, CMD_EDGES, CMD_LINES, CMD_SEGMENTS, CMD_SUMMARY,
 };
-use lms_core::telegram::{Direction, Event, Framer, Handshake};
+use lms_core::telegram::{Baud, Direction, Event, Framer, Handshake};
 use lms_core::Params;
 
 use super::checker::Checker;
@@ -95,6 +95,10 @@ pub(super) struct PowerCycle {
 }
 
 /// Both ends of the co-processor and everything verify keeps.
+/// The sensor runs while the host line's backlog is below this (half a
+/// 0.5° scan period).
+const HOST_LINE_SLACK: Duration = Duration::from_micros(13_333);
+
 pub(super) struct Session {
     /// First, so that it is dropped first: QEMU is killed before its peers
     /// disconnect (it spins when they do).
@@ -132,6 +136,13 @@ pub(super) struct Session {
     pub(super) replies: VecDeque<HostReply>,
     pub(super) naks: u32,
     pub(super) last_host_rx: Instant,
+    /// The host line's rate, and when what came over it would have left a
+    /// real line at that rate: the sensor is held meanwhile (less
+    /// [`HOST_LINE_SLACK`]), so that the co-processor's host-line budget
+    /// passes every scan on (a sensor faster than the host line makes it
+    /// drop scans, by design: docs/PROTOCOL.md).
+    pub(super) host_rate: Baud,
+    pub(super) host_line_free: Instant,
     pub(super) checker: Checker,
     pub(super) stop: Arc<AtomicBool>,
     pub(super) verbose: bool,
@@ -181,6 +192,8 @@ impl Session {
             replies: VecDeque::new(),
             naks: 0,
             last_host_rx: Instant::now(),
+            host_rate: Baud::B9600,
+            host_line_free: Instant::now(),
             checker: Checker::new(params, args.recompute_tau),
             stop,
             verbose: args.verbose,
@@ -228,6 +241,8 @@ impl Session {
                 break;
             }
             self.last_host_rx = Instant::now();
+            let start = self.host_line_free.max(self.last_host_rx);
+            self.host_line_free = start + crate::serial::line_time(n, self.host_rate);
             self.feed_host(&buf[..n]);
             wait = Duration::ZERO;
         }
@@ -255,7 +270,8 @@ impl Session {
             || self.quiesce
             || (self.sensor_streaming && !armed)
             || (armed && self.play_sent >= self.wanted)
-            || (armed && self.max_in_flight > 0 && in_flight >= self.max_in_flight);
+            || (armed && self.max_in_flight > 0 && in_flight >= self.max_in_flight)
+            || (armed && self.host_line_free > Instant::now() + HOST_LINE_SLACK);
         if hold {
             self.clock.hold();
         } else {

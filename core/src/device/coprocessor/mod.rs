@@ -6,15 +6,27 @@
 //! - Every intact scan runs through the [`Extractor`].
 //! - Host side: an [`Emulator`] answers the client exactly like an LMS 2xx
 //!   (its scans are the sensor's latest); while the client has continuous
-//!   output on, every sensor `B0` is passed through unchanged and followed
-//!   by the scan's feature telegrams ([`crate::telegram::features`]); a
-//!   `30 01` gets the latest `B0` and its features. The request `55` reads
-//!   the [`Counters`].
+//!   output on, every sensor `B0` is passed through unchanged. By default
+//!   the host line carries exactly what an LMS would; a client that sends
+//!   `56 01` ([`REQ_FEATURES`]) also gets each scan's feature telegrams
+//!   ([`crate::telegram::features`]) right after its `B0` (and after the
+//!   `B0` of a `30 01`), until `56 00` or a reset (`10`). The request `55`
+//!   reads the [`Counters`].
+//! - Transparency: the host face reports the sensor's variant and units
+//!   (`B1`, `F4`, `BB`); a client's accepted `3B` or `77` that changes the
+//!   variant or the units brings the sensor up again with them
+//!   ([`SensorLink::reconfigure`]); until its scans come, scans of the old
+//!   setting are not passed on ([`Counters::scans_other_setting`]).
+//! - Host-line budget ([`host_line`]): the co-processor models the host
+//!   line's time at the client's rate; a scan (with its features, if on) is
+//!   sent whole only if the line is free within one scan period, else it is
+//!   dropped and counted ([`Counters::host_scans_dropped`]).
 //!
 //! [`CoProcessor::poll`] is generic over `embedded-io` serial ports, so the
 //! firmware (UARTs) and the host build (pseudo-terminals) run the same code;
 //! time comes in as an argument.
 
+pub mod host_line;
 pub mod sensor_link;
 
 use embedded_io::{Read, ReadReady, Write};
@@ -23,13 +35,16 @@ use crate::device::emulator::{Emulator, Event as HostEvent, Handled, ScanSource,
 use crate::features::Features;
 use crate::params::ValidParams;
 use crate::pipeline::extractor::Extractor;
-use crate::telegram::features::{emit_features, Counters, EchoedParams, REQ_COUNTERS};
+use crate::telegram::features::{
+    emit_features, Counters, EchoedParams, CMD_FEATURES, REQ_COUNTERS, REQ_FEATURES,
+};
 use crate::telegram::{
-    Baud, Direction, MeasuredView, RangeBits, Telegram, MAX_TELEGRAM_LEN, MAX_VALUES,
+    Baud, Config, Direction, MeasuredView, RangeBits, Telegram, MAX_TELEGRAM_LEN, MAX_VALUES,
 };
 use crate::Unit;
 use crate::{Frame, Variant};
 
+pub use host_line::HostLine;
 pub use sensor_link::{LinkEvent, SensorLink, SensorSetup, Step};
 
 /// Bytes read from a port per call.
@@ -42,6 +57,8 @@ pub struct LatestScan {
     count: usize,
     variant: Variant,
     counters: Counters,
+    /// The client has switched the feature telegrams on (`56 01`).
+    features_on: bool,
 }
 
 impl LatestScan {
@@ -52,17 +69,8 @@ impl LatestScan {
             values: [0; MAX_VALUES],
             count: 0,
             variant: Variant::Fov180Res100,
-            counters: Counters {
-                scans_in: 0,
-                feature_scans_out: 0,
-                feature_telegrams_out: 0,
-                sensor_crc_errors: 0,
-                sensor_resyncs: 0,
-                sensor_bytes_skipped: 0,
-                host_crc_errors: 0,
-                scans_dropped: 0,
-                scans_rejected: 0,
-            },
+            counters: Counters::ZERO,
+            features_on: false,
         }
     }
 }
@@ -80,18 +88,27 @@ impl ScanSource for LatestScan {
         n
     }
 
-    fn supports(&self, variant: Variant) -> bool {
-        variant == self.variant
+    /// Every variant: the co-processor sets the sensor up for the one the
+    /// client asks for (an LMS 2xx has all five).
+    fn supports(&self, _variant: Variant) -> bool {
+        true
     }
 
     fn extra_command(&mut self, command: u8, data: &[u8], reply: &mut [u8]) -> Option<(u8, usize)> {
-        if command != REQ_COUNTERS || !data.is_empty() {
-            return None;
+        match (command, data) {
+            (REQ_COUNTERS, []) => {
+                let n = crate::telegram::features::COUNTERS_LEN;
+                let slot = reply.get_mut(..n)?;
+                self.counters.encode(slot);
+                Some((crate::telegram::features::CMD_COUNTERS, n))
+            }
+            (REQ_FEATURES, &[state @ (0 | 1)]) => {
+                *reply.first_mut()? = state;
+                self.features_on = state == 1;
+                Some((CMD_FEATURES, 1))
+            }
+            _ => None,
         }
-        let n = crate::telegram::features::COUNTERS_LEN;
-        let slot = reply.get_mut(..n)?;
-        self.counters.encode(slot);
-        Some((crate::telegram::features::CMD_COUNTERS, n))
     }
 }
 
@@ -136,7 +153,8 @@ pub struct CoProcessor {
     link: SensorLink,
     extractor: Extractor,
     host: Emulator<LatestScan>,
-    /// The scan the host last got (by stream or `30 01`) has had its features sent.
+    /// The host line's time budget.
+    host_line: HostLine,
     counters: Counters,
     scan_counter: u32,
     /// Features of the latest scan, ready for a `30 01`.
@@ -146,6 +164,8 @@ pub struct CoProcessor {
     frame: Frame,
     /// [`CoProcessor::configure`] has run.
     configured: bool,
+    /// The face has taken the sensor's configuration since the last bring-up.
+    face_synced: bool,
 }
 
 impl CoProcessor {
@@ -170,12 +190,14 @@ impl CoProcessor {
             link: SensorLink::zeroed(),
             extractor: Extractor::new(),
             host: Emulator::unpowered(LatestScan::new()),
-            counters: LatestScan::new().counters,
+            host_line: HostLine::new(),
+            counters: Counters::ZERO,
             scan_counter: 0,
             have_features: false,
             beams: 0,
             frame: Frame::zeroed(),
             configured: false,
+            face_synced: false,
         }
     }
 
@@ -186,6 +208,8 @@ impl CoProcessor {
         let mut settings = Settings::DEFAULT;
         settings.variant = setup.variant;
         settings.external_scans = true;
+        // The face reports the sensor's units (F4, B1): those of `setup`.
+        settings.config = Config::ZERO.with_units_code(units_code(setup.units));
         self.params = params;
         self.link.configure(setup);
         self.host.set_settings(settings);
@@ -212,6 +236,16 @@ impl CoProcessor {
     /// The features of the latest scan.
     pub fn features(&self) -> &Features {
         self.extractor.features()
+    }
+
+    /// The host face (the LMS the client sees: its rate, mode, variant, units).
+    pub fn host_face(&self) -> &Emulator<LatestScan> {
+        &self.host
+    }
+
+    /// `true` while the client has the feature telegrams on (`56 01`).
+    pub fn features_on(&self) -> bool {
+        self.host.source().features_on
     }
 
     /// Count bytes the board lost before they reached [`CoProcessor::poll`]
@@ -274,7 +308,7 @@ impl CoProcessor {
                 input = rest;
                 match event {
                     Some(LinkEvent::Scan) => {
-                        self.process_scan(host)?;
+                        self.process_scan(host, now_us)?;
                         outcome.scans += 1;
                     }
                     Some(LinkEvent::SwitchBaud(b)) => outcome.sensor_baud = Some(b),
@@ -284,6 +318,14 @@ impl CoProcessor {
                     break;
                 }
             }
+        }
+
+        // The sensor streams: the face reports its configuration (F4).
+        if self.link.step() == sensor_link::Step::Streaming && !self.face_synced {
+            if let Some(c) = self.link.config() {
+                self.host.set_config(c);
+            }
+            self.face_synced = true;
         }
 
         // 3. Time-outs: the baud search's next rate, a silent stream.
@@ -312,11 +354,14 @@ impl CoProcessor {
     ) -> Result<(), PollError<E, H::Error>> {
         let mut buf = [0u8; CHUNK];
         loop {
+            // `transmit` stops after the last byte before a baud switch.
+            let rate = self.host.baud();
             let n = self.host.transmit(now_us, &mut buf);
             let Some(bytes) = buf.get(..n).filter(|b| !b.is_empty()) else {
                 break;
             };
             host.write_all(bytes).map_err(PollError::Host)?;
+            self.host_line.occupy(now_us, bytes.len(), rate);
         }
         while let Some(event) = self.host.next_event() {
             match event {
@@ -325,33 +370,71 @@ impl CoProcessor {
                     self.counters.host_crc_errors = self.counters.host_crc_errors.wrapping_add(1);
                 }
                 // The B0 of a `30 01` has gone out: its features follow.
-                HostEvent::Request(Handled::OneScan) if self.have_features => {
-                    self.send_features(host)?;
+                HostEvent::Request(Handled::OneScan)
+                    if self.have_features && self.features_on() =>
+                {
+                    let n = self.send_features(host)?;
+                    self.host_line.occupy(now_us, n, self.host.baud());
                 }
+                HostEvent::Request(
+                    Handled::SetVariant { accepted: true, .. }
+                    | Handled::WriteConfig { accepted: true },
+                ) => self.follow_client(),
+                HostEvent::Request(Handled::Reset) => self.host.source_mut().features_on = false,
                 _ => {}
             }
         }
         Ok(())
     }
 
+    /// The client changed the face's variant or units: bring the sensor up
+    /// with them (its scans of the old setting are not passed on meanwhile).
+    fn follow_client(&mut self) {
+        let current = self.link.setup();
+        let wanted = SensorSetup {
+            variant: self.host.variant(),
+            units: self.host.units(),
+            ..current
+        };
+        if wanted != current {
+            self.link.reconfigure(wanted);
+            self.face_synced = false;
+        }
+    }
+
     /// One intact `B0` from the sensor: decode, run the pipeline, pass the
     /// scan and its features to a streaming host.
-    fn process_scan<H: Write, E>(&mut self, host: &mut H) -> Result<(), PollError<E, H::Error>> {
+    fn process_scan<H: Write, E>(
+        &mut self,
+        host: &mut H,
+        now_us: u64,
+    ) -> Result<(), PollError<E, H::Error>> {
         self.counters.scans_in = self.counters.scans_in.wrapping_add(1);
         self.scan_counter = self.counters.scans_in;
+        // The sensor's measuring mode decides the range bits (13/14/15).
+        let bits = self.link.config().map_or(RangeBits::Bits13, |c| {
+            RangeBits::from_measuring_mode(c.measuring_mode())
+        });
         let bytes = self.link.scan_bytes();
         let frame = &mut self.frame;
         let measured = Telegram::new_checked(bytes, Direction::SensorToHost)
             .ok()
             .and_then(|t| MeasuredView::parse(&t).ok())
-            .filter(|m| m.to_frame_into(RangeBits::Bits13, frame).is_ok());
+            .filter(|m| m.to_frame_into(bits, frame).is_ok());
         let Some(measured) = measured else {
             self.counters.scans_rejected = self.counters.scans_rejected.wrapping_add(1);
             self.have_features = false;
             return Ok(());
         };
+        let variant = Variant::from_beams(measured.count());
+        if variant != Some(self.host.variant()) || measured.units() != self.host.units() {
+            self.counters.scans_other_setting = self.counters.scans_other_setting.wrapping_add(1);
+            return Ok(());
+        }
         // The host's `30 01` and `31` see this scan.
+        let face_variant = self.host.variant();
         let latest = self.host.source_mut();
+        latest.variant = face_variant;
         latest.count = 0;
         for (slot, word) in latest.values.iter_mut().zip(measured.words()) {
             *slot = word;
@@ -361,31 +444,62 @@ impl CoProcessor {
         self.extractor.run(&self.frame, &self.params);
         self.have_features = true;
         if self.host.streaming() {
-            // Never inside a reply: the emulator hands out whole frames at
-            // once in external-scan mode, and `drain_host` emptied it.
-            host.write_all(self.link.scan_bytes())
-                .map_err(PollError::Host)?;
-            self.send_features(host)?;
+            self.pass_scan(host, now_us)?;
         }
         Ok(())
     }
 
-    /// The feature telegrams of the latest scan to the host.
-    fn send_features<H: Write, E>(&mut self, host: &mut H) -> Result<(), PollError<E, H::Error>> {
+    /// The scan's `B0` (and its features, if on) to a streaming host, whole,
+    /// if the host line is free within one scan period; else dropped and
+    /// counted.
+    fn pass_scan<H: Write, E>(
+        &mut self,
+        host: &mut H,
+        now_us: u64,
+    ) -> Result<(), PollError<E, H::Error>> {
+        let rate = self.host.baud();
+        let period = crate::device::emulator::scan_period_us(self.host.variant());
+        if !self.host_line.free_within(now_us, period) {
+            self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
+            return Ok(());
+        }
+        // Never inside a reply: the emulator hands out whole frames at
+        // once in external-scan mode, and `drain_host` emptied it.
+        host.write_all(self.link.scan_bytes())
+            .map_err(PollError::Host)?;
+        self.counters.scans_out = self.counters.scans_out.wrapping_add(1);
+        let mut bytes = self.link.scan_bytes().len();
+        if self.features_on() {
+            bytes += self.send_features(host)?;
+        }
+        self.host_line.occupy(now_us, bytes, rate);
+        Ok(())
+    }
+
+    /// The feature telegrams of the latest scan to the host; returns the
+    /// bytes sent.
+    fn send_features<H: Write, E>(
+        &mut self,
+        host: &mut H,
+    ) -> Result<usize, PollError<E, H::Error>> {
         let echoed = EchoedParams::from(self.params.get());
+        let mut bytes = 0usize;
         let sent = emit_features(
             self.scan_counter,
             self.beams,
             &echoed,
             self.extractor.features(),
             0,
-            |t| host.write_all(t),
+            |t| {
+                bytes += t.len();
+                host.write_all(t)
+            },
         )
         .map_err(PollError::Host)?;
         self.counters.feature_scans_out = self.counters.feature_scans_out.wrapping_add(1);
         self.counters.feature_telegrams_out =
             self.counters.feature_telegrams_out.wrapping_add(sent);
-        Ok(())
+        Ok(bytes)
     }
 
     /// Copy the framer counters into [`Counters`] and the host-visible copy.
@@ -397,5 +511,14 @@ impl CoProcessor {
         self.counters.sensor_resyncs = s.resyncs;
         self.counters.sensor_bytes_skipped = s.bytes_skipped;
         self.host.source_mut().counters = self.counters;
+    }
+}
+
+/// The LMS configuration's units code for `unit` (0 cm, 1 mm; 10 cm is not
+/// a code the LMS 2xx configuration takes: cm).
+const fn units_code(unit: Unit) -> u8 {
+    match unit {
+        Unit::Millimetre => 1,
+        _ => 0,
     }
 }

@@ -208,6 +208,11 @@ pub struct SensorLink {
     /// framer's skipped bytes then.
     scan_us: u64,
     skipped_at_scan: u32,
+    /// [`SensorLink::reconfigure`] came during the bring-up
+    /// (`has_pending`): bring the sensor up again with `pending` once it
+    /// streams. Not an `Option`, so that a zeroed link stays all zero.
+    pending: SensorSetup,
+    has_pending: bool,
 }
 
 impl SensorLink {
@@ -244,6 +249,12 @@ impl SensorLink {
             missed: 0,
             scan_us: 0,
             skipped_at_scan: 0,
+            pending: SensorSetup {
+                variant: Variant::Fov180Res100,
+                units: Unit::Centimetre,
+                baud: Baud::B9600,
+            },
+            has_pending: false,
         }
     }
 
@@ -257,6 +268,16 @@ impl SensorLink {
     /// (until the next [`feed`](SensorLink::feed)).
     pub fn scan_bytes(&self) -> &[u8] {
         self.client.telegram_bytes()
+    }
+
+    /// The sensor's configuration as read in the bring-up (`74`), with the
+    /// units written back (`77`); `None` before.
+    pub fn config(&self) -> Option<Config> {
+        let code = match self.setup.units {
+            Unit::Millimetre => 1,
+            _ => 0,
+        };
+        self.config.map(|c| c.with_units_code(code))
     }
 
     /// The current bring-up step.
@@ -333,10 +354,41 @@ impl SensorLink {
         self.stream_bytes.saturating_add(len / 2).max(0) / len
     }
 
+    /// The setup the link brings the sensor up with (the one to come, if
+    /// a [`reconfigure`](SensorLink::reconfigure) waits for the bring-up).
+    pub fn setup(&self) -> SensorSetup {
+        if self.has_pending {
+            self.pending
+        } else {
+            self.setup
+        }
+    }
+
+    /// Bring the sensor up again with `setup` (the co-processor's client
+    /// chose another variant or unit): at once if it streams, else when the
+    /// bring-up in progress is done (a reply in flight, e.g. to the baud
+    /// switch, must not be taken for another step's).
+    pub fn reconfigure(&mut self, setup: SensorSetup) {
+        if self.step == Step::Streaming {
+            // The sensor answers at the rate it streams at: no baud search.
+            let line = self.line;
+            self.setup = setup;
+            self.restart();
+            self.line = line;
+            self.switch_due = false;
+        } else {
+            self.pending = setup;
+            self.has_pending = true;
+        }
+    }
+
     /// Start the bring-up again (e.g. after the sensor reset): the baud
     /// search from 9600 Bd, the UART back to 9600 Bd (reported by the next
     /// [`poll`](SensorLink::poll)).
     pub fn restart(&mut self) {
+        if core::mem::take(&mut self.has_pending) {
+            self.setup = self.pending;
+        }
         self.step = Step::StopStream;
         self.requested = false;
         self.nak = false;
@@ -575,6 +627,9 @@ impl SensorLink {
         }
         self.requested = false;
         self.nak = false;
+        if self.step == Step::Streaming && self.has_pending {
+            self.restart();
+        }
         event
     }
 }

@@ -43,6 +43,13 @@ pub enum Handled {
     },
     /// `10`: reset.
     Reset,
+    /// `20 26`/`27`/`28`: a value mode.
+    ValueMode {
+        /// The mode and its parameters.
+        mode: ValueMode,
+        /// `true` if taken (`A0 00`), `false` for bad parameters (`A0 02`).
+        accepted: bool,
+    },
     /// A command the LMS does not know, answered by the source
     /// ([`ScanSource::extra_command`]).
     Extra {

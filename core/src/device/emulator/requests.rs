@@ -73,6 +73,17 @@ impl<S: ScanSource> Emulator<S> {
                 }
                 _ => None,
             };
+            // A value mode (`20 26`/`27`/`28`), answered by the sensor model
+            // itself (not on the co-processor's face).
+            let value_mode = match fed.event {
+                Some(FramerEvent::Telegram(t)) if !self.settings.external_scans => {
+                    match Request::parse(&t) {
+                        Ok(Request::Unknown { command, data }) => ValueMode::parse(command, data),
+                        _ => None,
+                    }
+                }
+                _ => None,
+            };
             let done = fed.event.is_none();
             for _ in 0..naks {
                 self.stats.naks = self.stats.naks.wrapping_add(1);
@@ -80,7 +91,7 @@ impl<S: ScanSource> Emulator<S> {
                 self.event(Event::BadChecksum);
             }
             if let Some(incoming) = incoming {
-                self.handle(now_us, incoming, data_len, extra);
+                self.handle(now_us, incoming, data_len, extra, value_mode);
             }
             if self.resetting {
                 // The sensor ignores what follows a reset in the same burst,
@@ -103,6 +114,7 @@ impl<S: ScanSource> Emulator<S> {
         incoming: Incoming,
         data_len: usize,
         extra: Option<(u8, usize)>,
+        value_mode: Option<ValueMode>,
     ) {
         if incoming.address != self.settings.address {
             self.stats.ignored = self.stats.ignored.wrapping_add(1);
@@ -116,7 +128,10 @@ impl<S: ScanSource> Emulator<S> {
             return;
         }
         self.stats.requests = self.stats.requests.wrapping_add(1);
-        let (reply, then, handled) = self.answer(now_us, incoming.request, data_len, extra);
+        let (reply, then, handled) = match value_mode {
+            Some(mode) => self.value_mode(mode),
+            None => self.answer(now_us, incoming.request, data_len, extra),
+        };
         self.queue(now_us, Outgoing::Reply { reply, then });
         self.event(Event::Request(handled));
     }
@@ -182,6 +197,18 @@ impl<S: ScanSource> Emulator<S> {
                 ),
             },
         }
+    }
+
+    /// `20 26`/`27`/`28`: the value mode, if its parameters fit the
+    /// variant (`A0 00`, the stream starts after the reply); else `A0 02`.
+    fn value_mode(&mut self, mode: ValueMode) -> (ReplyKind, Done, Handled) {
+        let accepted = mode.valid(self.variant);
+        let handled = Handled::ValueMode { mode, accepted };
+        if !accepted {
+            return (ReplyKind::Mode(ModeResult::Fault), Done::Nothing, handled);
+        }
+        self.mode = OperatingMode::Values(mode);
+        (ReplyKind::Mode(ModeResult::Ok), Done::StartStream, handled)
     }
 
     /// `20 00` + password: installation mode (stops a stream) if the

@@ -54,6 +54,8 @@ pub enum OperatingMode {
     Continuous,
     /// `25`: values on request only (power-on default).
     OnRequest,
+    /// `26`/`27`/`28`: mean values, a subrange, a mean subrange.
+    Values(ValueMode),
 }
 
 impl OperatingMode {
@@ -63,6 +65,7 @@ impl OperatingMode {
             OperatingMode::Installation => 0x00,
             OperatingMode::Continuous => 0x24,
             OperatingMode::OnRequest => 0x25,
+            OperatingMode::Values(m) => m.mode_code(),
         }
     }
 }

@@ -580,3 +580,57 @@ fn emulator_scan_timing_constants() {
     assert_eq!(scan_period_us(Variant::Fov180Res50), 26_667);
     assert_eq!(scan_period_us(Variant::Fov100Res25), 53_333);
 }
+
+#[test]
+fn emulator_value_modes_mean_subrange_and_mean_subrange() {
+    // 180°/1° power-on, 9600 Bd: switch to 500 kBd so the line is no limit.
+    let mut e = lms();
+    e.receive(0, &BAUD_500K);
+    drain(&mut e, 20_000);
+    // Subrange: values 1..=22 of each scan: A0 00, then a B7 per scan.
+    e.receive(20_000, &request(&[0x20, 0x27, 1, 0, 22, 0]));
+    let got = split(&drain(&mut e, 20_000 + 13_333 * 5));
+    assert_eq!(got[0], std::vec![ACK]);
+    assert_eq!(got[1], A0_OK);
+    let b7: Vec<_> = got[2..]
+        .iter()
+        .filter(|t| t.len() > 4 && t[4] == 0xB7)
+        .collect();
+    assert!(b7.len() >= 4, "{} B7", b7.len());
+    // B7 | 01 00 16 00 | W = 22, cm | 1000, 1001, … | status.
+    assert_eq!(&b7[0][5..11], &[1, 0, 22, 0, 22, 0]);
+    assert_eq!(&b7[0][11..15], &[0xE8, 0x03, 0xE9, 0x03]);
+    assert_eq!(e.status_fields().operating_mode, 0x27);
+    // Mean of 5 scans: one B6 per 5 scans (66.7 ms at 1°).
+    e.receive(200_000, &request(&[0x20, 0x26, 5]));
+    let got = split(&drain(&mut e, 200_000 + 180_000));
+    let b6: Vec<_> = got.iter().filter(|t| t.len() > 4 && t[4] == 0xB6).collect();
+    assert_eq!(b6.len(), 3, "one B6 per 5 scans: at 0, 66.7 and 133.3 ms");
+    assert_eq!(&b6[0][5..8], &[5, 181, 0], "n = 5, W = 181 values in cm");
+    assert_eq!(&b6[0][8..10], &[0xE8, 0x03], "the mean of a constant ramp");
+    // Mean subrange 10..=20 over 3 scans: BF | 03 | 0A 00 | 14 00 | W = 11.
+    e.receive(400_000, &request(&[0x20, 0x28, 3, 10, 0, 20, 0]));
+    let got = split(&drain(&mut e, 600_000));
+    let bf = got.iter().find(|t| t.len() > 4 && t[4] == 0xBF).unwrap();
+    assert_eq!(&bf[5..12], &[3, 10, 0, 20, 0, 11, 0]);
+    assert_eq!(&bf[12..14], &(1009u16).to_le_bytes());
+    // Bad parameters: A0 02, mode kept.
+    e.receive(600_000, &request(&[0x20, 0x26, 1]));
+    let got = split(&drain(&mut e, 700_000));
+    assert!(got
+        .iter()
+        .any(|t| t.len() > 5 && t[4] == 0xA0 && t[5] == 0x02));
+    assert_eq!(e.status_fields().operating_mode, 0x28);
+}
+
+#[test]
+fn emulator_value_modes_are_unknown_on_the_coprocessor_face() {
+    let settings = Settings {
+        external_scans: true,
+        ..Settings::default()
+    };
+    let mut e = Emulator::new(Ramp::default(), settings, 0);
+    drain(&mut e, 1_000_000);
+    e.receive(1_000_000, &request(&[0x20, 0x26, 5]));
+    assert_eq!(drain(&mut e, 1_100_000), acked(&REPLY_92));
+}

@@ -86,7 +86,11 @@ impl Stream {
     fn next(&self, free_us: u64, turns: u64) -> (u64, u64) {
         let free = free_us.max(self.start_us);
         let elapsed = free.saturating_sub(self.start_us);
-        let newest = elapsed.saturating_mul(3) / (turns * TURN_US_TIMES_3);
+        // `checked_div`: `turns` comes from the value mode's samples too.
+        let newest = elapsed
+            .saturating_mul(3)
+            .checked_div(turns.saturating_mul(TURN_US_TIMES_3))
+            .unwrap_or(0);
         let k = match self.last() {
             Some(last) if newest <= last => last.saturating_add(1),
             _ => newest,
@@ -165,7 +169,11 @@ impl<S: ScanSource> Emulator<S> {
                 return before != b;
             }
             Done::StartStream => {
-                if self.mode == OperatingMode::Continuous && !self.resetting {
+                let streams = matches!(
+                    self.mode,
+                    OperatingMode::Continuous | OperatingMode::Values(_)
+                );
+                if streams && !self.resetting {
                     if self.settings.external_scans {
                         self.external_stream = true;
                     } else {
@@ -226,7 +234,7 @@ impl<S: ScanSource> Emulator<S> {
             self.start_frame(p.ready_us, p.what);
             return;
         }
-        let turns = turns_per_scan(self.variant);
+        let turns = self.stream_turns();
         let Some(stream) = self.stream.as_mut() else {
             return;
         };
@@ -241,14 +249,54 @@ impl<S: ScanSource> Emulator<S> {
         };
         stream.sent = k.saturating_add(1);
         let skipped = u32::try_from(skipped).unwrap_or(u32::MAX);
-        self.start_scan(
-            tick,
-            false,
-            Done::Scan {
-                continuous: true,
-                skipped,
-            },
-        );
+        let done = Done::Scan {
+            continuous: true,
+            skipped,
+        };
+        match self.mode {
+            OperatingMode::Values(mode) => self.start_value_scan(tick, mode, done),
+            _ => self.start_scan(tick, false, done),
+        }
+    }
+
+    /// Mirror turns per stream telegram: a scan's, times the samples of a
+    /// mean value mode.
+    fn stream_turns(&self) -> u64 {
+        let samples = match self.mode {
+            OperatingMode::Values(m) => u64::from(m.samples()),
+            _ => 1,
+        };
+        turns_per_scan(self.variant).saturating_mul(samples.max(1))
+    }
+
+    /// A `B6`/`B7`/`BF` of the value mode: `samples` scans from the source,
+    /// averaged (means), cut to the subrange. Never inlined: its 2.4 KiB
+    /// accumulator must not enlarge the frame of `transmit` on the
+    /// co-processor's face, which never gets here (firmware stack budget).
+    #[inline(never)]
+    fn start_value_scan(&mut self, ready_us: u64, mode: ValueMode, done: Done) {
+        let variant = self.variant;
+        let units = self.units();
+        let beams = variant.beams().min(MAX_VALUES);
+        let mut means = value_modes::MeanAccumulator::new();
+        let not_valid = RangeBits::Bits13.encode_invalid(Invalid::NoEcho);
+        for _ in 0..mode.samples() {
+            let out = self.scan.get_mut(..beams).unwrap_or_default();
+            let written = self.source.next_scan(variant, units, out).min(out.len());
+            out.get_mut(written..).unwrap_or_default().fill(not_valid);
+            means.add(out);
+        }
+        if mode.samples() > 1 {
+            means.take(self.scan.get_mut(..beams).unwrap_or_default());
+        }
+        let (start, count) = mode.span(variant);
+        let values = self
+            .scan
+            .get(start..start.saturating_add(count))
+            .unwrap_or_default();
+        let (address, status) = (self.settings.address, self.settings.status);
+        let n = mode.emit(address, status, units, values, &mut self.tx);
+        self.set_frame(ready_us, n.ok(), done);
     }
 
     /// Put a frame on the line, starting when both it and the line are ready.
@@ -379,7 +427,7 @@ impl<S: ScanSource> Emulator<S> {
         } else if let Some(p) = self.pending.front() {
             consider(p.ready_us.max(self.line_free_us));
         } else if let Some(stream) = &self.stream {
-            let (_, tick) = stream.next(self.line_free_us, turns_per_scan(self.variant));
+            let (_, tick) = stream.next(self.line_free_us, self.stream_turns());
             consider(tick.max(self.line_free_us));
         }
         if let Some(at) = self.restart_at_us {

@@ -1,0 +1,63 @@
+//! The host line's time budget: when the bytes written to the client's
+//! line will have left it, at the client's rate (8N1, 10 bits a byte).
+//!
+//! The co-processor writes to its host port as fast as the port takes
+//! bytes; a UART (or a pseudo-terminal) does not tell when they are out.
+//! [`HostLine`] keeps that time itself, from the bytes written and the host
+//! face's current rate, so that the drop policy does not depend on the
+//! port: a scan is passed on only if the line is free within one scan
+//! period of its arrival (so its first byte leaves at most one scan period
+//! after the sensor delivered it, and the backlog never exceeds one scan
+//! group); otherwise the scan is dropped whole and counted.
+
+use crate::device::emulator::line_time_us;
+use crate::telegram::Baud;
+
+/// When the host line will be idle (µs, the co-processor's clock).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HostLine {
+    free_us: u64,
+}
+
+impl HostLine {
+    /// An idle line (`const`).
+    pub const fn new() -> Self {
+        HostLine { free_us: 0 }
+    }
+
+    /// `bytes` written at `now_us` at `baud`: they follow what is still on
+    /// the line.
+    pub fn occupy(&mut self, now_us: u64, bytes: usize, baud: Baud) {
+        let start = self.free_us.max(now_us);
+        self.free_us = start.saturating_add(line_time_us(bytes, baud));
+    }
+
+    /// `true` if what is on the line has left by `now_us + within_us`.
+    pub fn free_within(&self, now_us: u64, within_us: u64) -> bool {
+        self.free_us <= now_us.saturating_add(within_us)
+    }
+
+    /// When the line is idle (µs).
+    pub fn free_at_us(&self) -> u64 {
+        self.free_us
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bytes_queue_behind_each_other_at_the_line_rate() {
+        let mut line = HostLine::new();
+        assert!(line.free_within(0, 0));
+        // 732 bytes at 38400 Bd: 190 625 µs.
+        line.occupy(1_000, 732, Baud::B38400);
+        assert_eq!(line.free_at_us(), 191_625);
+        assert!(!line.free_within(100_000, 26_667));
+        assert!(line.free_within(165_000, 26_667));
+        // Written while busy: queued behind.
+        line.occupy(2_000, 3, Baud::B9600);
+        assert_eq!(line.free_at_us(), 191_625 + 3_125);
+    }
+}

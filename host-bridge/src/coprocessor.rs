@@ -1,0 +1,284 @@
+//! `host-bridge coprocessor`: the core's [`CoProcessor`] natively, between a
+//! sensor on a serial port and a pseudo-terminal for the client.
+//!
+//! ```text
+//! host-bridge coprocessor --sensor PORT --link PATH [--variant FOV/RES] [--units mm|cm]
+//!                         [--status-every SECONDS] [--quit-after SECONDS] [pipeline options]
+//! ```
+//!
+//! The same code as the firmware: it brings the LMS on `PORT` up (9600 Bd
+//! at first, then 500 kBd), and offers the client a pseudo-terminal,
+//! symlinked at `PATH`, that behaves like an LMS 2xx (see
+//! `lms_core::device::coprocessor` and docs/PROTOCOL.md: by default only
+//! what an LMS sends; the features after `56 01`). The client picks its own
+//! speed on the pseudo-terminal with `20 4x`, as with a real LMS; the
+//! co-processor's host-line budget follows that speed (a pty itself carries
+//! bytes at memory speed).
+//!
+//! A status line goes to stderr every `--status-every` seconds (scans in
+//! and out, host-line drops, sensor CRC errors, the sensor's bring-up state,
+//! the client's rate, mode and feature output). SIGINT/SIGTERM (Ctrl-C)
+//! stops the sensor's stream (`20 25`), removes the link and exits with 0.
+
+use std::fmt::Write as _;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+use anyhow::{ensure, Context, Result};
+use clap::Args;
+use lms_core::device::coprocessor::{CoProcessor, PollError, SensorSetup};
+use lms_core::telegram::{Baud, Request};
+use lms_core::Unit;
+
+use crate::options::{ParamArgs, UnitArg};
+use crate::pty::Pty;
+use crate::scan::{variant_name, VariantChoice};
+use crate::serial::{Link, PtyPort, SerialLink};
+use crate::simulate::symlink::Symlink;
+
+mod qemu_bridge;
+
+/// Longest wait for sensor bytes per loop (the host side is polled as often).
+const TICK: Duration = Duration::from_millis(1);
+
+/// Options of `host-bridge coprocessor`.
+#[derive(Args, Debug, Clone)]
+pub struct CoprocessorArgs {
+    /// Serial port of the sensor, e.g. /dev/ttyUSB0 (or the pty of `host-bridge simulate`)
+    #[arg(long, value_name = "PORT")]
+    pub sensor: PathBuf,
+    /// Make a pseudo-terminal for the client and a symbolic link to it here
+    /// (an existing symlink is replaced; removed on exit)
+    #[arg(long, value_name = "PATH")]
+    pub link: PathBuf,
+    /// Variant the sensor is brought up with until the client sets one (FOV/RES)
+    #[arg(long, default_value = "180/0.5", value_name = "FOV/RES")]
+    pub variant: VariantChoice,
+    /// Units the sensor is brought up with until the client sets them
+    #[arg(long, default_value = "mm", value_parser = UnitArg::sensor_parser())]
+    pub units: UnitArg,
+    /// Seconds between status lines on stderr (0: none)
+    #[arg(long, default_value_t = 1.0, value_name = "SECONDS")]
+    pub status_every: f64,
+    /// Exit after this many seconds
+    #[arg(long, value_name = "SECONDS")]
+    pub quit_after: Option<f64>,
+    /// Run the real firmware under QEMU (default ELF: the release build in
+    /// firmware/target) instead of the core's CoProcessor natively; the bytes
+    /// are passed between its UARTs, the sensor port and the client's pty
+    #[arg(long, value_name = "ELF", num_args = 0..=1)]
+    pub qemu: Option<Option<PathBuf>>,
+    /// Pipeline parameters (the ALGORITHM.md defaults unless set).
+    #[command(flatten)]
+    pub params: ParamArgs,
+}
+
+/// A [`Link`] as an `embedded-io` port: `read_ready` takes what has
+/// arrived into a buffer.
+struct LinkPort {
+    link: SerialLink,
+    buf: Vec<u8>,
+}
+
+impl LinkPort {
+    /// Wait up to `timeout` for bytes (into the buffer).
+    fn fill(&mut self, timeout: Duration) -> io::Result<()> {
+        if !self.buf.is_empty() {
+            return Ok(());
+        }
+        let mut chunk = [0u8; 4096];
+        let n = self.link.receive(&mut chunk, timeout)?;
+        self.buf.extend_from_slice(&chunk[..n]);
+        Ok(())
+    }
+}
+
+impl embedded_io::ErrorType for LinkPort {
+    type Error = io::Error;
+}
+
+impl embedded_io::ReadReady for LinkPort {
+    fn read_ready(&mut self) -> io::Result<bool> {
+        self.fill(Duration::ZERO)?;
+        Ok(!self.buf.is_empty())
+    }
+}
+
+impl embedded_io::Read for LinkPort {
+    fn read(&mut self, out: &mut [u8]) -> io::Result<usize> {
+        let n = out.len().min(self.buf.len());
+        out[..n].copy_from_slice(&self.buf[..n]);
+        self.buf.drain(..n);
+        Ok(n)
+    }
+}
+
+impl embedded_io::Write for LinkPort {
+    fn write(&mut self, bytes: &[u8]) -> io::Result<usize> {
+        self.link.send(bytes)?;
+        Ok(bytes.len())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+fn check_args(args: &CoprocessorArgs) -> Result<()> {
+    ensure!(
+        args.status_every.is_finite() && args.status_every >= 0.0,
+        "--status-every must be >= 0 (seconds)"
+    );
+    if let Some(q) = args.quit_after {
+        ensure!(
+            q.is_finite() && q >= 0.0,
+            "--quit-after must be >= 0 (seconds)"
+        );
+    }
+    Ok(())
+}
+
+/// Run `host-bridge coprocessor`.
+pub fn run(args: &CoprocessorArgs) -> Result<()> {
+    check_args(args)?;
+    let params = args
+        .params
+        .to_params()?
+        .validate()
+        .map_err(|e| anyhow::anyhow!("invalid parameters: {e}"))?;
+    let setup = SensorSetup {
+        variant: args.variant.0,
+        units: args.units.unit().unwrap_or(Unit::Millimetre),
+        baud: Baud::B500000,
+    };
+    let link = SerialLink::open(&args.sensor, Baud::B9600)
+        .with_context(|| "--sensor: cannot open the sensor's port".to_string())?;
+    if let Some(elf) = &args.qemu {
+        return run_qemu(args, link, elf.as_deref());
+    }
+    let mut sensor = LinkPort {
+        link,
+        buf: Vec::new(),
+    };
+    let pty = Pty::open(Baud::B9600.bits_per_second())?;
+    let symlink = Symlink::create(&args.link, pty.slave_path())?;
+    let mut host = PtyPort::new(pty);
+    let stop = crate::stop::stop_flag()?;
+    eprintln!(
+        "host-bridge coprocessor: sensor {} (brought up at {} in {}), client line {} -> {}",
+        args.sensor.display(),
+        variant_name(setup.variant),
+        setup.units,
+        symlink.path.display(),
+        host.slave_path().display()
+    );
+    let clock = Instant::now();
+    let now_us = || u64::try_from(clock.elapsed().as_micros()).unwrap_or(u64::MAX);
+    let mut cop = Box::new(CoProcessor::new(params, setup));
+    cop.start(now_us());
+    let status_every = Duration::from_secs_f64(args.status_every);
+    let quit_after = args.quit_after.map(Duration::from_secs_f64);
+    let mut next_status = Instant::now() + status_every;
+    let reason = loop {
+        if stop.load(Ordering::Relaxed) {
+            break "signal";
+        }
+        if quit_after.is_some_and(|q| clock.elapsed() >= q) {
+            break "--quit-after";
+        }
+        let outcome = cop
+            .poll(&mut sensor, &mut host, now_us())
+            .map_err(|e| match e {
+                PollError::Sensor(e) => anyhow::anyhow!("sensor port: {e}"),
+                PollError::Host(e) => anyhow::anyhow!("client line: {e}"),
+            })?;
+        if let Some(b) = outcome.sensor_baud {
+            sensor
+                .link
+                .set_baud(b)
+                .context("sensor port: cannot switch the rate")?;
+        }
+        if args.status_every > 0.0 && Instant::now() >= next_status {
+            eprintln!("{}", status(&cop, clock));
+            next_status += status_every;
+        }
+        sensor.fill(TICK)?;
+    };
+    stop_sensor(&mut sensor);
+    eprintln!(
+        "host-bridge coprocessor: stopped ({reason}); {}",
+        status(&cop, clock)
+    );
+    drop(symlink);
+    Ok(())
+}
+
+/// `--qemu`: the firmware between the sensor and the client.
+fn run_qemu(args: &CoprocessorArgs, mut sensor: SerialLink, elf: Option<&Path>) -> Result<()> {
+    let pty = Pty::open(Baud::B9600.bits_per_second())?;
+    let symlink = Symlink::create(&args.link, pty.slave_path())?;
+    let mut client = PtyPort::new(pty);
+    let stop = crate::stop::stop_flag()?;
+    let quit_after = args.quit_after.map(Duration::from_secs_f64);
+    let bound = quit_after.unwrap_or(Duration::from_secs(24 * 3600)) + Duration::from_secs(10);
+    let mut qemu = crate::verify::qemu_lines(elf, bound, &stop)?;
+    eprintln!(
+        "host-bridge coprocessor: the firmware under QEMU between sensor {} and client line {} -> {}",
+        args.sensor.display(),
+        symlink.path.display(),
+        client.slave_path().display()
+    );
+    let reason = qemu_bridge::bridge(&mut sensor, &mut client, &mut qemu, &stop, quit_after)?;
+    let mut buf = [0u8; 16];
+    if let Ok(n) = Request::OnRequest.emit(0, &mut buf) {
+        let _ = sensor.send(&buf[..n]);
+    }
+    eprintln!("host-bridge coprocessor: stopped ({reason})");
+    drop(symlink);
+    Ok(())
+}
+
+/// Stop the sensor's stream (`20 25`), so that it does not stream on with
+/// nobody listening; wait briefly for the bytes to go out.
+fn stop_sensor(sensor: &mut LinkPort) {
+    let mut buf = [0u8; 16];
+    if let Ok(n) = Request::OnRequest.emit(0, &mut buf) {
+        let _ = sensor.link.send(&buf[..n]);
+        let _ = sensor.fill(Duration::from_millis(50));
+    }
+}
+
+/// The status line.
+fn status(cop: &CoProcessor, clock: Instant) -> String {
+    let c = cop.counters();
+    let face = cop.host_face();
+    let mut line = format!(
+        "[{:8.1} s] scans in {} out {} (features {}), dropped: host line {}, other setting {}, \
+         processing {}, rejected {}; sensor CRC errors {}",
+        clock.elapsed().as_secs_f64(),
+        c.scans_in,
+        c.scans_out,
+        c.feature_scans_out,
+        c.host_scans_dropped,
+        c.scans_other_setting,
+        c.scans_dropped,
+        c.scans_rejected,
+        c.sensor_crc_errors,
+    );
+    let setup = cop.link().setup();
+    let _ = write!(
+        line,
+        "; sensor {:?} ({} {}); client {} Bd, mode {:02X}, {} {}, features {}",
+        cop.link().step(),
+        variant_name(setup.variant),
+        setup.units,
+        face.baud().bits_per_second(),
+        face.operating_mode().code(),
+        variant_name(face.variant()),
+        face.units(),
+        if cop.features_on() { "on" } else { "off" },
+    );
+    line
+}

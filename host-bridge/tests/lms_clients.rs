@@ -1,0 +1,803 @@
+//! Unmodified LMS 2xx clients through `host-bridge coprocessor` against
+//! `host-bridge simulate`, over real pseudo-terminals.
+//!
+//! Each modelled client follows one behaviour of common LMS 2xx drivers,
+//! with its own framing written from the public protocol (CRC, `02 80`
+//! sync), and fails the way such a driver fails:
+//!
+//! | client | behaviour | trips on |
+//! |---|---|---|
+//! | `any-reply` | after `ACK`, the first telegram addressed `0x80` is the reply; while streaming, the next telegram must be `B0` | any telegram it did not ask for |
+//! | `sync-crc` | syncs on `02 80`, checks `LEN ≤ 812` and the CRC, resyncs a byte on; skips codes it does not wait for | any resync or CRC error |
+//! | `stream-b0` | tolerant replies; while streaming, every telegram must be `B0` | a non-`B0` in the stream |
+//! | `ack-60ms` | waits 60 ms for the `ACK`, then sends the request again (≤ 10 times) | no `ACK` after 10 tries |
+//! | `features` | opts in (`56 01` → `D6 01`); after every `B0`, its `D4 D3 D1… D2… D0` group | a group missing, cut, or not bit-identical to the std build's features of that `B0` |
+//!
+//! Every client, at 9600, 38400 and 500000 Bd on its own chain (a
+//! `simulate` and a `coprocessor` process each, all chains at once, so that
+//! the slow 9600 Bd runs overlap): initialises (`20 4x`, `3A`, `31`), then
+//! for each of the five variants in both units sets them (`3B`, `20 00`,
+//! `74`, `77`), checks `31` and `74` tell them, streams (`20 24`) and reads
+//! [`scans_per_setting`] scans — 100 in all — whose value count, unit bits
+//! and values must equal one of the scans `simulate` sends for that variant
+//! and unit ([`SceneSource::scans_for`], the same seeded scene), then stops
+//! the stream (`20 25`).
+
+use std::fs::File;
+use std::io::Read as _;
+use std::os::fd::{AsFd, OwnedFd};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use host_bridge::simulate::SceneSource;
+use host_bridge::synthetic::SceneArgs;
+use lms_core::telegram::features::{Assembled, FeatureAssembler};
+use lms_core::telegram::{Direction, MeasuredView, RangeBits, Telegram};
+use lms_core::{Extractor, Unit, ValidParams, Variant};
+use nix::fcntl::{open, OFlag};
+use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+use nix::sys::stat::Mode;
+use nix::sys::termios::{cfmakeraw, cfsetspeed, tcflush, tcgetattr, tcsetattr, BaudRate};
+use nix::sys::termios::{FlushArg, SetArg};
+
+const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+
+/// Scans read per variant (in each unit): 100 per client in all, more of
+/// the short scans, so that the 9600 Bd runs (a 401-value `B0` takes
+/// 0.85 s there) stay short.
+fn scans_per_setting(v: Variant) -> usize {
+    match v {
+        Variant::Fov100Res100 => 20,
+        Variant::Fov180Res100 | Variant::Fov100Res50 => 10,
+        _ => 5,
+    }
+}
+/// The scene `simulate` plays (and the test recomputes).
+const SCENE: &[&str] = &["--count", "4", "--seed", "5"];
+
+const ACK: u8 = 0x06;
+
+// ------------------------------------------------------------ the wire --
+
+/// The LMS checksum (public telegram listing): shift left, feeding back
+/// 0x8005 on a carry, xor in the byte and the previous byte.
+fn lms_crc(bytes: &[u8]) -> u16 {
+    let (mut crc, mut prev) = (0u16, 0u8);
+    for &b in bytes {
+        crc = if crc & 0x8000 != 0 {
+            ((crc & 0x7FFF) << 1) ^ 0x8005
+        } else {
+            crc << 1
+        };
+        crc ^= u16::from(b) | (u16::from(prev) << 8);
+        prev = b;
+    }
+    crc
+}
+
+/// A request to address 0: `02 00 LEN CMD DATA CRC`.
+fn telegram(payload: &[u8]) -> Vec<u8> {
+    let len = payload.len() as u16;
+    let mut t = vec![0x02, 0x00, len as u8, (len >> 8) as u8];
+    t.extend_from_slice(payload);
+    let crc = lms_crc(&t);
+    t.extend_from_slice(&crc.to_le_bytes());
+    t
+}
+
+fn termios_rate(bps: u32) -> BaudRate {
+    match bps {
+        9600 => BaudRate::B9600,
+        19200 => BaudRate::B19200,
+        38400 => BaudRate::B38400,
+        500_000 => BaudRate::B500000,
+        other => panic!("no rate {other}"),
+    }
+}
+
+/// The `20 4x` mode byte of a rate.
+fn baud_code(bps: u32) -> u8 {
+    match bps {
+        38400 => 0x40,
+        19200 => 0x41,
+        9600 => 0x42,
+        _ => 0x48,
+    }
+}
+
+/// The client's serial port (the pty's slave), with a receive buffer.
+struct Port {
+    fd: OwnedFd,
+    rx: Vec<u8>,
+}
+
+impl Port {
+    fn open(path: &Path) -> Port {
+        let fd = open(
+            path,
+            OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_NONBLOCK,
+            Mode::empty(),
+        )
+        .unwrap_or_else(|e| panic!("cannot open {}: {e}", path.display()));
+        let port = Port { fd, rx: Vec::new() };
+        port.set_speed(9600);
+        port
+    }
+
+    fn set_speed(&self, bps: u32) {
+        let mut t = tcgetattr(self.fd.as_fd()).unwrap();
+        cfmakeraw(&mut t);
+        cfsetspeed(&mut t, termios_rate(bps)).unwrap();
+        tcsetattr(self.fd.as_fd(), SetArg::TCSANOW, &t).unwrap();
+    }
+
+    fn flush_input(&mut self) {
+        tcflush(self.fd.as_fd(), FlushArg::TCIFLUSH).unwrap();
+        self.rx.clear();
+    }
+
+    fn send(&self, bytes: &[u8]) {
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            match nix::unistd::write(&self.fd, rest) {
+                Ok(n) => rest = &rest[n..],
+                Err(nix::errno::Errno::EAGAIN) => std::thread::sleep(Duration::from_millis(1)),
+                Err(e) => panic!("write: {e}"),
+            }
+        }
+    }
+
+    /// Read what is there, waiting up to `wait` for something; `false` if
+    /// nothing came.
+    fn pull(&mut self, wait: Duration) -> bool {
+        let ms = wait.as_millis().clamp(0, 50) as u16;
+        let mut fds = [PollFd::new(self.fd.as_fd(), PollFlags::POLLIN)];
+        let _ = poll(&mut fds, PollTimeout::from(ms));
+        let mut buf = [0u8; 4096];
+        let mut got = false;
+        loop {
+            match nix::unistd::read(&self.fd, &mut buf) {
+                Ok(0) | Err(nix::errno::Errno::EAGAIN) | Err(nix::errno::Errno::EIO) => break,
+                Ok(n) => {
+                    self.rx.extend_from_slice(&buf[..n]);
+                    got = true;
+                }
+                Err(e) => panic!("read: {e}"),
+            }
+        }
+        got
+    }
+
+    /// The next byte within `deadline`.
+    fn byte(&mut self, deadline: Instant) -> Result<u8, String> {
+        while self.rx.is_empty() {
+            if Instant::now() >= deadline {
+                return Err("time-out waiting for a byte".into());
+            }
+            self.pull(deadline.saturating_duration_since(Instant::now()));
+        }
+        Ok(self.rx.remove(0))
+    }
+
+    /// `n` bytes within `deadline`.
+    fn bytes(&mut self, n: usize, deadline: Instant) -> Result<Vec<u8>, String> {
+        while self.rx.len() < n {
+            if Instant::now() >= deadline {
+                return Err(format!("time-out waiting for {n} bytes"));
+            }
+            self.pull(deadline.saturating_duration_since(Instant::now()));
+        }
+        Ok(self.rx.drain(..n).collect())
+    }
+}
+
+/// Read one frame the way the drivers do: find `02 80`, `LEN` (≤ 812),
+/// payload, CRC. `Ok(None)` is a frame that failed a check (the caller
+/// decides whether that trips it); the bytes after its `02` stay.
+fn read_frame(port: &mut Port, deadline: Instant) -> Result<Option<Vec<u8>>, String> {
+    loop {
+        if port.byte(deadline)? != 0x02 {
+            continue;
+        }
+        let addr = port.bytes(1, deadline)?[0];
+        if addr != 0x80 {
+            port.rx.insert(0, addr);
+            continue;
+        }
+        let len = port.bytes(2, deadline)?;
+        let n = usize::from(u16::from_le_bytes([len[0], len[1]]));
+        if !(2..=812).contains(&n) {
+            port.rx.splice(0..0, len);
+            return Ok(None);
+        }
+        let body = port.bytes(n + 2, deadline)?;
+        let mut all = vec![0x02, 0x80, len[0], len[1]];
+        all.extend_from_slice(&body[..n]);
+        if lms_crc(&all) != u16::from_le_bytes([body[n], body[n + 1]]) {
+            port.rx.splice(
+                0..0,
+                all[1..].iter().copied().chain(body[n..].iter().copied()),
+            );
+            return Ok(None);
+        }
+        return Ok(Some(body[..n].to_vec()));
+    }
+}
+
+// --------------------------------------------------------- the clients --
+
+/// The behaviours of the table in the module docs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Behaviour {
+    AnyReply,
+    SyncCrc,
+    StreamB0,
+    Ack60,
+    Features,
+}
+
+impl Behaviour {
+    const ALL: [Behaviour; 5] = [
+        Behaviour::AnyReply,
+        Behaviour::SyncCrc,
+        Behaviour::StreamB0,
+        Behaviour::Ack60,
+        Behaviour::Features,
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            Behaviour::AnyReply => "any-reply",
+            Behaviour::SyncCrc => "sync-crc",
+            Behaviour::StreamB0 => "stream-b0",
+            Behaviour::Ack60 => "ack-60ms",
+            Behaviour::Features => "features",
+        }
+    }
+}
+
+/// What a client run found.
+#[derive(Debug, Default)]
+struct Tally {
+    scans: usize,
+    feature_groups: usize,
+    skipped_telegrams: usize,
+    resends: usize,
+}
+
+struct Client {
+    behaviour: Behaviour,
+    port: Port,
+    baud: u32,
+    extractor: Extractor,
+    assembler: FeatureAssembler,
+    tally: Tally,
+}
+
+impl Client {
+    /// Send `payload` and return the reply (`CMD … STATUS`) with code `want`,
+    /// as this client's driver would.
+    fn request(&mut self, payload: &[u8], want: u8) -> Result<Vec<u8>, String> {
+        let deadline = Instant::now() + Duration::from_secs(5);
+        match self.behaviour {
+            Behaviour::AnyReply => {
+                self.port.send(&telegram(payload));
+                while self.port.byte(deadline)? != ACK {}
+                let reply =
+                    read_frame(&mut self.port, deadline)?.ok_or("bad frame as the reply")?;
+                if reply[0] != want {
+                    return Err(format!(
+                        "unexpected message {:02X} (waiting for {want:02X})",
+                        reply[0]
+                    ));
+                }
+                Ok(reply)
+            }
+            Behaviour::Ack60 => {
+                let mut tries = 0;
+                loop {
+                    self.port.send(&telegram(payload));
+                    tries += 1;
+                    let ack_by = Instant::now() + Duration::from_millis(60);
+                    if matches!(self.port.byte(ack_by), Ok(ACK)) {
+                        break;
+                    }
+                    if tries == 10 {
+                        return Err(format!("no ACK to {:02X} in 10 tries", payload[0]));
+                    }
+                    self.tally.resends += 1;
+                }
+                self.tolerant_reply(want, deadline)
+            }
+            _ => {
+                self.port.send(&telegram(payload));
+                self.tolerant_reply(want, deadline)
+            }
+        }
+    }
+
+    /// Frames until the one with code `want`, skipping others (`sync-crc`
+    /// trips on a bad frame).
+    fn tolerant_reply(&mut self, want: u8, deadline: Instant) -> Result<Vec<u8>, String> {
+        loop {
+            match read_frame(&mut self.port, deadline)? {
+                Some(f) if f[0] == want => return Ok(f),
+                Some(_) => self.tally.skipped_telegrams += 1,
+                None if self.behaviour == Behaviour::SyncCrc => {
+                    return Err("resync: bad length or CRC".into())
+                }
+                None => {}
+            }
+        }
+    }
+
+    /// The next scan (`B0` payload) while streaming.
+    fn scan(&mut self) -> Result<Vec<u8>, String> {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            let frame = read_frame(&mut self.port, deadline)?;
+            match (self.behaviour, frame) {
+                (_, Some(f)) if f[0] == 0xB0 => return Ok(f),
+                (Behaviour::AnyReply | Behaviour::StreamB0, Some(f)) => {
+                    return Err(format!("unexpected message {:02X} in the stream", f[0]))
+                }
+                (Behaviour::SyncCrc, None) => return Err("resync in the stream".into()),
+                (_, Some(_)) => self.tally.skipped_telegrams += 1,
+                (_, None) => {}
+            }
+        }
+    }
+
+    /// The features client: the group after a `B0`, bit-identical to the
+    /// std build's features of that scan.
+    fn check_features(&mut self, b0: &Telegram<&[u8]>) -> Result<(), String> {
+        let frame = MeasuredView::parse(b0)
+            .and_then(|m| m.to_frame(RangeBits::Bits13))
+            .map_err(|e| format!("B0: {e}"))?;
+        let want = self.extractor.run(&frame, &ValidParams::DEFAULT).clone();
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            let f = read_frame(&mut self.port, deadline)?.ok_or("bad frame in a group")?;
+            let wire = wire_bytes(&f);
+            let t = Telegram::new_checked(&wire[..], Direction::SensorToHost)
+                .map_err(|e| format!("{e:?}"))?;
+            if f[0] == 0xB0 {
+                return Err("a B0 before the previous scan's D0".into());
+            }
+            match self.assembler.push(&t) {
+                Ok(Assembled::Complete(summary, got)) => {
+                    let diffs = host_bridge::verify::differences(got, &want);
+                    if !diffs.is_empty() || usize::from(summary.beams) != frame.len() {
+                        return Err(format!("features differ: {diffs:?}"));
+                    }
+                    self.tally.feature_groups += 1;
+                    return Ok(());
+                }
+                Ok(_) => {}
+                Err(e) => return Err(format!("feature telegram: {e:?}")),
+            }
+        }
+    }
+
+    /// Stop the stream as a driver must with an LMS too: `20 25`, let what
+    /// was on the line arrive, drop it, ask again (now the next telegram
+    /// is the reply). On a pty the co-processor's bytes arrive at once
+    /// (its host-line budget keeps the time), so 100 ms is enough.
+    fn stop_stream(&mut self) -> Result<(), String> {
+        self.port.send(&telegram(&[0x20, 0x25]));
+        std::thread::sleep(Duration::from_millis(100));
+        self.port.pull(Duration::ZERO);
+        self.port.flush_input();
+        let a0 = self.request(&[0x20, 0x25], 0xA0)?;
+        expect(a0[1] == 0, "20 25 answered A0 00", &a0)
+    }
+}
+
+/// A frame's payload back to its bytes on the wire.
+fn wire_bytes(payload: &[u8]) -> Vec<u8> {
+    let len = payload.len() as u16;
+    let mut t = vec![0x02, 0x80, len as u8, (len >> 8) as u8];
+    t.extend_from_slice(payload);
+    let crc = lms_crc(&t);
+    t.extend_from_slice(&crc.to_le_bytes());
+    t
+}
+
+fn expect(ok: bool, what: &str, got: &[u8]) -> Result<(), String> {
+    if ok {
+        Ok(())
+    } else {
+        Err(format!("{what}: got {:02X?}", &got[..got.len().min(16)]))
+    }
+}
+
+// ------------------------------------------------------------ a session --
+
+/// A variant and unit, and the scans (value words) `simulate` sends for it.
+type Expected = ((Variant, Unit), Vec<Vec<u16>>);
+
+/// The scans `simulate` sends for each variant and unit.
+fn expected_scans() -> Vec<Expected> {
+    let args = SceneArgs {
+        count: 4,
+        seed: 5,
+        ..SceneArgs::default()
+    };
+    let mut source = SceneSource::new(&args).unwrap();
+    let mut all = Vec::new();
+    for v in VARIANTS {
+        for u in [Unit::Millimetre, Unit::Centimetre] {
+            all.push(((v, u), source.scans_for(v, u)));
+        }
+    }
+    all
+}
+
+const VARIANTS: [Variant; 5] = [
+    Variant::Fov180Res100,
+    Variant::Fov180Res50,
+    Variant::Fov100Res100,
+    Variant::Fov100Res50,
+    Variant::Fov100Res25,
+];
+
+/// Initialise: the rate, the features (opted-in client), type and status.
+fn initialise(c: &mut Client) -> Result<(), String> {
+    if c.baud != 9600 {
+        let a0 = c.request(&[0x20, baud_code(c.baud)], 0xA0)?;
+        expect(a0[1] == 0, "20 4x answered A0 00", &a0)?;
+        c.port.set_speed(c.baud);
+    }
+    if c.behaviour == Behaviour::Features {
+        let d6 = c.request(&[0x56, 0x01], 0xD6)?;
+        expect(d6[1] == 1, "56 01 answered D6 01", &d6)?;
+    }
+    let ba = c.request(&[0x3A], 0xBA)?;
+    expect(ba[1..].starts_with(b"LMS"), "3A answered BA LMS…", &ba)?;
+    let b1 = c.request(&[0x31], 0xB1)?;
+    expect(b1.len() > 122, "31 answered B1", &b1)
+}
+
+/// Set a variant and unit and check that `31` and `74` tell them.
+fn set_up(c: &mut Client, v: Variant, u: Unit) -> Result<(), String> {
+    let (fov, res) = (v.fov_deg(), v.resolution_centideg());
+    let mut req = vec![0x3B];
+    req.extend_from_slice(&fov.to_le_bytes());
+    req.extend_from_slice(&res.to_le_bytes());
+    let bb = c.request(&req, 0xBB)?;
+    expect(
+        bb[1] == 1 && bb[2..6] == req[1..5],
+        "3B answered BB 01 + variant",
+        &bb,
+    )?;
+    let mut install = vec![0x20, 0x00];
+    install.extend_from_slice(b"SICK_LMS");
+    let a0 = c.request(&install, 0xA0)?;
+    expect(a0[1] == 0, "installation mode", &a0)?;
+    let f4 = c.request(&[0x74], 0xF4)?;
+    let mut config = f4[1..35].to_vec();
+    config[6] = u8::from(u == Unit::Millimetre);
+    let mut write = vec![0x77];
+    write.extend_from_slice(&config);
+    let f7 = c.request(&write, 0xF7)?;
+    expect(
+        f7[1] == 1 && f7[2..36] == config[..],
+        "77 answered F7 01",
+        &f7,
+    )?;
+    let b1 = c.request(&[0x31], 0xB1)?;
+    let angle = u16::from_le_bytes([b1[107], b1[108]]);
+    let resolution = u16::from_le_bytes([b1[109], b1[110]]);
+    let ok = (angle, resolution, b1[122]) == (fov, res, config[6]);
+    expect(ok, "B1 tells the variant and units", &b1[105..123])?;
+    let f4 = c.request(&[0x74], 0xF4)?;
+    expect(f4[7] == config[6], "F4 tells the units", &f4)
+}
+
+/// Stream and read [`scans_per_setting`] scans of `v` in `u`, each one of
+/// `expected`.
+fn read_scans(c: &mut Client, v: Variant, u: Unit, expected: &[Vec<u16>]) -> Result<(), String> {
+    let a0 = c.request(&[0x20, 0x24], 0xA0)?;
+    expect(a0[1] == 0, "20 24 answered A0 00", &a0)?;
+    for _ in 0..scans_per_setting(v) {
+        let b0 = c.scan()?;
+        let count = u16::from_le_bytes([b0[1], b0[2]]);
+        let unit_bits = count >> 14;
+        let n = usize::from(count & 0x3FFF);
+        let want_unit = u16::from(u == Unit::Millimetre);
+        expect(
+            n == v.beams() && unit_bits == want_unit,
+            "B0 of the variant and units set",
+            &b0[..3],
+        )?;
+        let words: Vec<u16> = (0..n)
+            .map(|j| u16::from_le_bytes([b0[3 + 2 * j], b0[4 + 2 * j]]))
+            .collect();
+        expect(
+            expected.contains(&words),
+            "B0 values are one of simulate's scans",
+            &b0[..8],
+        )?;
+        c.tally.scans += 1;
+        if c.behaviour == Behaviour::Features {
+            let wire = wire_bytes(&b0);
+            let t = Telegram::new_checked(&wire[..], Direction::SensorToHost)
+                .map_err(|e| format!("{e:?}"))?;
+            c.check_features(&t)?;
+        }
+    }
+    c.stop_stream()
+}
+
+/// One client's whole run on `link`.
+fn session(behaviour: Behaviour, baud: u32, link: &Path) -> Result<Tally, String> {
+    let mut c = Client {
+        behaviour,
+        port: Port::open(link),
+        baud,
+        extractor: Extractor::new(),
+        assembler: FeatureAssembler::new(),
+        tally: Tally::default(),
+    };
+    // The line settles (a client opening the port sees nothing it did not ask for).
+    c.port.pull(Duration::from_millis(50));
+    c.port.flush_input();
+    initialise(&mut c)?;
+    for ((v, u), expected) in expected_scans() {
+        set_up(&mut c, v, u).map_err(|e| format!("{v:?} {u}: {e}"))?;
+        read_scans(&mut c, v, u, &expected).map_err(|e| format!("{v:?} {u}: {e}"))?;
+    }
+    finish(&mut c)?;
+    Ok(c.tally)
+}
+
+/// On exit, as drivers do: features off, back to 9600 Bd (the next client
+/// finds the line as at power-on).
+fn finish(c: &mut Client) -> Result<(), String> {
+    if c.behaviour == Behaviour::Features {
+        let d6 = c.request(&[0x56, 0x00], 0xD6)?;
+        expect(d6[1] == 0, "56 00 answered D6 00", &d6)?;
+    }
+    if c.baud != 9600 {
+        let a0 = c.request(&[0x20, 0x42], 0xA0)?;
+        expect(a0[1] == 0, "20 42 answered A0 00", &a0)?;
+        c.port.set_speed(9600);
+    }
+    Ok(())
+}
+
+// -------------------------------------------------------- the processes --
+
+/// A child process, killed when dropped.
+struct Proc(Child);
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Wait until `path` exists (a `--link`).
+fn await_path(path: &Path, what: &str) {
+    let until = Instant::now() + Duration::from_secs(20);
+    while std::fs::symlink_metadata(path).is_err() {
+        assert!(Instant::now() < until, "{what}: no {}", path.display());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// `simulate` and `coprocessor` for one client; the client's link.
+fn chain(dir: &Path, name: &str) -> (Proc, Proc, PathBuf) {
+    chain_with(dir, name, &[])
+}
+
+/// [`chain`] with more `coprocessor` options (e.g. `--qemu ELF`).
+fn chain_with(dir: &Path, name: &str, cop_args: &[&str]) -> (Proc, Proc, PathBuf) {
+    let sensor = dir.join(format!("{name}.sensor"));
+    let client = dir.join(format!("{name}.client"));
+    let log = |what: &str| File::create(dir.join(format!("{name}.{what}.log"))).unwrap();
+    let sim = Command::new(BIN)
+        .arg("simulate")
+        .args(SCENE)
+        .arg("--link")
+        .arg(&sensor)
+        .stdout(Stdio::null())
+        .stderr(log("simulate"))
+        .spawn()
+        .expect("simulate");
+    await_path(&sensor, "simulate");
+    let cop = Command::new(BIN)
+        .args(["coprocessor", "--status-every", "5"])
+        .args(cop_args)
+        .arg("--sensor")
+        .arg(&sensor)
+        .arg("--link")
+        .arg(&client)
+        .stdout(Stdio::null())
+        .stderr(log("coprocessor"))
+        .spawn()
+        .expect("coprocessor");
+    await_path(&client, "coprocessor");
+    (Proc(sim), Proc(cop), client)
+}
+
+fn tail(path: &Path) -> String {
+    let mut s = String::new();
+    if let Ok(mut f) = File::open(path) {
+        let _ = f.read_to_string(&mut s);
+    }
+    let lines: Vec<&str> = s.lines().collect();
+    lines[lines.len().saturating_sub(3)..].join("\n")
+}
+
+#[test]
+fn lms_clients_through_the_coprocessor_against_simulate() {
+    let dir = std::env::temp_dir().join(format!("host-bridge-lms-clients-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let started = Instant::now();
+    let mut runs = Vec::new();
+    for baud in [9600u32, 38400, 500_000] {
+        for behaviour in Behaviour::ALL {
+            let name = format!("{}-{baud}", behaviour.name());
+            let (sim, cop, link) = chain(&dir, &name);
+            let handle = std::thread::spawn(move || {
+                let t0 = Instant::now();
+                let r = session(behaviour, baud, &link);
+                (r, t0.elapsed())
+            });
+            runs.push((name, sim, cop, handle));
+        }
+    }
+    let mut failures = Vec::new();
+    for (name, sim, cop, handle) in runs {
+        let (result, took) = handle.join().unwrap();
+        drop((cop, sim));
+        match result {
+            Ok(t) => {
+                println!(
+                    "{name:18} {:3} scans, {:3} feature groups, {} telegrams skipped, {} resends, {:.1} s",
+                    t.scans,
+                    t.feature_groups,
+                    t.skipped_telegrams,
+                    t.resends,
+                    took.as_secs_f64()
+                );
+                let features = name.starts_with("features");
+                if t.scans < 100 || (features && t.feature_groups != t.scans) {
+                    failures.push(format!("{name}: {t:?}"));
+                }
+            }
+            Err(e) => failures.push(format!(
+                "{name}: {e}\n  coprocessor: {}\n  simulate: {}",
+                tail(&dir.join(format!("{name}.coprocessor.log"))),
+                tail(&dir.join(format!("{name}.simulate.log")))
+            )),
+        }
+    }
+    println!("all clients: {:.1} s", started.elapsed().as_secs_f64());
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn simulate_powers_up_with_its_stored_settings() {
+    let dir = std::env::temp_dir().join(format!("host-bridge-power-on-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let link = dir.join("lms");
+    let sim = Command::new(BIN)
+        .args([
+            "simulate",
+            "--variant",
+            "100/0.25",
+            "--units",
+            "mm",
+            "--range-mode",
+            "16",
+        ])
+        .arg("--link")
+        .arg(&link)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("simulate");
+    let _sim = Proc(sim);
+    await_path(&link, "simulate");
+    let mut c = Client {
+        behaviour: Behaviour::AnyReply,
+        port: Port::open(&link),
+        baud: 9600,
+        extractor: Extractor::new(),
+        assembler: FeatureAssembler::new(),
+        tally: Tally::default(),
+    };
+    c.port.pull(Duration::from_millis(100));
+    c.port.flush_input();
+    // A client that sets nothing: B1, F4 and the scans tell the stored
+    // 100°/0.25°, mm, 16 m mode (measuring mode 04, 14 range bits).
+    let b1 = c.request(&[0x31], 0xB1).unwrap();
+    let angle = u16::from_le_bytes([b1[107], b1[108]]);
+    let res = u16::from_le_bytes([b1[109], b1[110]]);
+    assert_eq!((angle, res, b1[122]), (100, 25, 1));
+    let f4 = c.request(&[0x74], 0xF4).unwrap();
+    assert_eq!((f4[6], f4[7]), (0x04, 1), "measuring mode 04, mm");
+    let b0 = c.request(&[0x30, 0x01], 0xB0).unwrap();
+    let count = u16::from_le_bytes([b0[1], b0[2]]);
+    assert_eq!((count & 0x3FF, count >> 14), (401, 1));
+    // The room is within 8 m: every value a range or the 14-bit "not valid".
+    let words = (0..401).map(|j| u16::from_le_bytes([b0[3 + 2 * j], b0[4 + 2 * j]]));
+    assert!(
+        words.clone().all(|w| w < 8000 || w == 0x3FFF),
+        "14-bit codes"
+    );
+    assert!(
+        words.clone().any(|w| w == 0x3FFF),
+        "dropouts coded in 14 bits"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The release firmware, if built (`cd firmware && cargo build --release`).
+fn firmware_elf() -> Option<PathBuf> {
+    let elf = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../firmware/target/thumbv7em-none-eabihf/release/lms-firmware");
+    let qemu = std::env::var_os("PATH")
+        .is_some_and(|p| std::env::split_paths(&p).any(|d| d.join("qemu-system-arm").exists()));
+    (elf.exists() && qemu).then_some(elf)
+}
+
+/// The same clients through the real firmware under QEMU
+/// (`host-bridge coprocessor --qemu`), one after another on one chain (each
+/// leaves the line at 9600 Bd, features off): every client at 500000 Bd, the
+/// `any-reply` and `features` clients also at 38400 Bd (9600 Bd under QEMU:
+/// `any-reply` passed in 83 s, `features` timed out after 4 of the 10
+/// settings — open, see the i11 notes; left out for CI time). Needs the
+/// release firmware and QEMU; CI runs it after the firmware build:
+/// `cargo test -p host-bridge --test lms_clients -- --ignored --nocapture`.
+#[test]
+#[ignore = "needs the release firmware and qemu-system-arm (CI: after the firmware build)"]
+fn lms_clients_through_the_firmware_under_qemu() {
+    let elf = firmware_elf().expect("the release firmware and qemu-system-arm");
+    let dir = std::env::temp_dir().join(format!("host-bridge-lms-qemu-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let (_sim, _cop, link) = chain_with(&dir, "qemu", &["--qemu", elf.to_str().unwrap()]);
+    let mut runs: Vec<(Behaviour, u32)> = Behaviour::ALL.iter().map(|&b| (b, 500_000)).collect();
+    runs.push((Behaviour::AnyReply, 38400));
+    runs.push((Behaviour::Features, 38400));
+    let started = Instant::now();
+    let mut failures = Vec::new();
+    for (behaviour, baud) in runs {
+        let t0 = Instant::now();
+        match session(behaviour, baud, &link) {
+            Ok(t) => {
+                println!(
+                    "qemu {:10} {baud:6} Bd: {:3} scans, {:3} feature groups, {} resends, {:.1} s",
+                    behaviour.name(),
+                    t.scans,
+                    t.feature_groups,
+                    t.resends,
+                    t0.elapsed().as_secs_f64()
+                );
+                let features = behaviour == Behaviour::Features;
+                if t.scans < 100 || (features && t.feature_groups != t.scans) {
+                    failures.push(format!("{} {baud}: {t:?}", behaviour.name()));
+                }
+            }
+            Err(e) => failures.push(format!(
+                "{} {baud}: {e}\n  coprocessor: {}",
+                behaviour.name(),
+                tail(&dir.join("qemu.coprocessor.log"))
+            )),
+        }
+    }
+    println!(
+        "all clients under QEMU: {:.1} s",
+        started.elapsed().as_secs_f64()
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
