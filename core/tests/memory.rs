@@ -31,6 +31,8 @@ fn coprocessor_parts_sizes() {
     // scans in place in its framer (it held a second 818-byte copy).
     assert!(size_of::<Client>() < size_of::<Framer>() + 256);
     // The whole co-processor (x86-64 layout; on the MCU a little smaller):
-    // 22 704 B before the copy went, 21 896 B after.
-    assert!(size_of::<CoProcessor>() <= 21_896);
+    // 22 704 B before the copy went, 21 896 B after; 21 944 B with the
+    // drop-in host face (three more D5 counters, twice; the host line's
+    // clock; the feature opt-in; a pending reconfiguration).
+    assert!(size_of::<CoProcessor>() <= 21_944);
 }

@@ -47,9 +47,11 @@ pub struct VerifyArgs {
     #[arg(long, value_name = "BAUD", default_value_t = 500_000)]
     pub host_baud: u32,
     /// Hold the sensor's stream while this many scans are out and not back
-    /// with features (0 = never) [default: 5 with --qemu, whose UARTs take
-    /// a third of the line rate (five scans fit the firmware's 4 KiB sensor
-    /// queue); else 0, as a real sensor never waits]
+    /// with features (0 = never) [default: 1 with --qemu, whose UARTs take
+    /// a third of the line rate (more would queue in the firmware and reach
+    /// its host-line budget back to back, which drops what does not fit one
+    /// scan period; five scans fit its 4 KiB sensor queue); else 0, as a
+    /// real sensor never waits]
     #[arg(long, value_name = "N")]
     pub max_in_flight: Option<usize>,
     /// Switch the simulated LMS off and on once, after this many scans of the

@@ -162,8 +162,13 @@ impl Session {
         let clock = EmuClock::new();
         let wanted = source.len();
         let emu = Emulator::new(source, Settings::default(), clock.now_us());
+        // Under QEMU one scan at a time: scans queued in the firmware's
+        // sensor queue (QEMU's UART is slow) are processed back to back, and
+        // the co-processor's host-line budget drops a scan that finds the
+        // line busy for more than a scan period (docs/PROTOCOL.md §2c);
+        // `qemu_max_in_flight()` is the most the queue could hold.
         let max_in_flight = args.max_in_flight.unwrap_or(if args.qemu.is_some() {
-            qemu_max_in_flight()
+            qemu_max_in_flight().min(1)
         } else {
             0
         });
