@@ -40,13 +40,26 @@ fn main() {
             .expect("LMS_ITERATIONS must be a whole number 1..=1000"),
         Err(_) => 30,
     };
+    // The board's crystal (Hz): 8 MHz on the STM32F4-Discovery, 25 MHz on
+    // a Netduino Plus 2; rcc.rs checks at compile time that the PLL gets
+    // exactly 168 MHz from it.
+    println!("cargo:rerun-if-env-changed=LMS_HSE_HZ");
+    let hse_hz: u32 = match env::var("LMS_HSE_HZ") {
+        Ok(s) => s
+            .trim()
+            .parse()
+            .expect("LMS_HSE_HZ must be a whole number (Hz)"),
+        Err(_) => 8_000_000,
+    };
     fs::write(
         out.join("build_config.rs"),
         format!(
             "/// Scans after which an `exit-after-scans` build exits (`LMS_EXIT_AFTER_SCANS` at build time).\n\
              pub const EXIT_AFTER_SCANS: u32 = {scans};\n\
              /// Smoothing passes (`LMS_ITERATIONS` at build time, default 30).\n\
-             pub const ITERATIONS: u16 = {iterations};\n"
+             pub const ITERATIONS: u16 = {iterations};\n\
+             /// The board's crystal (`LMS_HSE_HZ` at build time, default 8 MHz).\n\
+             pub const HSE_HZ: u32 = {hse_hz};\n"
         ),
     )
     .expect("write build_config.rs");

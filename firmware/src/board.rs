@@ -1,41 +1,35 @@
 #![allow(unsafe_code)]
-//! Board bring-up for the STM32F405 as QEMU's `netduinoplus2` models it,
-//! the UART interrupt handlers, fault handlers and the stack report.
+//! Board bring-up for an STM32F405/407 board and QEMU's `netduinoplus2`
+//! (one ELF, QEMU detected at run time by [`crate::rcc`]): clocks, pins,
+//! the USART interrupt handlers, fault handlers and the stack report.
 //!
-//! This is the only module with `unsafe` code; each block says why it holds.
+//! `unsafe` lives here and in [`crate::rcc`], [`crate::fault`] and
+//! [`crate::log`]; each block says why it holds.
 //!
 //! | port | USART | pins (silicon) | IRQ | QEMU | role |
 //! |---|---|---|---|---|---|
-//! | host | USART1 | PA9 TX / PA10 RX, AF7 | 37 | 1st `-serial` | the robot's computer (LMS client) |
-//! | sensor | USART2 | PA2 TX / PA3 RX, AF7 | 38 | 2nd `-serial` | the LMS 2xx |
-//! | control | USART3 | PB10 TX / PB11 RX, AF7 | polled | 3rd `-serial` | debug console: stats, exit |
+//! | host | USART1 (APB2 84 MHz) | PB6 TX / PB7 RX, AF7 | 37 | 1st `-serial` | the robot's computer (LMS client) |
+//! | sensor | USART2 (APB1 42 MHz) | PA2 TX / PA3 RX, AF7 | 38 | 2nd `-serial` | the LMS 2xx |
+//! | control | USART3 (APB1 42 MHz) | PB10 TX / PB11 RX, AF7 | 39 | 3rd `-serial` | debug console: stats, exit |
 //!
-//! Clocks: QEMU has no RCC model (its registers read 0 and ignore writes),
-//! so nothing here waits for a ready bit. QEMU runs the core at a fixed
-//! 168 MHz (`netduinoplus2`: `SYSCLK_FRQ`), SysTick's "processor clock"
-//! source included; the serial rate is ignored. The peripheral clock
-//! enables and the pin functions below are written anyway so that the same
-//! code is right on silicon, where only the PLL set-up (HSE → 168 MHz,
-//! APB1 42 MHz, APB2 84 MHz) is still missing.
+//! USART1 is on PB6/PB7, not PA9/PA10: on the STM32F4-Discovery PA9 is
+//! the USB VBUS sense with a 4.7 µF capacitor, which a 500 kBd TX cannot
+//! drive. QEMU does not model the pins (nor the clocks, the watchdog or the
+//! option bytes); it ignores those writes.
 
 use core::cell::RefCell;
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use cortex_m_rt::{exception, ExceptionFrame};
 use critical_section::Mutex;
-use heapless::spsc::{Producer, Queue};
+use heapless::spsc::{Consumer, Producer, Queue};
 use static_cell::ConstStaticCell;
 use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 
 use crate::clock;
-use crate::serial::{self, PolledSerial, RxStats, Serial};
-
-/// Core clock (Hz): QEMU `netduinoplus2`'s fixed SYSCLK.
-pub const CORE_HZ: u32 = 168_000_000;
-/// APB2 clock (USART1) of the 168 MHz configuration (Hz).
-pub const PCLK2_HZ: u32 = 84_000_000;
-/// APB1 clock (USART2, USART3) of the 168 MHz configuration (Hz).
-pub const PCLK1_HZ: u32 = 42_000_000;
+use crate::fault::{self, Bor, Cause, FaultRecord, ResetCause};
+use crate::rcc::{self, Clocks};
+use crate::serial::{self, RxStats, Serial};
 
 /// Line speed of the host side at power-on (Bd): the co-processor looks like
 /// an LMS 2xx to its client, which starts at 9600 and switches on request
@@ -46,31 +40,90 @@ pub const SENSOR_BAUD: u32 = 9_600;
 /// Line speed of the control console (Bd).
 pub const CONTROL_BAUD: u32 = 115_200;
 
-/// Slots of the host receive queue (holds one less byte): requests are short.
-pub const HOST_RX_SLOTS: usize = 1024;
+/// Slots of the host receive queue (holds one less byte): requests are
+/// short (the longest, `77`, is 42 bytes) and a client waits for each reply.
+pub const HOST_RX_SLOTS: usize = 256;
+/// Slots of the host transmit queue: a 361-beam `B0` and its features are
+/// about 1.15 KB; the write of a scan returns once all but this much is
+/// queued, so the rest leaves while the next scan is computed.
+pub const HOST_TX_SLOTS: usize = 1024;
 /// Slots of the sensor receive queue (holds one less byte): five 732-byte
-/// scans, i.e. ~80 ms of a 500 kBd stream (50 kB/s), for a loop that is
-/// busy with one scan for ~20–30 ms (3.3 M instructions at 168 MHz).
+/// scans (`verify --qemu`'s default of 5 in flight; five 401-beam `B0`s are
+/// 4 060 bytes), i.e. ~80 ms of a 500 kBd stream (50 kB/s), for a loop that
+/// is busy with one scan for ~16–20 ms.
 pub const SENSOR_RX_SLOTS: usize = 4096;
+/// Slots of the sensor transmit queue: one bring-up request (≤ 42 bytes).
+pub const SENSOR_TX_SLOTS: usize = 64;
+/// Slots of the console receive queue (one-byte commands).
+pub const CONTROL_RX_SLOTS: usize = 16;
+/// Slots of the console transmit queue (the report line is ~700 bytes; a
+/// report waits, asleep, for the rest).
+pub const CONTROL_TX_SLOTS: usize = 256;
 
 /// The host port (USART1).
 pub type HostPort = Serial<pac::USART1>;
 /// The sensor port (USART2).
 pub type SensorPort = Serial<pac::USART2>;
 /// The control console (USART3).
-pub type ControlPort = PolledSerial<pac::USART3>;
+pub type ControlPort = Serial<pac::USART3>;
 
-static HOST_RX: ConstStaticCell<Queue<u8, HOST_RX_SLOTS>> = ConstStaticCell::new(Queue::new());
-static SENSOR_RX: ConstStaticCell<Queue<u8, SENSOR_RX_SLOTS>> = ConstStaticCell::new(Queue::new());
+/// One USART's queues and counters, and the interrupt's queue ends parked
+/// until the interrupt takes them on first entry.
+struct PortStatics<const RX: usize, const TX: usize> {
+    rx: ConstStaticCell<Queue<u8, RX>>,
+    tx: ConstStaticCell<Queue<u8, TX>>,
+    parked: Mutex<RefCell<Ends>>,
+    stats: RxStats,
+}
 
-/// Producer ends, parked here until each interrupt takes its own on first entry.
-static HOST_RX_PRODUCER: Mutex<RefCell<Option<Producer<'static, u8>>>> =
-    Mutex::new(RefCell::new(None));
-static SENSOR_RX_PRODUCER: Mutex<RefCell<Option<Producer<'static, u8>>>> =
-    Mutex::new(RefCell::new(None));
+impl<const RX: usize, const TX: usize> PortStatics<RX, TX> {
+    const fn new() -> Self {
+        PortStatics {
+            rx: ConstStaticCell::new(Queue::new()),
+            tx: ConstStaticCell::new(Queue::new()),
+            parked: Mutex::new(RefCell::new(None)),
+            stats: RxStats::new(),
+        }
+    }
 
-static HOST_RX_STATS: RxStats = RxStats::new();
-static SENSOR_RX_STATS: RxStats = RxStats::new();
+    /// Split the queues: the interrupt's ends parked, the loop's returned.
+    fn split(&'static self) -> (Consumer<'static, u8>, Producer<'static, u8>) {
+        let (rx_in, rx_out) = self.rx.take().split();
+        let (tx_in, tx_out) = self.tx.take().split();
+        critical_section::with(|cs| self.parked.borrow_ref_mut(cs).replace((rx_in, tx_out)));
+        (rx_out, tx_in)
+    }
+
+    /// The interrupt's ends, once (`None` before `split`).
+    fn unpark(&self) -> Ends {
+        critical_section::with(|cs| self.parked.borrow_ref_mut(cs).take())
+    }
+}
+
+static HOST: PortStatics<HOST_RX_SLOTS, HOST_TX_SLOTS> = PortStatics::new();
+static SENSOR: PortStatics<SENSOR_RX_SLOTS, SENSOR_TX_SLOTS> = PortStatics::new();
+static CONTROL: PortStatics<CONTROL_RX_SLOTS, CONTROL_TX_SLOTS> = PortStatics::new();
+
+/// True under QEMU (set once by [`init`]).
+static EMULATOR: AtomicBool = AtomicBool::new(false);
+
+/// True under QEMU: semihosting (log, exit, clock) may be used.
+pub fn on_emulator() -> bool {
+    EMULATOR.load(Ordering::Relaxed)
+}
+
+/// What the boot found and did: reported on the console and in `D5`.
+#[derive(Clone, Copy, Debug, defmt::Format)]
+pub struct Boot {
+    /// The clocks in force.
+    pub clocks: Clocks,
+    /// `RCC_CSR`'s reset flags (0 under QEMU).
+    pub reset: ResetCause,
+    /// The fault record the previous boot left, if any.
+    pub last_fault: Option<FaultRecord>,
+    /// The brown-out level programming.
+    pub bor: Bor,
+}
 
 /// What [`init`] hands to the main loop.
 pub struct Board {
@@ -80,16 +133,87 @@ pub struct Board {
     pub sensor: SensorPort,
     /// USART3.
     pub control: ControlPort,
+    /// What the boot found.
+    pub boot: Boot,
 }
 
-/// Bring the board up: clocks for the peripherals, pins, the three USARTs,
-/// their receive queues and interrupts, SysTick. Call once; returns `None`
-/// if called again.
+/// Bring the board up: clocks (or QEMU detected), the log, the fault
+/// record and reset cause, brown-out level, pins, the three USARTs with
+/// their queues and interrupts, SysTick, the watchdog. Call once; returns
+/// `None` if called again.
 pub fn init() -> Option<Board> {
     let cp = cortex_m::Peripherals::take()?;
     let dp = pac::Peripherals::take()?;
 
-    // Peripheral clocks and pins (no effect in QEMU, needed on silicon).
+    let clocks = rcc::init(&dp.RCC, &dp.FLASH, &dp.PWR);
+    EMULATOR.store(clocks.is_emulator(), Ordering::Relaxed);
+    if clocks.is_emulator() {
+        crate::log::use_semihosting();
+    } else {
+        crate::log::init_rtt();
+    }
+    let boot = Boot {
+        clocks,
+        reset: fault::reset_cause(&dp.RCC),
+        last_fault: fault::take_last_fault(),
+        bor: fault::program_bor_level(&dp.FLASH),
+    };
+    pins(&dp);
+
+    // Receivers on as early as possible: QEMU drops what arrives before.
+    let host = HOST.split();
+    let sensor = SENSOR.split();
+    let control = CONTROL.split();
+    serial::configure(&dp.USART1, clocks.pclk2_hz, HOST_BAUD);
+    serial::configure(&dp.USART2, clocks.pclk1_hz, SENSOR_BAUD);
+    serial::configure(&dp.USART3, clocks.pclk1_hz, CONTROL_BAUD);
+
+    clock::start(cp.SYST, clocks.sysclk_hz);
+    fault::start_watchdog(&dp.IWDG);
+
+    // SAFETY: unmasking can break a critical section only if one is in
+    // progress; none is (we are in thread mode outside `critical_section::with`),
+    // and each handler only touches its own queue ends and counters.
+    unsafe {
+        cortex_m::peripheral::NVIC::unmask(Interrupt::USART1);
+        cortex_m::peripheral::NVIC::unmask(Interrupt::USART2);
+        cortex_m::peripheral::NVIC::unmask(Interrupt::USART3);
+    }
+
+    Some(Board {
+        host: Serial::new(
+            dp.USART1,
+            host.0,
+            host.1,
+            &HOST.stats,
+            Interrupt::USART1,
+            clocks.pclk2_hz,
+            HOST_BAUD,
+        ),
+        sensor: Serial::new(
+            dp.USART2,
+            sensor.0,
+            sensor.1,
+            &SENSOR.stats,
+            Interrupt::USART2,
+            clocks.pclk1_hz,
+            SENSOR_BAUD,
+        ),
+        control: Serial::new(
+            dp.USART3,
+            control.0,
+            control.1,
+            &CONTROL.stats,
+            Interrupt::USART3,
+            clocks.pclk1_hz,
+            CONTROL_BAUD,
+        ),
+        boot,
+    })
+}
+
+/// Peripheral clocks and pin functions (AF7 for all three USARTs).
+fn pins(dp: &pac::Peripherals) {
     dp.RCC
         .ahb1enr()
         .modify(|_, w| w.gpioaen().set_bit().gpioben().set_bit());
@@ -99,75 +223,85 @@ pub fn init() -> Option<Board> {
         .modify(|_, w| w.usart2en().set_bit().usart3en().set_bit());
     dp.GPIOA.afrl().modify(|_, w| w.afrl2().af7().afrl3().af7());
     dp.GPIOA
-        .afrh()
-        .modify(|_, w| w.afrh9().af7().afrh10().af7());
-    dp.GPIOA.moder().modify(|_, w| {
-        w.moder2().alternate();
-        w.moder3().alternate();
-        w.moder9().alternate();
-        w.moder10().alternate()
-    });
+        .moder()
+        .modify(|_, w| w.moder2().alternate().moder3().alternate());
+    dp.GPIOB.afrl().modify(|_, w| w.afrl6().af7().afrl7().af7());
     dp.GPIOB
         .afrh()
         .modify(|_, w| w.afrh10().af7().afrh11().af7());
-    dp.GPIOB
-        .moder()
-        .modify(|_, w| w.moder10().alternate().moder11().alternate());
-
-    // Receive queues: the consumer ends go to the ports, the producer ends
-    // to the interrupts (taken before the interrupts are unmasked).
-    let (host_tx, host_rx) = HOST_RX.take().split();
-    let (sensor_tx, sensor_rx) = SENSOR_RX.take().split();
-    critical_section::with(|cs| {
-        HOST_RX_PRODUCER.borrow_ref_mut(cs).replace(host_tx);
-        SENSOR_RX_PRODUCER.borrow_ref_mut(cs).replace(sensor_tx);
+    dp.GPIOB.moder().modify(|_, w| {
+        w.moder6().alternate();
+        w.moder7().alternate();
+        w.moder10().alternate();
+        w.moder11().alternate()
     });
+    // Pull-ups on the receive pins: an unconnected line idles high
+    // instead of floating into framing errors.
+    dp.GPIOA.pupdr().modify(|_, w| w.pupdr3().pull_up());
+    dp.GPIOB
+        .pupdr()
+        .modify(|_, w| w.pupdr7().pull_up().pupdr11().pull_up());
+}
 
-    // Receivers on as early as possible: QEMU drops what arrives before.
-    serial::configure(&dp.USART1, PCLK2_HZ, HOST_BAUD, true);
-    serial::configure(&dp.USART2, PCLK1_HZ, SENSOR_BAUD, true);
-    serial::configure(&dp.USART3, PCLK1_HZ, CONTROL_BAUD, false);
+/// The interrupt's queue ends, taken on its first entry.
+type Ends = Option<(Producer<'static, u8>, Consumer<'static, u8>)>;
 
-    clock::start(cp.SYST, CORE_HZ);
-
-    // SAFETY: unmasking can break a critical section only if one is in
-    // progress; none is (we are in thread mode outside `critical_section::with`),
-    // and both handlers only touch their own queue end and counters.
-    unsafe {
-        cortex_m::peripheral::NVIC::unmask(Interrupt::USART1);
-        cortex_m::peripheral::NVIC::unmask(Interrupt::USART2);
+fn serve<const RX: usize, const TX: usize>(
+    usart: &pac::usart1::RegisterBlock,
+    ends: &mut Ends,
+    port: &PortStatics<RX, TX>,
+) {
+    if ends.is_none() {
+        *ends = port.unpark();
     }
-
-    Some(Board {
-        host: Serial::new(dp.USART1, host_rx, &HOST_RX_STATS, PCLK2_HZ),
-        sensor: Serial::new(dp.USART2, sensor_rx, &SENSOR_RX_STATS, PCLK1_HZ),
-        control: PolledSerial::new(dp.USART3),
-    })
+    let (rx, tx) = match ends.as_mut() {
+        Some((rx, tx)) => (Some(rx), Some(tx)),
+        None => (None, None),
+    };
+    serial::on_interrupt(usart, rx, tx, &port.stats);
 }
 
 #[interrupt]
 fn USART1() {
-    static mut PRODUCER: Option<Producer<'static, u8>> = None;
-    if PRODUCER.is_none() {
-        *PRODUCER = critical_section::with(|cs| HOST_RX_PRODUCER.borrow_ref_mut(cs).take());
-    }
-    // SAFETY: the handler reads only SR and DR; the main loop's `Serial`
-    // writes DR/BRR and reads SR, which has no side effect on this path
-    // (a SR read followed by a DR read clears the error flags; the main loop
-    // never reads DR of an interrupt-driven port).
-    let usart = unsafe { pac::USART1::steal() };
-    serial::on_rx_interrupt(&usart, PRODUCER.as_mut(), &HOST_RX_STATS);
+    static mut ENDS: Ends = None;
+    // SAFETY: the handler reads SR/DR and writes DR and CR1.TXEIE; the main
+    // loop's `Serial` writes BRR and sets TXEIE inside a critical section,
+    // and never reads DR of an interrupt-driven port.
+    let usart = unsafe { &*pac::USART1::ptr() };
+    serve(usart, ENDS, &HOST);
 }
 
 #[interrupt]
 fn USART2() {
-    static mut PRODUCER: Option<Producer<'static, u8>> = None;
-    if PRODUCER.is_none() {
-        *PRODUCER = critical_section::with(|cs| SENSOR_RX_PRODUCER.borrow_ref_mut(cs).take());
-    }
+    static mut ENDS: Ends = None;
+    // SAFETY: as for USART1 (USART2 has the same register block).
+    let usart = unsafe { &*pac::USART2::ptr() };
+    serve(usart, ENDS, &SENSOR);
+}
+
+#[interrupt]
+fn USART3() {
+    static mut ENDS: Ends = None;
     // SAFETY: as for USART1.
-    let usart = unsafe { pac::USART2::steal() };
-    serial::on_rx_interrupt(&usart, PRODUCER.as_mut(), &SENSOR_RX_STATS);
+    let usart = unsafe { &*pac::USART3::ptr() };
+    serve(usart, ENDS, &CONTROL);
+}
+
+/// Stop for good with `code` after a fault (the record is already written):
+/// under QEMU exit through semihosting with `code` (the tests read it), on
+/// the board a system reset (the next boot reports the record).
+pub fn fatal(code: i32) -> ! {
+    if on_emulator() {
+        semihosting::process::exit(code)
+    }
+    cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// Stop on request (console `q`, `exit-after-scans`): under QEMU exit with
+/// `code`; on the board a software reset after the console has drained.
+pub fn exit(code: i32, control: &mut ControlPort) -> ! {
+    control.drain();
+    fatal(code)
 }
 
 /// Stack use measured against the paint the reset handler applied
@@ -240,19 +374,34 @@ pub fn repaint_stack() -> StackUsage {
 
 #[exception]
 unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    // SAFETY: a read of SCB_CFSR (what faulted), no side effect.
+    let cfsr = unsafe { (*cortex_m::peripheral::SCB::PTR).cfsr.read() };
+    fault::record(FaultRecord {
+        cause: Cause::HardFault,
+        pc: frame.pc(),
+        lr: frame.lr(),
+        detail: cfsr,
+    });
     defmt::error!(
-        "hard fault: pc={=u32:#010x} lr={=u32:#010x} xpsr={=u32:#010x}",
+        "hard fault: pc={=u32:#010x} lr={=u32:#010x} xpsr={=u32:#010x} cfsr={=u32:#010x}",
         frame.pc(),
         frame.lr(),
-        frame.xpsr()
+        frame.xpsr(),
+        cfsr
     );
-    semihosting::process::exit(crate::EXIT_HARD_FAULT)
+    fatal(crate::EXIT_HARD_FAULT)
 }
 
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
+    fault::record(FaultRecord {
+        cause: Cause::UnexpectedIrq,
+        pc: 0,
+        lr: 0,
+        detail: irqn as u32,
+    });
     defmt::error!("unexpected exception or interrupt {=i16}", irqn);
-    semihosting::process::exit(crate::EXIT_UNEXPECTED_IRQ)
+    fatal(crate::EXIT_UNEXPECTED_IRQ)
 }
 
 /// Which side of a scan marker the program last passed (1 = inside a scan).

@@ -4,26 +4,31 @@
 //! | byte | effect |
 //! |---|---|
 //! | `s` | report (the line below, also logged) |
-//! | `q` | report, then exit through semihosting with code 0 |
+//! | `q` | report, then exit through semihosting with code 0 (QEMU); a software reset (board) |
 //! | anything else | ignored |
 //!
 //! The report line, all values decimal:
 //!
 //! ```text
-//! now_us=… scans=… stack_peak=… stack_size=… emulator_us=… host_rx=… host_dropped=… host_overrun=… host_line_errors=… host_peak=… sensor_rx=… sensor_dropped=… sensor_overrun=… sensor_line_errors=… sensor_peak=… scans_in=… feature_scans_out=… feature_telegrams_out=… sensor_crc_errors=… sensor_resyncs=… sensor_bytes_skipped=… host_crc_errors=… scans_dropped=… scans_rejected=… host_scans_dropped=… scans_other_setting=… scans_out=…
+//! now_us=… scans=… stack_peak=… stack_size=… emulator_us=… host_rx=… host_dropped=… host_overrun=… host_line_errors=… host_peak=… sensor_rx=… sensor_dropped=… sensor_overrun=… sensor_line_errors=… sensor_peak=… scans_in=… feature_scans_out=… feature_telegrams_out=… sensor_crc_errors=… sensor_resyncs=… sensor_bytes_skipped=… host_crc_errors=… scans_dropped=… scans_rejected=… host_scans_dropped=… scans_other_setting=… scans_out=… sysclk_hz=… reset_flags=… fault_cause=… fault_pc=… fault_lr=… fault_detail=…
 //! ```
 //!
-//! The last twelve are the co-processor's [`Counters`] (also readable by the
-//! host with request `55`).
+//! Then twelve of the co-processor's [`Counters`] (also readable by the host
+//! with request `55`), then the boot's: SYSCLK (Hz), `RCC_CSR`'s reset flags
+//! ([`crate::fault::ResetCause`]; 0 under QEMU), and the previous boot's
+//! fault record (cause 0 = none, 1 panic, 2 HardFault, 3 unexpected
+//! interrupt).
 //!
 //! `emulator_us` is the emulator's own clock read at the same moment
 //! (semihosting `SYS_ELAPSED` / `SYS_TICKFREQ`; QEMU: the host's monotonic
 //! clock since QEMU started), printed beside `now_us` to check the time
-//! base; 0 where semihosting has no such clock.
+//! base; 0 on the board (no semihosting there).
 
 use lms_core::telegram::features::Counters;
 
-use crate::board::{stack_usage, ControlPort, StackUsage};
+use embedded_io::Write;
+
+use crate::board::{stack_usage, Boot, ControlPort, StackUsage};
 use crate::serial::RxCounts;
 
 /// What the console is asked to do.
@@ -63,6 +68,8 @@ pub struct Report {
     pub host: RxCounts,
     /// Sensor port receive counters.
     pub sensor: RxCounts,
+    /// What the boot found.
+    pub boot: Boot,
 }
 
 impl Report {
@@ -73,6 +80,7 @@ impl Report {
         counters: Counters,
         host: RxCounts,
         sensor: RxCounts,
+        boot: &Boot,
     ) -> Self {
         Report {
             now_us,
@@ -82,6 +90,7 @@ impl Report {
             emulator_us: emulator_us().unwrap_or(0),
             host,
             sensor,
+            boot: *boot,
         }
     }
 
@@ -113,14 +122,29 @@ impl Report {
         ] {
             w.field(name, v.into());
         }
-        w.out.write_all(b"\n");
+        let b = &self.boot;
+        let f = b.last_fault;
+        for (name, v) in [
+            ("sysclk_hz", b.clocks.sysclk_hz),
+            ("reset_flags", b.reset.0),
+            ("fault_cause", f.map_or(0, |f| f.cause as u32)),
+            ("fault_pc", f.map_or(0, |f| f.pc)),
+            ("fault_lr", f.map_or(0, |f| f.lr)),
+            ("fault_detail", f.map_or(0, |f| f.detail)),
+        ] {
+            w.field(name, v.into());
+        }
+        w.put(b"\n");
     }
 }
 
 /// The emulator's clock in µs (semihosting `SYS_ELAPSED` ticks at
-/// `SYS_TICKFREQ` Hz), if it has one.
+/// `SYS_TICKFREQ` Hz), if it has one; `None` on the board.
 fn emulator_us() -> Option<u64> {
     use semihosting::sys::arm_compat::{sys_elapsed, sys_tickfreq};
+    if !crate::board::on_emulator() {
+        return None;
+    }
     let ticks = sys_elapsed().ok()?;
     let hz = u64::try_from(sys_tickfreq().ok()?).ok()?;
     if hz == 0 {
@@ -136,15 +160,20 @@ struct Line<'a> {
 }
 
 impl Line<'_> {
+    fn put(&mut self, bytes: &[u8]) {
+        // Infallible: the port's error type is `Infallible`.
+        let Ok(()) = self.out.write_all(bytes);
+    }
+
     fn field(&mut self, key: &str, value: u64) {
         if !self.first {
-            self.out.write_all(b" ");
+            self.put(b" ");
         }
         self.first = false;
-        self.out.write_all(key.as_bytes());
-        self.out.write_all(b"=");
+        self.put(key.as_bytes());
+        self.put(b"=");
         let mut digits = [0u8; 20];
-        self.out.write_all(decimal(value, &mut digits));
+        self.put(decimal(value, &mut digits));
     }
 
     fn counts(&mut self, side: &str, c: &RxCounts) {
@@ -156,11 +185,11 @@ impl Line<'_> {
             ("peak", c.peak_queued),
         ] {
             if !self.first {
-                self.out.write_all(b" ");
+                self.put(b" ");
             }
             self.first = false;
-            self.out.write_all(side.as_bytes());
-            self.out.write_all(b"_");
+            self.put(side.as_bytes());
+            self.put(b"_");
             self.first = true;
             self.field(name, v.into());
         }

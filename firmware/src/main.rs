@@ -1,12 +1,15 @@
-//! Firmware for the LMS 2xx feature co-processor on an STM32F405, as QEMU's
-//! `netduinoplus2` models it. Only glue: board bring-up ([`board`]), the
-//! UARTs as `embedded-io` streams ([`serial`]), the time base ([`clock`]),
-//! a control console ([`control`]) and the loop that feeds the core's
+//! Firmware for the LMS 2xx feature co-processor on an STM32F405/407 board,
+//! and the same ELF under QEMU's `netduinoplus2` (detected at run time,
+//! [`rcc`]). Only glue: board bring-up ([`board`]), clocks ([`rcc`]), the
+//! fault policy ([`fault`]), the log ([`log`]), the UARTs as `embedded-io`
+//! streams ([`serial`]), the time base ([`clock`]), a control console
+//! ([`control`]) and the loop that feeds the core's
 //! [`CoProcessor`](lms_core::device::coprocessor::CoProcessor) (or, with the
 //! `standin` feature, a plain forwarder, [`standin`]).
 //!
-//! Exit codes (semihosting, become QEMU's exit status): see [`EXIT_SUCCESS`]
-//! and the constants after it.
+//! Exit codes (semihosting, become QEMU's exit status; on the board a fault
+//! resets the chip instead, see [`board::fatal`]): see [`EXIT_SUCCESS`] and
+//! the constants after it.
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
@@ -14,6 +17,9 @@
 mod board;
 mod clock;
 mod control;
+mod fault;
+mod log;
+mod rcc;
 mod serial;
 #[cfg(feature = "standin")]
 mod standin;
@@ -21,7 +27,6 @@ mod standin;
 use core::panic::PanicInfo;
 
 use cortex_m_rt::entry;
-use defmt_semihosting as _; // the global defmt logger
 
 use lms_core::device::coprocessor::PollError;
 
@@ -104,20 +109,47 @@ fn main() -> ! {
     let app = init_app();
     // From here on the stack report covers the loop only.
     let boot_stack = board::repaint_stack();
+    log_boot(&board.boot);
     defmt::info!(
-        "lms-firmware {=str} ready: host=USART1 (rx queue {=usize} B), sensor=USART2 (rx queue {=usize} B), control=USART3; start-up stack peak {=u32} B",
+        "lms-firmware {=str} ready: host=USART1 (rx queue {=usize} B, tx queue {=usize} B), sensor=USART2 (rx queue {=usize} B), control=USART3; start-up stack peak {=u32} B",
         env!("CARGO_PKG_VERSION"),
         board.host.rx_capacity(),
+        board.host.tx_capacity(),
         board.sensor.rx_capacity(),
         boot_stack.peak
     );
     let mut watch = Watch::default();
     loop {
+        fault::feed();
         poll(app, &mut board, &mut watch);
         watch.sensor_queue(app, &board);
         watch.bring_up(app);
         serve_console(app, &mut board, &watch);
         sleep_until_input(&board);
+    }
+}
+
+/// The boot's findings into the log (clocks, reset cause, last fault).
+fn log_boot(boot: &board::Boot) {
+    let c = &boot.clocks;
+    defmt::info!(
+        "clocks: {} SYSCLK {=u32} Hz, APB1 {=u32} Hz, APB2 {=u32} Hz; reset cause {=str} ({=u32:#04x}); brown-out level: {}",
+        c.source,
+        c.sysclk_hz,
+        c.pclk1_hz,
+        c.pclk2_hz,
+        boot.reset.name(),
+        boot.reset.0,
+        boot.bor
+    );
+    if let Some(f) = boot.last_fault {
+        defmt::warn!(
+            "last boot ended in {}: pc={=u32:#010x} lr={=u32:#010x} detail={=u32:#x}",
+            f.cause,
+            f.pc,
+            f.lr,
+            f.detail
+        );
     }
 }
 
@@ -189,15 +221,16 @@ fn serve_console(app: &app::App, board: &mut board::Board, watch: &Watch) {
             app.counters(),
             board.host.rx_counts(),
             board.sensor.rx_counts(),
+            &board.boot,
         )
     };
-    if let Some(command) = board.control.try_read().and_then(Command::from_byte) {
+    if let Some(command) = serial::try_read(&mut board.control).and_then(Command::from_byte) {
         let r = report(board);
         defmt::info!("{}", r);
         r.write_line(&mut board.control);
         if command == Command::Quit {
             defmt::info!("exit on console command");
-            semihosting::process::exit(EXIT_SUCCESS);
+            board::exit(EXIT_SUCCESS, &mut board.control);
         }
     }
     if cfg!(feature = "exit-after-scans") && watch.scans >= EXIT_AFTER_SCANS {
@@ -205,7 +238,7 @@ fn serve_console(app: &app::App, board: &mut board::Board, watch: &Watch) {
         defmt::info!("{}", r);
         r.write_line(&mut board.control);
         defmt::info!("exit after {=u32} scans", watch.scans);
-        semihosting::process::exit(EXIT_SUCCESS);
+        board::exit(EXIT_SUCCESS, &mut board.control);
     }
 }
 
@@ -214,7 +247,10 @@ fn serve_console(app: &app::App, board: &mut board::Board, watch: &Watch) {
 /// so one that arrives in between still wakes WFI.
 fn sleep_until_input(board: &board::Board) {
     critical_section::with(|_| {
-        if board.host.rx_pending() == 0 && board.sensor.rx_pending() == 0 {
+        if board.host.rx_pending() == 0
+            && board.sensor.rx_pending() == 0
+            && board.control.rx_pending() == 0
+        {
             cortex_m::asm::wfi();
         }
     });
@@ -230,6 +266,14 @@ fn init_app() -> &'static mut app::App {
 
 #[panic_handler]
 fn panic(info: &PanicInfo) -> ! {
+    let lr = fault::link_register();
+    cortex_m::interrupt::disable();
+    fault::record(fault::FaultRecord {
+        cause: fault::Cause::Panic,
+        pc: lr,
+        lr: 0,
+        detail: info.location().map_or(0, |l| l.line()),
+    });
     let message = info.message().as_str().unwrap_or("(formatted message)");
     match info.location() {
         Some(l) => defmt::error!(
@@ -240,10 +284,18 @@ fn panic(info: &PanicInfo) -> ! {
         ),
         None => defmt::error!("panic: {=str}", message),
     }
-    semihosting::process::exit(EXIT_PANIC)
+    board::fatal(EXIT_PANIC)
 }
 
 #[defmt::panic_handler]
 fn defmt_panic() -> ! {
-    semihosting::process::exit(EXIT_PANIC)
+    let lr = fault::link_register();
+    cortex_m::interrupt::disable();
+    fault::record(fault::FaultRecord {
+        cause: fault::Cause::Panic,
+        pc: lr,
+        lr: 0,
+        detail: 0,
+    });
+    board::fatal(EXIT_PANIC)
 }

@@ -1,18 +1,24 @@
 //! A USART as an `embedded-io` byte stream: interrupt-driven receive into a
-//! fixed queue, blocking transmit.
+//! fixed queue, interrupt-driven transmit from a fixed queue.
 //!
-//! The receive interrupt ([`on_rx_interrupt`], called from the handlers in
-//! [`crate::board`]) moves each byte from the data register into the
-//! producer end of a `heapless::spsc::Queue`; the main loop reads from the
-//! consumer end through [`Serial`]'s [`Read`] / [`ReadReady`]. Nothing here
-//! blocks in the interrupt and nothing is lost silently: a byte that finds
-//! the queue full is dropped and counted in [`RxStats::dropped_full`], a
-//! byte the hardware lost because the interrupt came too late is counted in
+//! The interrupt ([`on_interrupt`], called from the handlers in
+//! [`crate::board`]) moves each received byte from the data register into
+//! the producer end of a `heapless::spsc::Queue`, and, while the transmit
+//! queue holds bytes (`TXEIE` on), the next byte to send into the data
+//! register. The main loop reads from the receive queue's consumer end and
+//! writes into the transmit queue's producer end through [`Serial`]'s
+//! [`Read`] / [`ReadReady`] / [`Write`]: a write returns as soon as its
+//! bytes are queued, and the line sends them while the loop computes.
+//! Only a write that finds the transmit queue full waits, asleep in `WFI`
+//! until the interrupt has made room. Nothing here blocks in the
+//! interrupt and nothing is lost silently: a byte that finds the receive
+//! queue full is dropped and counted in [`RxStats::dropped_full`], a byte
+//! the hardware lost because the interrupt came too late is counted in
 //! [`RxStats::overrun`].
 //!
-//! Transmit writes the data register as soon as `TXE` says it is empty. In
-//! QEMU `TXE` is always set and the byte leaves at once; on silicon the
-//! caller waits one character time per byte.
+//! In QEMU `TXE` is always set, so one interrupt sends the whole queue; the
+//! writer pends that interrupt itself ([`Serial`]'s `start_tx`), as QEMU
+//! 7.2 raises a USART's line only for received bytes.
 
 use core::convert::Infallible;
 use core::ops::Deref;
@@ -21,6 +27,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use embedded_io::{ErrorType, Read, ReadReady, Write, WriteReady};
 use heapless::spsc::{Consumer, Producer};
 use stm32f4::stm32f405::usart1::RegisterBlock;
+use stm32f4::stm32f405::Interrupt;
 
 /// Receive counters of one USART, written by its interrupt, read anywhere.
 pub struct RxStats {
@@ -84,8 +91,9 @@ impl RxCounts {
 }
 
 /// Serial settings: 8 data bits, no parity, 1 stop bit, no flow control (the
-/// LMS 2xx's 8N1), at `baud` from a peripheral clock of `pclk_hz`.
-pub fn configure(usart: &RegisterBlock, pclk_hz: u32, baud: u32, rx_interrupt: bool) {
+/// LMS 2xx's 8N1), at `baud` from a peripheral clock of `pclk_hz`; receive
+/// interrupt on (the transmit interrupt is switched on while bytes wait).
+pub fn configure(usart: &RegisterBlock, pclk_hz: u32, baud: u32) {
     usart.cr1().reset();
     usart.cr2().reset();
     usart.cr3().reset();
@@ -94,9 +102,9 @@ pub fn configure(usart: &RegisterBlock, pclk_hz: u32, baud: u32, rx_interrupt: b
         w.ue().set_bit();
         w.te().set_bit();
         w.re().set_bit();
-        // Only RXNEIE: QEMU's model raises the line for TXE/TC too if their
-        // enables are set, and TXE is always set there.
-        w.rxneie().bit(rx_interrupt)
+        // Not TXEIE yet: QEMU's model raises the line whenever TXE (always
+        // set there) and TXEIE are both set; it is on only while bytes wait.
+        w.rxneie().set_bit()
     });
 }
 
@@ -116,11 +124,37 @@ fn write_brr(usart: &RegisterBlock, div: u32) {
     });
 }
 
-/// The receive interrupt of one USART: drain the data register into the
-/// queue, count what is lost. `producer` is `None` only if the interrupt
-/// fires before the queue has been handed over; the byte is then counted
-/// as dropped (the data register must be read or the interrupt repeats).
-pub fn on_rx_interrupt(
+/// The interrupt of one USART: drain the data register into the receive
+/// queue, count what is lost, and feed the transmitter from the transmit
+/// queue (switching `TXEIE` off when it is empty). `producer` is `None`
+/// only if the interrupt fires before the queue has been handed over; the
+/// byte is then counted as dropped (the data register must be read or the
+/// interrupt repeats).
+pub fn on_interrupt(
+    usart: &RegisterBlock,
+    producer: Option<&mut Producer<'static, u8>>,
+    tx: Option<&mut Consumer<'static, u8>>,
+    stats: &RxStats,
+) {
+    on_receive(usart, producer, stats);
+    if usart.cr1().read().txeie().bit_is_clear() {
+        return;
+    }
+    let mut tx = tx;
+    while usart.sr().read().txe().bit_is_set() {
+        match tx.as_deref_mut().and_then(|c| c.dequeue()) {
+            Some(b) => {
+                usart.dr().write(|w| w.dr().set(u16::from(b)));
+            }
+            None => {
+                usart.cr1().modify(|_, w| w.txeie().clear_bit());
+                return;
+            }
+        }
+    }
+}
+
+fn on_receive(
     usart: &RegisterBlock,
     producer: Option<&mut Producer<'static, u8>>,
     stats: &RxStats,
@@ -159,25 +193,39 @@ pub fn on_rx_interrupt(
 }
 
 /// One USART as a byte stream for the main loop: the consumer end of its
-/// receive queue and its transmitter.
+/// receive queue and the producer end of its transmit queue.
 ///
 /// `U` is the owned peripheral (`pac::USART1`, …), which gives access to
 /// the registers.
 pub struct Serial<U> {
     usart: U,
     rx: Consumer<'static, u8>,
+    tx: Producer<'static, u8>,
     stats: &'static RxStats,
+    irq: Interrupt,
     pclk_hz: u32,
+    baud: u32,
 }
 
 impl<U: Deref<Target = RegisterBlock>> Serial<U> {
-    /// Wrap a configured USART and the consumer end of its receive queue.
-    pub fn new(usart: U, rx: Consumer<'static, u8>, stats: &'static RxStats, pclk_hz: u32) -> Self {
+    /// Wrap a USART configured at `baud` and its queue ends.
+    pub fn new(
+        usart: U,
+        rx: Consumer<'static, u8>,
+        tx: Producer<'static, u8>,
+        stats: &'static RxStats,
+        irq: Interrupt,
+        pclk_hz: u32,
+        baud: u32,
+    ) -> Self {
         Serial {
             usart,
             rx,
+            tx,
             stats,
+            irq,
             pclk_hz,
+            baud,
         }
     }
 
@@ -196,16 +244,68 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
         self.rx.capacity()
     }
 
+    /// Room of the transmit queue in bytes.
+    pub fn tx_capacity(&self) -> usize {
+        self.tx.capacity()
+    }
+
     /// Change the line speed (e.g. after the sensor has acknowledged `20 4x`).
-    /// Waits for the last byte to leave first. QEMU ignores the rate.
+    /// Lets what is queued leave at the old rate first ([`Self::drain`]).
+    /// QEMU ignores the rate.
     pub fn set_baud(&mut self, baud: u32) {
-        while self.usart.sr().read().tc().bit_is_clear() {}
+        self.drain();
+        self.baud = baud;
         write_brr(&self.usart, brr(self.pclk_hz, baud));
     }
 
-    fn write_byte(&mut self, byte: u8) {
-        while self.usart.sr().read().txe().bit_is_clear() {}
-        self.usart.dr().write(|w| w.dr().set(u16::from(byte)));
+    /// Wait until the transmit queue is empty and the last byte has left
+    /// the shift register (`TC`), asleep between interrupts; bounded: gives
+    /// up after twice the time the queued bytes need at the current rate
+    /// plus 2 ms (then the rate changes under a byte, which the peer sees
+    /// as one bad telegram).
+    pub fn drain(&mut self) {
+        let bits = (self.tx.len() as u64 + 2) * 10;
+        let deadline =
+            crate::clock::now_us() + 2 * bits * 1_000_000 / u64::from(self.baud.max(1)) + 2_000;
+        while crate::clock::now_us() < deadline {
+            let done = critical_section::with(|_| {
+                let empty = self.tx.is_empty();
+                if !empty {
+                    cortex_m::asm::wfi();
+                }
+                empty
+            });
+            if done && self.usart.sr().read().tc().bit_is_set() {
+                return;
+            }
+        }
+    }
+
+    /// Switch the transmit interrupt on (the queue has bytes) and pend the
+    /// interrupt once: QEMU 7.2 raises a USART's line only for a received
+    /// byte, not for `TXE` & `TXEIE`; on silicon the pended run just sends
+    /// the first byte a little earlier.
+    fn start_tx(&mut self) {
+        critical_section::with(|_| self.usart.cr1().modify(|_, w| w.txeie().set_bit()));
+        cortex_m::peripheral::NVIC::pend(self.irq);
+    }
+
+    /// Sleep until the transmit queue has room; feeds the watchdog while
+    /// bytes are still leaving (a line stuck for good ends in its reset).
+    fn wait_for_room(&mut self) {
+        let mut queued = self.tx.len();
+        while !self.tx.ready() {
+            critical_section::with(|_| {
+                if !self.tx.ready() {
+                    cortex_m::asm::wfi();
+                }
+            });
+            let now = self.tx.len();
+            if now < queued {
+                crate::fault::feed();
+            }
+            queued = now;
+        }
     }
 }
 
@@ -221,7 +321,8 @@ impl<U: Deref<Target = RegisterBlock>> ReadReady for Serial<U> {
 
 impl<U: Deref<Target = RegisterBlock>> Read for Serial<U> {
     /// Blocks (sleeping between interrupts) until at least one byte is
-    /// there, then returns what is queued, up to `buf.len()`.
+    /// there, then returns what is queued, up to `buf.len()`. The
+    /// co-processor reads only after `read_ready`, so it never sleeps here.
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
         if buf.is_empty() {
             return Ok(0);
@@ -242,56 +343,38 @@ impl<U: Deref<Target = RegisterBlock>> Read for Serial<U> {
 }
 
 impl<U: Deref<Target = RegisterBlock>> Write for Serial<U> {
-    /// Blocking: returns when every byte has been handed to the transmitter.
+    /// Queues what fits (at least one byte: waits for room if the queue is
+    /// full) and returns; the interrupt sends it.
     fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
-        for &b in buf {
-            self.write_byte(b);
+        if buf.is_empty() {
+            return Ok(0);
         }
-        Ok(buf.len())
+        self.wait_for_room();
+        let mut n = 0;
+        for &b in buf {
+            if self.tx.enqueue(b).is_err() {
+                break;
+            }
+            n += 1;
+        }
+        self.start_tx();
+        Ok(n)
     }
 
-    /// Waits until the last byte has left the shift register.
+    /// Waits (bounded) until every queued byte has left ([`Serial::drain`]).
     fn flush(&mut self) -> Result<(), Infallible> {
-        while self.usart.sr().read().tc().bit_is_clear() {}
+        self.drain();
         Ok(())
     }
 }
 
 impl<U: Deref<Target = RegisterBlock>> WriteReady for Serial<U> {
     fn write_ready(&mut self) -> Result<bool, Infallible> {
-        Ok(self.usart.sr().read().txe().bit_is_set())
+        Ok(self.tx.ready())
     }
 }
 
-/// A USART without a receive interrupt, polled by the main loop (the
-/// control console): nothing is queued, QEMU holds the next byte until the
-/// data register is read.
-pub struct PolledSerial<U> {
-    usart: U,
-}
-
-impl<U: Deref<Target = RegisterBlock>> PolledSerial<U> {
-    /// Wrap a configured USART.
-    pub fn new(usart: U) -> Self {
-        PolledSerial { usart }
-    }
-
-    /// The next received byte, if one is there.
-    pub fn try_read(&mut self) -> Option<u8> {
-        let sr = self.usart.sr().read();
-        if sr.rxne().bit_is_set() || sr.ore().bit_is_set() {
-            let byte = self.usart.dr().read().dr().bits() as u8;
-            sr.rxne().bit_is_set().then_some(byte)
-        } else {
-            None
-        }
-    }
-
-    /// Blocking transmit.
-    pub fn write_all(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            while self.usart.sr().read().txe().bit_is_clear() {}
-            self.usart.dr().write(|w| w.dr().set(u16::from(b)));
-        }
-    }
+/// The next received byte of a port, if one is there (the console).
+pub fn try_read<U: Deref<Target = RegisterBlock>>(port: &mut Serial<U>) -> Option<u8> {
+    port.rx.dequeue()
 }
