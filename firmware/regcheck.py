@@ -562,43 +562,42 @@ class FakeLms:
 
 
 class Client:
-    """The robot's computer on USART1: asks for each rate in turn."""
+    """The robot's computer on USART1: asks for each rate in turn, and
+    switches itself after the A0 reply, as an LMS client does."""
 
     def __init__(self, chip, rates):
         self.u = chip.usarts[0x40011000]
         self.chip = chip
         self.rates = list(rates)
         self.deframer = Deframer()
-        self.switched = []   # (asked, BRR-derived baud after the switch)
-        self.waiting = None
+        self.switched = []   # (asked, BRR-derived baud once the firmware switched)
+        self.waiting = None  # asked, reply not yet seen
+        self.expect = None   # reply seen, firmware not yet switched
         self.garbled = 0
 
     def poll(self):
-        u = self.u
+        u, chip = self.u, self.chip
         if u.tx:
             data, u.tx[:] = bytes(u.tx), b""
-            if abs(self.chip.baud(u) / u.peer_baud - 1) > 0.02:
+            if abs(chip.baud(u) / u.peer_baud - 1) > 0.02:
                 self.garbled += len(data)
             else:
                 for t in self.deframer.feed(data):
                     if self.waiting and len(t) > 5 and t[4] == 0xA0:
-                        u.peer_baud = self.waiting
+                        u.peer_baud = self.expect = self.waiting
                         self.waiting = None
-        if self.waiting is None and self.rates and not u.rx:
-            if self.switched or u.peer_baud == 9600:
-                if self.switched and self.switched[-1][1] is None:
-                    self.switched[-1] = (self.switched[-1][0], self.chip.baud(u))
-            if self.rates and (not self.switched or self.switched[-1][1] is not None):
-                rate = self.rates.pop(0)
-                code = {v: k for k, v in BAUD_CODES.items()}[rate]
-                u.rx += [(b, False) for b in telegram(0x00, bytes([0x20, code]))]
-                self.waiting = rate
-                self.switched.append((rate, None))
+        if self.expect and not u.tx and within(chip.baud(u), self.expect, 0.02):
+            self.switched.append((self.expect, chip.baud(u)))
+            self.expect = None
+        if self.waiting is None and self.expect is None and self.rates and not u.rx:
+            rate = self.rates.pop(0)
+            code = {v: k for k, v in BAUD_CODES.items()}[rate]
+            ok = abs(chip.baud(u) / u.peer_baud - 1) <= 0.02
+            u.rx += [(b, not ok) for b in telegram(0x00, bytes([0x20, code]))]
+            self.waiting = rate
 
     def done(self):
-        if self.switched and self.switched[-1][1] is None and self.waiting is None:
-            self.switched[-1] = (self.switched[-1][0], self.chip.baud(self.u))
-        return not self.rates and self.waiting is None
+        return not self.rates and self.waiting is None and self.expect is None
 
 
 def within(baud, want, tol=0.01):
@@ -609,7 +608,7 @@ def boot_and_bring_up(segments, syms, wfi, bkpt):
     chip = Chip()
     m = Machine(chip, segments, wfi, bkpt)
     lms = FakeLms(chip)
-    host = Client(chip, [19200, 38400, 500000, 9600])
+    host = Client(chip, [19200, 38400, 500000, 9600])  # keep in step with `asked` below
 
     def ready():
         return chip.syst[0x14] != 0 and chip.usarts[0x40004800].cr1 & 0x2000 and chip.nvic_enabled
@@ -653,9 +652,13 @@ def boot_and_bring_up(segments, syms, wfi, bkpt):
     check("sensor line switched to 500 kBd exactly", sensor_switch and sensor_switch[-1] == 500_000
           and lms.bad_rate == 0, f"USART2 rates written: {[round(b) for b in sensor_switch]}, "
           f"{lms.bad_rate} bytes at a wrong rate")
-    for asked, got in host.switched:
-        check(f"host line after 20 {[k for k, v in BAUD_CODES.items() if v == asked][0]:02X}: {asked} Bd within 1 %",
-              got is not None and within(got, asked), f"{got and round(got, 1)} Bd")
+    asked = [19200, 38400, 500000, 9600]
+    got = dict(host.switched)
+    for rate in asked:
+        code = [k for k, v in BAUD_CODES.items() if v == rate][0]
+        check(f"host line after 20 {code:02X}: {rate} Bd within 1 %", rate in got and within(got[rate], rate),
+              f"{got.get(rate) and round(got[rate], 1)} Bd; USART1 rates written: "
+              f"{[round(b) for n, b in chip.baud_log if n == 'USART1']}")
     check("host replies understood at every rate", host.garbled == 0 and host.done(),
           f"{host.garbled} bytes at a wrong rate")
     feeds = chip.iwdg_keys.count(0xAAAA)

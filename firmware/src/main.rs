@@ -52,9 +52,9 @@ mod app {
 
     pub type App = CoProcessor;
 
-    /// The co-processor with the default parameters and sensor set-up
-    /// (180°/0.5°, mm, 500 kBd), built at compile time into `.bss`/`.data`.
-    pub const INITIAL: App = CoProcessor::new(PARAMS, SensorSetup::DEFAULT);
+    /// The co-processor, every byte zero: the static lands in `.bss` (no
+    /// flash image, nothing copied at boot); [`start`] configures it in place.
+    pub const INITIAL: App = CoProcessor::unconfigured();
 
     /// The defaults of ALGORITHM.md with the passes of this build,
     /// validated at compile time (an invalid setting fails the build).
@@ -71,8 +71,11 @@ mod app {
         }
     };
 
-    /// Switch it on: its host side sends the LMS power-on telegram.
+    /// Configure it in place with the default parameters and sensor set-up
+    /// (180°/0.5°, mm, 500 kBd) and switch it on: its host side sends the
+    /// LMS power-on telegram.
     pub fn start(app: &mut App, now_us: u64) {
+        app.configure(PARAMS, SensorSetup::DEFAULT);
         app.start(now_us);
     }
 
