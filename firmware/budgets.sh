@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Measure the firmware's budgets (issue: firmware under QEMU), reproducibly:
-#   flash = .text + .rodata (+ .vector_table), static RAM = .data + .bss,
+#   flash = .vector_table + .text + .rodata + the .data image (copied to RAM
+#   at boot, so it is in flash too), static RAM = .data + .bss + .uninit,
 #   peak stack (painted stack, read back by the console report),
 #   guest instructions per scan at 1 and 30 passes, default, fast-math and
 #   split before reject (proposal A of docs/evaluation),
@@ -32,11 +33,11 @@ measure() { # label, then cargo build arguments
 
 cargo build -q --release
 text=$(section .text); rodata=$(section .rodata); vt=$(section .vector_table)
-data=$(section .data); bss=$(section .bss)
+data=$(section .data); bss=$(section .bss); uninit=$(section .uninit)
 kib() { awk -v b="$1" 'BEGIN { printf "%.1f", b / 1024 }'; }
-flash=$((vt + text + rodata)); ram=$((data + bss))
-echo "flash (.vector_table + .text + .rodata): $flash B ($(kib $flash) KiB; goal <= 64 KiB)"
-echo "static RAM (.data + .bss): $ram B ($(kib $ram) KiB; goal <= 16 KiB); .data image in flash: $data B"
+flash=$((vt + text + rodata + data)); ram=$((data + bss + ${uninit:-0}))
+echo "flash (.vector_table + .text + .rodata + .data image): $flash B ($(kib $flash) KiB; goal <= 48 KiB)"
+echo "static RAM (.data + .bss + .uninit): $ram B ($(kib $ram) KiB; goal <= 16 KiB): .data $data, .bss $bss, .uninit ${uninit:-0}"
 LMS_ITERATIONS=30 measure "30 passes" 
 LMS_ITERATIONS=1 measure "1 pass"
 LMS_ITERATIONS=30 measure "30 passes, fast-math" --features fast-math

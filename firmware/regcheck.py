@@ -79,6 +79,16 @@ def load_segments(path):
     return out
 
 
+def sym_range(name, path=None):
+    """(address, size) of a function symbol (thumb bit cleared)."""
+    for line in subprocess.run(["nm", "-S", "-C", path or ELF], capture_output=True, text=True,
+                               check=True).stdout.splitlines():
+        parts = line.split(" ", 3)
+        if len(parts) == 4 and parts[3].split("::h")[0] == name and parts[2] in "tT":
+            return int(parts[0], 16) & ~1, int(parts[1], 16)
+    raise KeyError(name)
+
+
 def symbols(path):
     out = {}
     for line in subprocess.run(["nm", "-C", path], capture_output=True, text=True, check=True).stdout.splitlines():
@@ -89,11 +99,14 @@ def symbols(path):
 
 
 def instruction_sites(path):
-    """Addresses of `wfi` and `bkpt #0xab` (semihosting) in the code."""
+    """Addresses of `wfi`, of `bkpt #0xab` (semihosting) and of the
+    instructions right after a `cpsie i` / `msr primask` (where a pending
+    interrupt is taken) in the code."""
     objdump = "llvm-objdump"
     dis = subprocess.run([objdump, "-d", "--no-show-raw-insn", path], capture_output=True, text=True,
                          check=True).stdout
-    wfi, bkpt = [], []
+    wfi, bkpt, unmask = [], [], []
+    after_unmask = False
     for line in dis.splitlines():
         parts = line.split()
         if len(parts) >= 2 and parts[0].endswith(":"):
@@ -101,11 +114,14 @@ def instruction_sites(path):
                 addr = int(parts[0][:-1], 16)
             except ValueError:
                 continue
+            if after_unmask:
+                unmask.append(addr)
+            after_unmask = parts[1] == "cpsie" or (parts[1] == "msr" and parts[2:3] == ["primask,"])
             if parts[1] == "wfi":
                 wfi.append(addr)
             elif parts[1] == "bkpt" and parts[2:3] in (["#171"], ["#0xab"]):
                 bkpt.append(addr)
-    return wfi, bkpt
+    return wfi, bkpt, unmask
 
 
 # ---- LMS framing (PROTOCOL.md section 1) ----
@@ -162,10 +178,14 @@ class Usart:
         self.dr_in = 0
         self.fe = False
         self.tx = bytearray()
+        self.tx_times = []     # cycle at which each byte of `tx` was written
+        self.tx_busy_until = 0 # the byte written last is on the wire until then
         self.peer_baud = 9600  # the rate of whoever is on the other end
+        self.now = 0
 
     def sr(self):
-        return 0xC0 | (0x20 if self.rxne else 0) | (0x02 if self.fe and self.rxne else 0)
+        idle = 0xC0 if self.now >= self.tx_busy_until else 0
+        return idle | (0x20 if self.rxne else 0) | (0x02 if self.fe and self.rxne else 0)
 
     def irq_level(self):
         sr = self.sr()
@@ -297,6 +317,9 @@ class Chip:
             u, off = self.usarts[base], addr - base
             if off == 0x04:
                 u.tx.append(value & 0xFF)
+                u.tx_times.append(self.cycles)
+                rate = self.baud(u) or 9600
+                u.tx_busy_until = max(self.cycles, u.tx_busy_until) + int(10 * self.hclk() / rate)
             elif off == 0x08:
                 u.brr = value
                 self.baud_log.append((u.name, self.baud(u)))
@@ -360,6 +383,8 @@ class Chip:
     # -- time --
     def advance(self, cycles):
         self.cycles += cycles
+        for u in self.usarts.values():
+            u.now = self.cycles
         while self.tick_at is not None and self.cycles >= self.tick_at:
             if self.syst[0x10] & 2:
                 self.pending.add(15)
@@ -368,6 +393,7 @@ class Chip:
     def next_event(self):
         times = [self.tick_at] if self.tick_at is not None else []
         times += [u.rx_at for u in self.usarts.values() if u.rx and not u.rxne]
+        times += [u.tx_busy_until for u in self.usarts.values() if u.tx_busy_until > self.cycles]
         return min(times) if times else self.cycles + 1_000_000
 
     def deliver_rx(self):
@@ -385,7 +411,8 @@ IRQ = {0x40011000: 16 + 37, 0x40004400: 16 + 38, 0x40004800: 16 + 39}
 class Machine:
     """The CPU on the chip model, with exception entry/return done here."""
 
-    def __init__(self, chip, segments, wfi, bkpt, ram_image=None):
+    def __init__(self, chip, segments, sites, ram_image=None):
+        wfi, bkpt, unmask = sites
         self.chip = chip
         uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
         uc.ctl_set_cpu_model(A.UC_CPU_ARM_CORTEX_M4)
@@ -407,6 +434,10 @@ class Machine:
         self.reason = None
         self.limit = 0
         self.saved = None
+        self.current = None
+        self.icache = {}
+        self.handler_instructions = {}  # exception number -> instructions
+        self.handler_entries = {}
         self.semihosting_calls = 0
         self.faults = []
         uc.hook_add(UC_HOOK_BLOCK, self._block)
@@ -415,6 +446,8 @@ class Machine:
         for a in bkpt:
             uc.hook_add(UC_HOOK_CODE, self._bkpt, begin=a, end=a)
         uc.hook_add(UC_HOOK_CODE, self._stop("return"), begin=TRAMPOLINE, end=TRAMPOLINE)
+        for a in unmask:
+            uc.hook_add(UC_HOOK_CODE, self._unmasked, begin=a, end=a)
         uc.hook_add(UC_HOOK_INTR, self._intr)
         vectors = uc.mem_read(0x08000000, 8)
         sp, reset = struct.unpack("<II", vectors)
@@ -424,9 +457,25 @@ class Machine:
             A.UC_ARM_REG_SP, A.UC_ARM_REG_LR, A.UC_ARM_REG_XPSR, A.UC_ARM_REG_FPSCR] + [
             getattr(A, f"UC_ARM_REG_D{i}") for i in range(16)]
 
-    def _block(self, uc, _addr, size, _d):
-        # One cycle per halfword of code executed: a proxy for instructions.
-        self.chip.advance(size // 2)
+    def instructions(self, addr, size):
+        """Thumb instructions in the block at addr (16- or 32-bit each)."""
+        n = self.icache.get((addr, size))
+        if n is None:
+            code = bytes(self.uc.mem_read(addr, size))
+            n, i = 0, 0
+            while i < size:
+                hw = code[i] | code[i + 1] << 8 if i + 1 < size else 0
+                i += 4 if hw >> 11 in (0b11101, 0b11110, 0b11111) else 2
+                n += 1
+            self.icache[(addr, size)] = n
+        return n
+
+    def _block(self, uc, addr, size, _d):
+        # One cycle per instruction: the time base of this model.
+        n = self.instructions(addr, size)
+        self.chip.advance(n)
+        if self.saved is not None:
+            self.handler_instructions[self.current] = self.handler_instructions.get(self.current, 0) + n
         if self.chip.cycles >= self.limit or self.chip.reset_requested:
             self.reason = self.reason or "time"
             uc.emu_stop()
@@ -436,6 +485,12 @@ class Machine:
             self.reason = why
             uc.emu_stop()
         return hook
+
+    def _unmasked(self, uc, _addr, _size, _d):
+        # PRIMASK may just have been cleared: take a pending interrupt now.
+        if self.saved is None and not self.masked() and self.interrupt_due() is not None:
+            self.reason = "unmasked"
+            uc.emu_stop()
 
     def _bkpt(self, uc, addr, _size, _d):
         self.semihosting_calls += 1
@@ -460,6 +515,8 @@ class Machine:
         uc.reg_write(A.UC_ARM_REG_SP, sp)
         uc.reg_write(A.UC_ARM_REG_LR, TRAMPOLINE | 1 if frame is None else 0xFFFFFFF9)
         self.chip.pending.discard(n)
+        self.current = n
+        self.handler_entries[n] = self.handler_entries.get(n, 0) + 1
         self.pc = self.vector(n)
 
     def leave(self):
@@ -492,16 +549,12 @@ class Machine:
                 return "reset requested"
             chip.deliver_rx()
             n = self.interrupt_due()
-            step = 0
-            if n is not None:
-                if self.masked():
-                    step = 1  # to the end of the critical section, one instruction at a time
-                else:
-                    self.enter(n)
+            if n is not None and not self.masked():
+                self.enter(n)
             self.reason = None
             self.limit = min(chip.next_event(), chip.cycles + 20_000)
             try:
-                self.uc.emu_start(self.pc | 1, 0xFFFFFFFF, count=step)
+                self.uc.emu_start(self.pc | 1, 0xFFFFFFFF)
             except UcError as e:
                 return f"emulation error {e} at {self.uc.reg_read(A.UC_ARM_REG_PC):#x}"
             self.pc = self.uc.reg_read(A.UC_ARM_REG_PC)
@@ -512,7 +565,7 @@ class Machine:
                 self.pc += 2
             elif self.reason == "return":
                 self.leave()
-            elif self.reason not in ("time", None):
+            elif self.reason not in ("time", "unmasked", None):
                 return self.reason
         return None
 
@@ -604,11 +657,11 @@ def within(baud, want, tol=0.01):
     return baud and abs(baud / want - 1) <= tol
 
 
-def boot_and_bring_up(segments, syms, wfi, bkpt):
+def boot_and_bring_up(segments, syms, sites):
     chip = Chip()
-    m = Machine(chip, segments, wfi, bkpt)
+    m = Machine(chip, segments, sites)
     lms = FakeLms(chip)
-    host = Client(chip, [19200, 38400, 500000, 9600])  # keep in step with `asked` below
+    host = Client(chip, [19200, 38400, 9600, 500000])  # keep in step with `asked` below
 
     def ready():
         return chip.syst[0x14] != 0 and chip.usarts[0x40004800].cr1 & 0x2000 and chip.nvic_enabled
@@ -652,7 +705,7 @@ def boot_and_bring_up(segments, syms, wfi, bkpt):
     check("sensor line switched to 500 kBd exactly", sensor_switch and sensor_switch[-1] == 500_000
           and lms.bad_rate == 0, f"USART2 rates written: {[round(b) for b in sensor_switch]}, "
           f"{lms.bad_rate} bytes at a wrong rate")
-    asked = [19200, 38400, 500000, 9600]
+    asked = [19200, 38400, 9600, 500000]
     got = dict(host.switched)
     for rate in asked:
         code = [k for k, v in BAUD_CODES.items() if v == rate][0]
@@ -664,11 +717,95 @@ def boot_and_bring_up(segments, syms, wfi, bkpt):
     feeds = chip.iwdg_keys.count(0xAAAA)
     check("watchdog fed from the loop", feeds > 10, f"{feeds} feeds in {chip.cycles / 168e6:.2f} s (modelled)")
     check("no semihosting on the board path", m.semihosting_calls == 0 and not m.faults,
-          f"{len(bkpt)} BKPT 0xAB sites in the ELF, {m.semihosting_calls} executed, CPU exceptions {m.faults}")
+          f"{len(sites[1])} BKPT 0xAB sites in the ELF, {m.semihosting_calls} executed, CPU exceptions {m.faults}")
+    stream(m, chip, lms, host, syms)
     return m, chip
 
 
-def fault_and_reboot(m, chip, segments, syms, wfi, bkpt):
+def room_scan(k):
+    """A 361-value B0 (180 deg / 0.5 deg, mm) of a room, as qemu-smoke.py sends."""
+    import math
+    import random
+    rng = random.Random(k)
+    words = []
+    for i in range(361):
+        phi = math.radians(i * 0.5 - 90.0)
+        c, s_ = math.cos(phi), math.sin(phi)
+        d = math.inf
+        if c > 1e-6:
+            d = min(d, 3.0 / c)
+        if abs(s_) > 1e-6:
+            d = min(d, 2.0 / abs(s_))
+        if -0.2 < phi < 0.1:
+            d = min(d, 1.5 / c)
+        words.append(min(8182, round((d + rng.uniform(-0.005, 0.005)) * 1000)))
+    data = (0x4000 | 361).to_bytes(2, "little") + b"".join(w.to_bytes(2, "little") for w in words)
+    return telegram(0x80, bytes([0xB0]) + data + bytes([0x10]))
+
+
+def stream(m, chip, lms, host, syms, n_scans=3):
+    """Both lines at 500 kBd: the LMS streams a scan every 26.7 ms, the
+    client has continuous output on. Measures the receive interrupt's cost
+    per byte and how long the host line is still sending after the loop has
+    finished a scan (the overlap of computation and transmission)."""
+    u1, u2 = chip.usarts[0x40011000], chip.usarts[0x40004400]
+    u1.rx += [(b, False) for b in telegram(0x00, bytes([0x20, 0x24]))]
+    got, seq = [], []
+    ends = []
+    end_addr = syms.get("scan_end", 0) & ~1
+    m.uc.hook_add(UC_HOOK_CODE, lambda *_: ends.append(chip.cycles), begin=end_addr, end=end_addr)
+    m.uc.ctl_flush_tb()
+    scans = [room_scan(k) for k in range(n_scans)]
+    period = int(0.0267 * 168e6)
+    t0 = chip.cycles + 2_000_000
+    sent = [0]
+    # Exact instruction count of the USART2 handler and the function it
+    # tail-calls (a hook per instruction, on those two only).
+    isr = {"n": 0}
+
+    def count(_uc, _a, _s, _d):
+        if m.current == 54 and m.saved is not None:
+            isr["n"] += 1
+    for name in ("USART2", "lms_firmware::serial::on_interrupt"):
+        lo, size = sym_range(name)
+        m.uc.hook_add(UC_HOOK_CODE, count, begin=lo, end=lo + size - 1)
+    m.uc.ctl_flush_tb()  # code translated before the hooks existed
+    entries_before = m.handler_entries.get(54, 0)
+    last_byte = []
+
+    def progress():
+        k = sent[0]
+        if k < n_scans and chip.cycles >= t0 + k * period:
+            lms.send(scans[k])
+            sent[0] += 1
+        lms.poll()
+        if u1.tx:
+            data, times = bytes(u1.tx), list(u1.tx_times)
+            u1.tx[:], u1.tx_times[:] = b"", []
+            for i, t in enumerate(host.deframer.feed(data)):
+                if len(t) > 5:
+                    seq.append(t[4])
+                    if t[4] == 0xB0:
+                        got.append(t)
+                    if t[4] == 0xD0:
+                        last_byte.append(times[-1] + int(10 * 168e6 / 500_000))
+        return len([c for c in seq if c == 0xD0]) >= n_scans
+    why = m.run(progress, max_cycles=chip.cycles + 20 * period)
+    check(f"{n_scans} scans streamed at 500 kBd: every B0 passed through byte for byte", why is None and got == scans,
+          f"{len(got)} of {n_scans} B0" + (f"; {why}" if why else ""))
+    groups = " ".join(f"{c:02X}" for c in seq)
+    check("features after every scan (D4 D3 D1 D2 D0)", seq.count(0xD0) == n_scans, groups[:80])
+    entries = m.handler_entries.get(54, 0) - entries_before
+    per_byte = isr["n"] / max(1, entries)
+    check("receive interrupt cost per byte (USART2, 500 kBd)", 0 < per_byte < 150,
+          f"{per_byte:.1f} instructions per byte ({entries} entries, one per byte) = "
+          f"{per_byte * 50_000 / 168e6 * 100:.2f} % of 168 MHz at 50 000 bytes/s, + 12 cycles entry and 12 exit each")
+    overlap = [(lb - e) / 168e3 for e, lb in zip(ends[-n_scans:], last_byte)]
+    check("the loop finishes each scan while the host line is still sending", overlap and min(overlap) > 5,
+          "host line busy " + ", ".join(f"{o:.1f}" for o in overlap) + " ms after scan_end")
+
+
+def fault_and_reboot(m, chip, segments, syms, sites):
     """HardFault from the loop -> record + reset request; next boot reports it."""
     fake_pc, fake_lr = 0x08001234, 0x08005679
     frame = [0, 0, 0, 0, 0, fake_lr, fake_pc, 0x01000000]
@@ -682,7 +819,7 @@ def fault_and_reboot(m, chip, segments, syms, wfi, bkpt):
           f"at {rec_addr:#x}: magic={rec[0]:#x} cause={rec[1]} pc={rec[2]:#x} lr={rec[3]:#x}")
     ram = bytes(m.uc.mem_read(0x20000000, 0x20000))
     chip2 = Chip(csr=1 << 28, ram=ram)  # SFTRSTF
-    m2 = Machine(chip2, segments, wfi, bkpt, ram_image=ram)
+    m2 = Machine(chip2, segments, sites, ram_image=ram)
     console = chip2.usarts[0x40004800]
     sent = []
 
@@ -703,9 +840,9 @@ def fault_and_reboot(m, chip, segments, syms, wfi, bkpt):
     check("no semihosting on the reboot", m2.semihosting_calls == 0)
 
 
-def dead_crystal(segments, wfi, bkpt):
+def dead_crystal(segments, sites):
     chip = Chip(hse_ok=False)
-    m = Machine(chip, segments, wfi, bkpt)
+    m = Machine(chip, segments, sites)
     why = m.run(lambda: chip.syst[0x14] != 0, max_cycles=200_000_000)
     cfg = chip.rcc[0x04]
     check("dead crystal: PLL on HSI, still 168 MHz, bounded wait", why is None and chip.sysclk() == 168_000_000
@@ -716,10 +853,10 @@ def dead_crystal(segments, wfi, bkpt):
 def main():
     segments = load_segments(ELF)
     syms = symbols(ELF)
-    wfi, bkpt = instruction_sites(ELF)
-    m, chip = boot_and_bring_up(segments, syms, wfi, bkpt)
-    fault_and_reboot(m, chip, segments, syms, wfi, bkpt)
-    dead_crystal(segments, wfi, bkpt)
+    sites = instruction_sites(ELF)
+    m, chip = boot_and_bring_up(segments, syms, sites)
+    fault_and_reboot(m, chip, segments, syms, sites)
+    dead_crystal(segments, sites)
     print(f"{sum(results)} passed, {len(results) - sum(results)} failed")
     return 0 if all(results) else 1
 
