@@ -250,6 +250,7 @@ fn serve<const RX: usize, const TX: usize>(
     usart: &pac::usart1::RegisterBlock,
     ends: &mut Ends,
     port: &PortStatics<RX, TX>,
+    irq: Interrupt,
 ) {
     if ends.is_none() {
         *ends = port.unpark();
@@ -258,7 +259,7 @@ fn serve<const RX: usize, const TX: usize>(
         Some((rx, tx)) => (Some(rx), Some(tx)),
         None => (None, None),
     };
-    serial::on_interrupt(usart, rx, tx, &port.stats);
+    serial::on_interrupt(usart, rx, tx, &port.stats, irq);
 }
 
 #[interrupt]
@@ -268,7 +269,7 @@ fn USART1() {
     // loop's `Serial` writes BRR and sets TXEIE inside a critical section,
     // and never reads DR of an interrupt-driven port.
     let usart = unsafe { &*pac::USART1::ptr() };
-    serve(usart, ENDS, &HOST);
+    serve(usart, ENDS, &HOST, Interrupt::USART1);
 }
 
 #[interrupt]
@@ -276,7 +277,7 @@ fn USART2() {
     static mut ENDS: Ends = None;
     // SAFETY: as for USART1 (USART2 has the same register block).
     let usart = unsafe { &*pac::USART2::ptr() };
-    serve(usart, ENDS, &SENSOR);
+    serve(usart, ENDS, &SENSOR, Interrupt::USART2);
 }
 
 #[interrupt]
@@ -284,7 +285,7 @@ fn USART3() {
     static mut ENDS: Ends = None;
     // SAFETY: as for USART1.
     let usart = unsafe { &*pac::USART3::ptr() };
-    serve(usart, ENDS, &CONTROL);
+    serve(usart, ENDS, &CONTROL, Interrupt::USART3);
 }
 
 /// Stop for good with `code` after a fault (the record is already written):
