@@ -837,6 +837,20 @@ def fault_and_reboot(m, chip, segments, syms, sites):
           and fields.get("fault_pc") == str(fake_pc) and fields.get("fault_lr") == str(fake_lr),
           " ".join(f"{k}={fields.get(k)}" for k in ("reset_flags", "fault_cause", "fault_pc", "fault_lr")) or why)
     check("record cleared after it was reported", struct.unpack("<I", m2.uc.mem_read(rec_addr, 4))[0] == 0)
+    # The host reads the same with the counters request 55 -> D5.
+    host = chip2.usarts[0x40011000]
+    host.tx[:] = b""
+    host.rx += [(b, False) for b in telegram(0x00, bytes([0x55]))]
+    d5 = []
+
+    def counters():
+        d5.extend(t for t in Deframer().feed(bytes(host.tx)) if len(t) > 5 and t[4] == 0xD5)
+        return bool(d5)
+    why = m2.run(counters, max_cycles=chip2.cycles + 500_000_000)
+    fields = struct.unpack("<13I", d5[0][5:57]) if d5 and len(d5[0]) >= 59 else (0,) * 13
+    check("the counters telegram D5 carries reset flags and the last fault", why is None and
+          fields[9:13] == (1 << 3, 2, fake_pc, fake_lr),
+          f"D5 boot fields {[hex(v) for v in fields[9:13]]}" + (f"; {why}" if why else ""))
     check("no semihosting on the reboot", m2.semihosting_calls == 0)
 
 

@@ -17,7 +17,7 @@ const EDGES: &str = "02 80 0A 00 D3 2A 00 00 00 01 00 3C 00 10 62 F6";
 const LINES: &str = "02 80 65 00 D1 2A 00 00 00 00 01 02 00 00 00 00 00 00 00 40 BD 37 86 35 00 00 00 00 BD 37 86 36 00 00 80 3F 00 00 00 40 00 00 C0 BF 00 00 00 40 00 00 00 3F 0A 00 3C 00 33 00 DB 0F C9 3F 00 00 00 3F BD 37 86 35 00 00 00 00 BD 37 86 36 00 00 00 3F 00 00 00 40 00 00 00 3F 00 00 00 3F 00 00 00 3F 3C 00 78 00 3D 00 10 CC B0";
 const CORNERS: &str = "02 80 24 00 D2 2A 00 00 00 00 01 01 00 00 00 40 00 00 00 3F BD 37 86 36 00 00 00 00 BD 37 86 36 00 00 B4 42 01 00 01 10 67 F6";
 const SUMMARY: &str = "02 80 33 00 D0 2A 00 00 00 69 01 02 02 01 01 00 69 01 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 1E 00 0A D7 A3 3B 00 00 00 00 00 00 10 41 10 F8 F5";
-const COUNTERS: &str = "02 80 32 00 D5 E8 03 00 00 E8 03 00 00 88 13 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 E8 03 00 00 10 7B 31";
+const COUNTERS: &str = "02 80 42 00 D5 E8 03 00 00 E8 03 00 00 88 13 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 E8 03 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 10 A8 1B";
 const FEATURES_ON: &str = "02 00 02 00 56 01 FD 7E";
 const FEATURES_OFF: &str = "02 00 02 00 56 00 FC 7E";
 const FEATURES_ON_REPLY: &str = "02 80 03 00 D6 01 10 CC E6";
@@ -139,7 +139,7 @@ fn the_worked_example_parses_back_to_the_same_bits() {
 
 #[test]
 fn counters_request_and_reply_are_byte_exact() {
-    let mut buf = [0u8; 64];
+    let mut buf = [0u8; 96];
     let n = emit_telegram(&mut buf, 0x00, REQ_COUNTERS, &[], None).unwrap();
     assert_eq!(buf[..n], bytes(COUNTERS_REQUEST)[..]);
     let c = Counters {
@@ -151,6 +151,33 @@ fn counters_request_and_reply_are_byte_exact() {
     };
     let n = c.emit(0, &mut buf).unwrap();
     assert_eq!(buf[..n], bytes(COUNTERS)[..]);
+}
+
+#[test]
+fn counters_carry_the_boot_fields_and_still_read_the_old_length() {
+    use lms_core::telegram::features::{COUNTERS_LEN, COUNTERS_LEN_V1};
+    let c = Counters {
+        scans_in: 7,
+        scans_out: 5,
+        reset_flags: 16,
+        fault_cause: 2,
+        fault_pc: 0x0800_1234,
+        fault_lr: 0x0800_5679,
+        ..Counters::default()
+    };
+    let mut data = [0u8; COUNTERS_LEN];
+    c.encode(&mut data);
+    assert_eq!(&data[48..52], &16u32.to_le_bytes());
+    assert_eq!(&data[56..60], &0x0800_1234u32.to_le_bytes());
+    assert_eq!(Counters::decode(&data), Some(c));
+    // A co-processor without the boot fields sent the first 48 bytes.
+    let old = Counters::decode(&data[..COUNTERS_LEN_V1]).unwrap();
+    assert_eq!((old.scans_in, old.scans_out), (7, 5));
+    assert_eq!(
+        (old.reset_flags, old.fault_cause, old.fault_pc, old.fault_lr),
+        (0, 0, 0, 0)
+    );
+    assert_eq!(Counters::decode(&data[..52]), None);
 }
 
 #[test]

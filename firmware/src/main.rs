@@ -82,6 +82,17 @@ mod app {
     pub fn step(app: &App) -> Option<Step> {
         Some(app.link().step())
     }
+
+    /// The boot's findings into the counters (`55` → `D5`).
+    pub fn note_boot(app: &mut App, boot: &crate::board::Boot) {
+        let f = boot.last_fault;
+        app.note_boot(
+            boot.reset.0,
+            f.map_or(0, |f| f.cause as u32),
+            f.map_or(0, |f| f.pc),
+            f.map_or(0, |f| f.lr),
+        );
+    }
 }
 
 #[cfg(feature = "standin")]
@@ -95,6 +106,8 @@ mod app {
     pub fn step(_app: &App) -> Option<lms_core::device::coprocessor::Step> {
         None
     }
+
+    pub fn note_boot(_app: &mut App, _boot: &crate::board::Boot) {}
 }
 
 /// The application's state (about 20 KiB): a static built at compile time,
@@ -110,6 +123,7 @@ fn main() -> ! {
         defmt::panic!("board::init called twice");
     };
     let app = init_app();
+    app::note_boot(app, &board.boot);
     // From here on the stack report covers the loop only.
     let boot_stack = board::repaint_stack();
     log_boot(&board.boot);

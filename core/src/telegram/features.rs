@@ -65,7 +65,10 @@ pub const CORNER_RECORD_LEN: usize = 27;
 /// Bytes of the summary's data.
 pub const SUMMARY_LEN: usize = 49;
 /// Bytes of the counters' data (12 × u32).
-pub const COUNTERS_LEN: usize = 48;
+pub const COUNTERS_LEN: usize = 64;
+/// Bytes of the counters' data before the boot fields were added (12 ×
+/// u32), which [`Counters::decode`] still reads (boot fields 0).
+pub const COUNTERS_LEN_V1: usize = 48;
 
 /// Counters the co-processor reports (`D5`); all wrap at `u32::MAX`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -100,6 +103,17 @@ pub struct Counters {
     pub scans_other_setting: u32,
     /// `B0` scans passed on to the host (stream and `30 01`).
     pub scans_out: u32,
+    /// The board's reset flags at this boot (STM32 `RCC_CSR` bits 25–31
+    /// shifted down: 1 brown-out, 2 pin, 4 power-on, 8 software,
+    /// 16 watchdog, 32 window watchdog, 64 low-power; 0 if unknown).
+    pub reset_flags: u32,
+    /// How the previous boot ended, from its fault record: 0 no record,
+    /// 1 panic, 2 hard fault, 3 unexpected interrupt.
+    pub fault_cause: u32,
+    /// Program counter of that fault (address; 0 if none).
+    pub fault_pc: u32,
+    /// Link register of that fault (0 if none).
+    pub fault_lr: u32,
 }
 
 impl Counters {
@@ -117,9 +131,13 @@ impl Counters {
         host_scans_dropped: 0,
         scans_other_setting: 0,
         scans_out: 0,
+        reset_flags: 0,
+        fault_cause: 0,
+        fault_pc: 0,
+        fault_lr: 0,
     };
 
-    fn fields(&self) -> [u32; 12] {
+    fn fields(&self) -> [u32; 16] {
         [
             self.scans_in,
             self.feature_scans_out,
@@ -133,10 +151,14 @@ impl Counters {
             self.host_scans_dropped,
             self.scans_other_setting,
             self.scans_out,
+            self.reset_flags,
+            self.fault_cause,
+            self.fault_pc,
+            self.fault_lr,
         ]
     }
 
-    /// Write the `D5` data (12 × u32 LE, in field order) into `out`.
+    /// Write the `D5` data (16 × u32 LE, in field order) into `out`.
     pub fn encode(&self, out: &mut [u8]) {
         let mut w = Writer::new(out);
         for v in self.fields() {
@@ -144,12 +166,15 @@ impl Counters {
         }
     }
 
-    /// Read the `D5` data; `None` if it is not [`COUNTERS_LEN`] bytes.
+    /// Read the `D5` data; `None` if it is neither [`COUNTERS_LEN`] nor
+    /// [`COUNTERS_LEN_V1`] bytes (then the boot fields read 0).
     pub fn decode(data: &[u8]) -> Option<Counters> {
-        if data.len() != COUNTERS_LEN {
+        if data.len() != COUNTERS_LEN && data.len() != COUNTERS_LEN_V1 {
             return None;
         }
         let mut r = Reader::new(data);
+        let boot = data.len() == COUNTERS_LEN;
+        let boot_field = |r: &mut Reader<'_>| if boot { r.u32() } else { Some(0) };
         Some(Counters {
             scans_in: r.u32()?,
             feature_scans_out: r.u32()?,
@@ -163,6 +188,10 @@ impl Counters {
             host_scans_dropped: r.u32()?,
             scans_other_setting: r.u32()?,
             scans_out: r.u32()?,
+            reset_flags: boot_field(&mut r)?,
+            fault_cause: boot_field(&mut r)?,
+            fault_pc: boot_field(&mut r)?,
+            fault_lr: boot_field(&mut r)?,
         })
     }
 
@@ -896,8 +925,12 @@ mod tests {
             host_scans_dropped: 10,
             scans_other_setting: 11,
             scans_out: 12,
+            reset_flags: 13,
+            fault_cause: 14,
+            fault_pc: 15,
+            fault_lr: 16,
         };
-        let mut buf = [0u8; 64];
+        let mut buf = [0u8; 96];
         let n = c.emit(0, &mut buf).unwrap();
         assert_eq!(n, 4 + 1 + COUNTERS_LEN + 1 + 2);
         let t = Telegram::new_checked(&buf[..n], Direction::SensorToHost).unwrap();

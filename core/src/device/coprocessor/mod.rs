@@ -255,6 +255,16 @@ impl CoProcessor {
         self.counters.scans_dropped = self.counters.scans_dropped.wrapping_add(1);
     }
 
+    /// Record what the board found at boot (reset flags, the previous boot's
+    /// fault record), reported with the counters (`55` → `D5`).
+    pub fn note_boot(&mut self, reset_flags: u32, fault_cause: u32, fault_pc: u32, fault_lr: u32) {
+        self.counters.reset_flags = reset_flags;
+        self.counters.fault_cause = fault_cause;
+        self.counters.fault_pc = fault_pc;
+        self.counters.fault_lr = fault_lr;
+        self.host.source_mut().counters = self.counters;
+    }
+
     /// `bytes` from the sensor were lost before they reached
     /// [`CoProcessor::poll`] (receive queue overflow, overrun): every scan
     /// they cut is counted in `scans_dropped` (see
