@@ -90,13 +90,17 @@ impl<const RX: usize, const TX: usize> PortStatics<RX, TX> {
     fn split(&'static self) -> (Consumer<'static, u8>, Producer<'static, u8>) {
         let (rx_in, rx_out) = self.rx.take().split();
         let (tx_in, tx_out) = self.tx.take().split();
-        critical_section::with(|cs| self.parked.borrow_ref_mut(cs).replace((rx_in, tx_out)));
+        critical_section::with(|cs| {
+            if let Ok(mut slot) = self.parked.borrow(cs).try_borrow_mut() {
+                *slot = Some((rx_in, tx_out));
+            }
+        });
         (rx_out, tx_in)
     }
 
     /// The interrupt's ends, once (`None` before `split`).
     fn unpark(&self) -> Ends {
-        critical_section::with(|cs| self.parked.borrow_ref_mut(cs).take())
+        critical_section::with(|cs| self.parked.borrow(cs).try_borrow_mut().ok()?.take())
     }
 }
 

@@ -37,14 +37,22 @@ pub fn init_rtt() {
             }
         }
     };
-    critical_section::with(|cs| RTT.borrow_ref_mut(cs).replace(channels.up.0));
+    critical_section::with(|cs| {
+        if let Ok(mut slot) = RTT.borrow(cs).try_borrow_mut() {
+            *slot = Some(channels.up.0);
+        }
+    });
     SINK.store(SINK_RTT, Ordering::SeqCst);
 }
 
 /// Log through semihosting from now on (QEMU only).
 pub fn use_semihosting() {
     let out = semihosting::io::stdout().ok();
-    critical_section::with(|cs| *STDOUT.borrow_ref_mut(cs) = out);
+    critical_section::with(|cs| {
+        if let Ok(mut slot) = STDOUT.borrow(cs).try_borrow_mut() {
+            *slot = out;
+        }
+    });
     SINK.store(SINK_SEMIHOSTING, Ordering::SeqCst);
 }
 
@@ -52,12 +60,24 @@ pub fn use_semihosting() {
 fn emit(cs: critical_section::CriticalSection<'_>, bytes: &[u8]) {
     match SINK.load(Ordering::Relaxed) {
         SINK_RTT => {
-            if let Some(ch) = RTT.borrow_ref_mut(cs).as_mut() {
+            if let Some(ch) = RTT
+                .borrow(cs)
+                .try_borrow_mut()
+                .ok()
+                .as_deref_mut()
+                .and_then(Option::as_mut)
+            {
                 ch.write(bytes);
             }
         }
         SINK_SEMIHOSTING => {
-            if let Some(out) = STDOUT.borrow_ref_mut(cs).as_mut() {
+            if let Some(out) = STDOUT
+                .borrow(cs)
+                .try_borrow_mut()
+                .ok()
+                .as_deref_mut()
+                .and_then(Option::as_mut)
+            {
                 let _ = out.write_all(bytes);
             }
         }

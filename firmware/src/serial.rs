@@ -293,31 +293,61 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
         }
     }
 
-    /// Switch the transmit interrupt on (the queue has bytes) and pend the
-    /// interrupt once: QEMU 7.2 raises a USART's line only for a received
-    /// byte, not for `TXE` & `TXEIE`; on silicon the pended run just sends
-    /// the first byte a little earlier.
+    /// Switch the transmit interrupt on (the queue has bytes) and pend it.
     fn start_tx(&mut self) {
-        critical_section::with(|_| self.usart.cr1().modify(|_, w| w.txeie().set_bit()));
-        cortex_m::peripheral::NVIC::pend(self.irq);
+        start_tx(&self.usart, self.irq);
     }
 
-    /// Sleep until the transmit queue has room; feeds the watchdog while
-    /// bytes are still leaving (a line stuck for good ends in its reset).
+    /// Sleep until the transmit queue has room (see [`wait_for_room`]).
     fn wait_for_room(&mut self) {
-        let mut queued = self.tx.len();
-        while !self.tx.ready() {
-            critical_section::with(|_| {
-                if !self.tx.ready() {
-                    cortex_m::asm::wfi();
-                }
-            });
-            let now = self.tx.len();
-            if now < queued {
-                crate::fault::feed();
+        wait_for_room(&self.tx);
+    }
+}
+
+/// Switch the transmit interrupt on (the queue has bytes) and pend the
+/// interrupt once: QEMU 7.2 raises a USART's line only for a received byte,
+/// not for `TXE` & `TXEIE`; on silicon the pended run just sends the first
+/// byte a little earlier.
+fn start_tx(usart: &RegisterBlock, irq: Interrupt) {
+    critical_section::with(|_| usart.cr1().modify(|_, w| w.txeie().set_bit()));
+    cortex_m::peripheral::NVIC::pend(irq);
+}
+
+/// Sleep until the transmit queue has room; feeds the watchdog while bytes
+/// are still leaving (a line stuck for good ends in its reset).
+fn wait_for_room(tx: &Producer<'static, u8>) {
+    let mut queued = tx.len();
+    while !tx.ready() {
+        critical_section::with(|_| {
+            if !tx.ready() {
+                cortex_m::asm::wfi();
             }
-            queued = now;
+        });
+        let now = tx.len();
+        if now < queued {
+            crate::fault::feed();
         }
+        queued = now;
+    }
+}
+
+/// Queue every byte of `buf`, waiting for room (asleep) whenever the queue
+/// is full. One function for every port (not generic): the firmware's one
+/// copy. Not inlined, so that the one panic path left, heapless's
+/// `% capacity` (unreachable: the capacity is a non-zero constant), is
+/// listed by `panic-sites.sh` as the firmware's, not inside the core's `poll`.
+#[inline(never)]
+fn queue_all(usart: &RegisterBlock, tx: &mut Producer<'static, u8>, irq: Interrupt, buf: &[u8]) {
+    for chunk in buf.chunks(64) {
+        for &b in chunk {
+            if tx.enqueue(b).is_err() {
+                start_tx(usart, irq);
+                wait_for_room(tx);
+                // Room now (the wait returns only when there is some; one producer).
+                let _ = tx.enqueue(b);
+            }
+        }
+        start_tx(usart, irq);
     }
 }
 
@@ -374,24 +404,10 @@ impl<U: Deref<Target = RegisterBlock>> Write for Serial<U> {
     }
 
     /// Queues every byte, waiting for room (asleep) whenever the queue is
-    /// full. Overrides the provided method, which has a panic path for a
-    /// `write` that returns 0 (this one never does). Not inlined, so that
-    /// the one panic path left, heapless's `% capacity` (unreachable: the
-    /// capacity is a non-zero constant), is listed by `panic-sites.sh` as
-    /// the firmware's, not inside the core's `poll`.
-    #[inline(never)]
+    /// full ([`queue_all`]). Overrides the provided method, which has a
+    /// panic path for a `write` that returns 0 (this one never does).
     fn write_all(&mut self, buf: &[u8]) -> Result<(), Infallible> {
-        for chunk in buf.chunks(64) {
-            for &b in chunk {
-                if self.tx.enqueue(b).is_err() {
-                    self.start_tx();
-                    self.wait_for_room();
-                    // Room now (the wait returns only when there is some).
-                    let _ = self.tx.enqueue(b);
-                }
-            }
-            self.start_tx();
-        }
+        queue_all(&self.usart, &mut self.tx, self.irq, buf);
         Ok(())
     }
 
