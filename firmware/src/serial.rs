@@ -279,6 +279,7 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
         let bits = (self.tx.len() as u64 + 2) * 10;
         let deadline =
             crate::clock::now_us() + 2 * bits * 1_000_000 / u64::from(self.baud.max(1)) + 2_000;
+        let mut queued = self.tx.len();
         while crate::clock::now_us() < deadline {
             let done = critical_section::with(|_| {
                 let empty = self.tx.is_empty();
@@ -290,6 +291,11 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
             if done && self.usart.sr().read().tc().bit_is_set() {
                 return;
             }
+            // Bytes are leaving: not stuck (a 1 KiB queue at 9600 Bd takes 1 s).
+            if self.tx.len() < queued {
+                crate::fault::feed();
+            }
+            queued = self.tx.len();
         }
     }
 
