@@ -435,6 +435,7 @@ class Machine:
         self.limit = 0
         self.saved = None
         self.current = None
+        self.first_block = True
         self.icache = {}
         self.handler_instructions = {}  # exception number -> instructions
         self.handler_entries = {}
@@ -471,14 +472,19 @@ class Machine:
         return n
 
     def _block(self, uc, addr, size, _d):
-        # One cycle per instruction: the time base of this model.
+        # One cycle per instruction: the time base of this model. A stop
+        # requested here happens before the block runs, so the block is
+        # counted only when it does run; the first block of a run always
+        # runs (else a run that starts past its limit would never move).
+        if not self.first_block and (self.chip.cycles >= self.limit or self.chip.reset_requested):
+            self.reason = self.reason or "time"
+            uc.emu_stop()
+            return
+        self.first_block = False
         n = self.instructions(addr, size)
         self.chip.advance(n)
         if self.saved is not None:
             self.handler_instructions[self.current] = self.handler_instructions.get(self.current, 0) + n
-        if self.chip.cycles >= self.limit or self.chip.reset_requested:
-            self.reason = self.reason or "time"
-            uc.emu_stop()
 
     def _stop(self, why):
         def hook(uc, _addr, _size, _d):
@@ -526,6 +532,12 @@ class Machine:
         self.pc = pc
         self.saved = None
 
+    def in_it_block(self):
+        """Stopped inside an IT block (ITSTATE in xPSR bits 26:25, 15:10)?
+        Exception entry here would run the handler under the IT condition."""
+        xpsr = self.uc.reg_read(A.UC_ARM_REG_XPSR)
+        return bool((xpsr >> 25) & 3 or (xpsr >> 10) & 0x3F)
+
     def masked(self):
         return bool(self.uc.reg_read(A.UC_ARM_REG_PRIMASK) & 1)
 
@@ -549,10 +561,15 @@ class Machine:
                 return "reset requested"
             chip.deliver_rx()
             n = self.interrupt_due()
+            soon = False
             if n is not None and not self.masked():
-                self.enter(n)
+                if self.in_it_block():
+                    soon = True  # hardware would finish the IT block's state; take it at the next block
+                else:
+                    self.enter(n)
             self.reason = None
-            self.limit = min(chip.next_event(), chip.cycles + 20_000)
+            self.limit = chip.cycles if soon else min(chip.next_event(), chip.cycles + 20_000)
+            self.first_block = True
             try:
                 self.uc.emu_start(self.pc | 1, 0xFFFFFFFF)
             except UcError as e:
