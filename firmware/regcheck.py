@@ -766,7 +766,8 @@ def stream(m, chip, lms, host, syms, n_scans=3):
     per byte and how long the host line is still sending after the loop has
     finished a scan (the overlap of computation and transmission)."""
     u1, u2 = chip.usarts[0x40011000], chip.usarts[0x40004400]
-    u1.rx += [(b, False) for b in telegram(0x00, bytes([0x20, 0x24]))]
+    # Features are opt-in on the host line (56 01), then continuous output.
+    u1.rx += [(b, False) for b in telegram(0x00, bytes([0x56, 0x01])) + telegram(0x00, bytes([0x20, 0x24]))]
     got, seq = [], []
     ends = []
     end_addr = syms.get("scan_end", 0) & ~1
@@ -864,10 +865,10 @@ def fault_and_reboot(m, chip, segments, syms, sites):
         d5.extend(t for t in Deframer().feed(bytes(host.tx)) if len(t) > 5 and t[4] == 0xD5)
         return bool(d5)
     why = m2.run(counters, max_cycles=chip2.cycles + 500_000_000)
-    fields = struct.unpack("<13I", d5[0][5:57]) if d5 and len(d5[0]) >= 59 else (0,) * 13
+    fields = struct.unpack("<16I", d5[0][5:69]) if d5 and len(d5[0]) >= 71 else (0,) * 16
     check("the counters telegram D5 carries reset flags and the last fault", why is None and
-          fields[9:13] == (1 << 3, 2, fake_pc, fake_lr),
-          f"D5 boot fields {[hex(v) for v in fields[9:13]]}" + (f"; {why}" if why else ""))
+          fields[12:16] == (1 << 3, 2, fake_pc, fake_lr),
+          f"D5 boot fields {[hex(v) for v in fields[12:16]]}" + (f"; {why}" if why else ""))
     check("no semihosting on the reboot", m2.semihosting_calls == 0)
 
 

@@ -52,7 +52,7 @@ impl Command {
 }
 
 /// The numbers the console reports.
-#[derive(Clone, Copy, Debug, defmt::Format)]
+#[derive(Clone, Copy, Debug)]
 pub struct Report {
     /// Time base (µs since boot).
     pub now_us: u64,

@@ -243,7 +243,7 @@ fn serve_console(app: &app::App, board: &mut board::Board, watch: &Watch) {
     };
     if let Some(command) = serial::try_read(&mut board.control).and_then(Command::from_byte) {
         let r = report(board);
-        defmt::info!("{}", r);
+        log_report(&r);
         r.write_line(&mut board.control);
         if command == Command::Quit {
             defmt::info!("exit on console command");
@@ -252,11 +252,24 @@ fn serve_console(app: &app::App, board: &mut board::Board, watch: &Watch) {
     }
     if cfg!(feature = "exit-after-scans") && watch.scans >= EXIT_AFTER_SCANS {
         let r = report(board);
-        defmt::info!("{}", r);
+        log_report(&r);
         r.write_line(&mut board.control);
         defmt::info!("exit after {=u32} scans", watch.scans);
         board::exit(EXIT_SUCCESS, &mut board.control);
     }
+}
+
+/// The report's headline into the log (the whole line goes to the console;
+/// a `defmt::Format` of every field cost ~1 KiB of flash).
+fn log_report(r: &Report) {
+    defmt::info!(
+        "Report {{ now_us: {=u64}, scans: {=u32}, scans_in: {=u32}, dropped: {=u32}, stack_peak: {=u32} }}",
+        r.now_us,
+        r.scans,
+        r.counters.scans_in,
+        r.counters.scans_dropped,
+        r.stack.peak
+    );
 }
 
 /// Sleep until the next interrupt (at the latest the next SysTick, 1 ms)

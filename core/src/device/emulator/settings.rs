@@ -45,8 +45,15 @@ impl Settings {
 }
 
 /// The operating mode (the `B1` mode byte, payload `[8]`).
+///
+/// `repr(u8)`: an explicit tag, 0 for `Installation`, so that an all-zero
+/// emulator (the firmware's `static`, in `.bss`) is in installation mode;
+/// without it the niche in [`ValueMode`] made `Installation` a non-zero
+/// byte and put the firmware's whole co-processor into `.data` (21 KiB of
+/// flash for one byte).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
 pub enum OperatingMode {
     /// `00`: installation mode (configuration may be written).
     Installation,
