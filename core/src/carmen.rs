@@ -42,12 +42,21 @@
 //! the sensor's unit: in cm mode 8183 … 8191 cm read 81.83 … 81.91 m, in the
 //! 32 m mm mode 32759 … 32767 mm read 32.759 … 32.767 m. The two modes
 //! cannot be told apart from one value (cm logs hold genuine 32.8 m
-//! readings), so the unit is decided **per file**: in **mm** if any range
-//! value of any `FLASER` line has three or more decimals (the Örebro log;
-//! CARMEN trims trailing zeros, so most but not all of its values show
-//! three), else in **cm** (two decimals at most: CSAIL, Intel, Belgioioso,
-//! Freiburg). [`Flaser::three_decimals`] is that per-line fact; callers may
-//! also force a unit.
+//! readings), so the unit is decided **per file** ([`UnitVote`]) from the
+//! share of range values with three or more decimals:
+//!
+//! * none: **cm** (two decimals at most: CSAIL, Intel, Belgioioso,
+//!   Freiburg, Acapulco);
+//! * at least a quarter ([`MM_SHARE_DENOMINATOR`]): **mm** (the Örebro log:
+//!   CARMEN trims trailing zeros, so 90 % of its values show three);
+//! * some, but fewer than a quarter: **ambiguous** — read as **cm** (most
+//!   values say so; a stray three-decimal value must not turn a whole cm
+//!   log into mm and its genuine 32.76 m readings into error codes), and the
+//!   tools say so and suggest `--unit`.
+//!
+//! The decision names the value that decided (its line, beam and text).
+//! [`Flaser::three_decimals`] is the per-line fact; callers may also force
+//! a unit.
 //!
 //! Readings at or above the unit's [`Unit::first_error_code`] are invalid
 //! with the reason [`Invalid::from_code_offset`]`(all_ones − value)`
@@ -191,6 +200,10 @@ pub struct Flaser<'a> {
     pub hostname: &'a str,
     /// `true` if a range shows three or more decimals (a mm log).
     pub three_decimals: bool,
+    /// How many ranges show three or more decimals.
+    pub three_decimal_ranges: usize,
+    /// The first range with three or more decimals: beam index and text.
+    pub first_three_decimals: Option<(usize, &'a str)>,
     /// The whole line (the ranges are read again by [`Flaser::fill`]).
     line: &'a str,
 }
@@ -212,10 +225,14 @@ impl<'a> Flaser<'a> {
         if after_n != n + TRAILING_FIELDS {
             return Err(LineError::FieldCount { n, after_n });
         }
-        let mut three_decimals = false;
+        let mut three_decimal_ranges = 0usize;
+        let mut first_three_decimals = None;
         for (beam, text) in fields.by_ref().take(n).enumerate() {
             parse_range(beam, text)?;
-            three_decimals |= decimals(text) >= 3;
+            if decimals(text) >= 3 {
+                three_decimal_ranges += 1;
+                first_three_decimals = first_three_decimals.or(Some((beam, text)));
+            }
         }
         // Nine fields are left (counted above).
         let mut num = || {
@@ -241,7 +258,9 @@ impl<'a> Flaser<'a> {
                 logger_timestamp,
             },
             hostname,
-            three_decimals,
+            three_decimals: three_decimal_ranges > 0,
+            three_decimal_ranges,
+            first_three_decimals,
             line,
         })
     }
@@ -279,28 +298,150 @@ impl<'a> Flaser<'a> {
     }
 }
 
+/// A file is read in mm when at least 1/4 of its range values show three
+/// decimals (see the module docs).
+pub const MM_SHARE_DENOMINATOR: u64 = 4;
+
+/// Longest range text kept as evidence of a decision ([`UnitVote::evidence`]).
+pub const EVIDENCE_LEN: usize = 24;
+
+/// The range that decided for mm: the first with three or more decimals.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Evidence {
+    /// Line number (1-based; 0 if the caller gave none).
+    pub line: usize,
+    /// Beam index.
+    pub beam: usize,
+    text: [u8; EVIDENCE_LEN],
+    len: u8,
+}
+
+impl Evidence {
+    /// The range's text as in the log (cut to [`EVIDENCE_LEN`] bytes).
+    pub fn text(&self) -> &str {
+        let bytes = self.text.get(..usize::from(self.len)).unwrap_or_default();
+        core::str::from_utf8(bytes).unwrap_or("?")
+    }
+}
+
+/// How a file's unit was decided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// No range shows three decimals: cm.
+    Centimetre,
+    /// At least a quarter of the ranges show three decimals: mm.
+    Millimetre,
+    /// Some ranges show three decimals, fewer than a quarter: read as cm,
+    /// but the file should be given a unit (`--unit`).
+    Ambiguous,
+}
+
 /// The per-file unit decision, one line at a time (see the module docs):
-/// [`Unit::Millimetre`] once any line shows three decimals, else
-/// [`Unit::Centimetre`]. Without allocation, for callers that read the log
-/// themselves; `decide_unit` (with `std`) runs it over a whole log.
+/// counts of range values and of those showing three or more decimals,
+/// and the first of them. Without allocation, for callers that read the
+/// log themselves; `decide` (with `std`) runs it over a whole log.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct UnitVote {
-    mm: bool,
+    ranges: u64,
+    three: u64,
+    evidence: Option<Evidence>,
 }
 
 impl UnitVote {
-    /// Count one `FLASER` line.
+    /// Count one `FLASER` line (no line number).
     pub fn observe(&mut self, line: &Flaser<'_>) {
-        self.mm |= line.three_decimals;
+        self.observe_at(0, line);
     }
 
-    /// The unit of the lines observed so far.
-    pub fn unit(&self) -> Unit {
-        if self.mm {
-            Unit::Millimetre
-        } else {
-            Unit::Centimetre
+    /// Count one `FLASER` line, which is line `number` of the log.
+    pub fn observe_at(&mut self, number: usize, line: &Flaser<'_>) {
+        self.ranges = self.ranges.saturating_add(line.beams as u64);
+        self.three = self.three.saturating_add(line.three_decimal_ranges as u64);
+        if self.evidence.is_none() {
+            if let Some((beam, text)) = line.first_three_decimals {
+                let mut e = Evidence {
+                    line: number,
+                    beam,
+                    text: [0; EVIDENCE_LEN],
+                    len: 0,
+                };
+                // Cut at a character boundary.
+                let mut n = text.len().min(EVIDENCE_LEN);
+                while !text.is_char_boundary(n) {
+                    n -= 1;
+                }
+                e.text[..n].copy_from_slice(&text.as_bytes()[..n]);
+                e.len = n as u8;
+                self.evidence = Some(e);
+            }
         }
+    }
+
+    /// Range values counted.
+    pub fn ranges(&self) -> u64 {
+        self.ranges
+    }
+
+    /// Range values with three or more decimals.
+    pub fn three_decimal_ranges(&self) -> u64 {
+        self.three
+    }
+
+    /// The first range with three or more decimals, if any.
+    pub fn evidence(&self) -> Option<Evidence> {
+        self.evidence
+    }
+
+    /// The decision so far.
+    pub fn verdict(&self) -> Verdict {
+        if self.three == 0 {
+            Verdict::Centimetre
+        } else if self.three.saturating_mul(MM_SHARE_DENOMINATOR) >= self.ranges {
+            Verdict::Millimetre
+        } else {
+            Verdict::Ambiguous
+        }
+    }
+
+    /// The unit of the lines observed so far (an ambiguous file is read in cm).
+    pub fn unit(&self) -> Unit {
+        match self.verdict() {
+            Verdict::Millimetre => Unit::Millimetre,
+            Verdict::Centimetre | Verdict::Ambiguous => Unit::Centimetre,
+        }
+    }
+}
+
+impl fmt::Display for UnitVote {
+    /// Why: e.g. `mm: 38690 of 42897 range values show 3 decimals (the first
+    /// "3.382", line 2, beam 1)`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let verdict = match self.verdict() {
+            Verdict::Centimetre => "cm",
+            Verdict::Millimetre => "mm",
+            Verdict::Ambiguous => "ambiguous, read as cm",
+        };
+        write!(
+            f,
+            "{verdict}: {} of {} range values show 3 or more decimals",
+            self.three, self.ranges
+        )?;
+        if let Some(e) = self.evidence {
+            write!(
+                f,
+                " (the first {:?}, line {}, beam {})",
+                e.text(),
+                e.line,
+                e.beam
+            )?;
+        }
+        if self.verdict() == Verdict::Ambiguous {
+            write!(
+                f,
+                "; mm needs at least 1/{MM_SHARE_DENOMINATOR} of them: give --unit mm or --unit cm"
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -328,7 +469,7 @@ fn decimals(text: &str) -> usize {
 #[cfg(any(test, feature = "std"))]
 mod reader;
 #[cfg(any(test, feature = "std"))]
-pub use reader::{decide_unit, ReadError, Reader, Scan};
+pub use reader::{decide, decide_unit, Cut, ReadError, Reader, Scan, MAX_LINE_LEN};
 
 #[cfg(test)]
 mod tests;

@@ -272,9 +272,13 @@ impl<W: Write> CaptureWriter<W> {
         let mut header = [0u8; RECORD_HEADER_LEN];
         header[..8].copy_from_slice(&time_us.to_le_bytes());
         header[8..].copy_from_slice(&length.to_le_bytes());
+        // One buffer, one write: a record reaches the file whole or cut.
+        let mut record_bytes = [0u8; RECORD_HEADER_LEN + MAX_TELEGRAM_LEN];
+        record_bytes[..RECORD_HEADER_LEN].copy_from_slice(&header);
+        record_bytes[RECORD_HEADER_LEN..RECORD_HEADER_LEN + telegram.len()]
+            .copy_from_slice(telegram);
         self.out
-            .write_all(&header)
-            .and_then(|()| self.out.write_all(telegram))
+            .write_all(&record_bytes[..RECORD_HEADER_LEN + telegram.len()])
             .map_err(|source| CaptureError::Io { offset, source })?;
         self.records += 1;
         self.bytes += (RECORD_HEADER_LEN + telegram.len()) as u64;
@@ -336,11 +340,20 @@ impl CaptureFile {
         })
     }
 
-    /// Append one record (see [`CaptureWriter::write`]).
+    /// Append one record (see [`CaptureWriter::write`]) and flush it to the
+    /// file, so that a kill or a power loss costs at most the record being
+    /// written (readers keep every complete record of a cut file).
     pub fn write(&mut self, time_us: u64, telegram: &[u8]) -> anyhow::Result<()> {
         use anyhow::Context;
+        let offset = self.writer.bytes();
         self.writer
             .write(time_us, telegram)
+            .and_then(|()| {
+                self.writer
+                    .out
+                    .flush()
+                    .map_err(|source| CaptureError::Io { offset, source })
+            })
             .with_context(|| format!("cannot write capture file {}", self.partial.display()))
     }
 
@@ -530,94 +543,120 @@ pub struct CapturedScan {
     pub values: MeasuredValues,
 }
 
-/// The `B0` records of a capture as raw values, in file order, for replay
-/// (`simulate`). Other telegrams are skipped. Each item names the file and
-/// the record on error; the iterator ends after the first error.
-pub fn read_values(
-    path: &Path,
-) -> anyhow::Result<impl Iterator<Item = anyhow::Result<CapturedScan>>> {
-    let reader = open(path)?;
-    let path = path.to_owned();
-    let mut index = 0usize;
-    Ok(reader.filter_map(move |rec| {
-        let rec = match rec {
-            Ok(r) => r,
-            Err(e) => {
-                return Some(Err(
-                    anyhow::Error::new(e).context(path.display().to_string())
-                ))
+/// The `B0` records of a capture as raw values, in file order (other
+/// telegrams are skipped), for replay (`simulate`) and for
+/// [`crate::input`]. A file cut inside a record (a recorder killed, a
+/// power loss) ends the scans without an error: every complete record
+/// before the cut is read and [`CaptureScans::cut`] says where and why.
+/// Any other damage is an error naming the file and the record; the
+/// iterator ends after it.
+#[derive(Debug)]
+pub struct CaptureScans<R: Read> {
+    reader: CaptureReader<R>,
+    path: PathBuf,
+    index: usize,
+    cut: Option<CaptureError>,
+    done: bool,
+}
+
+impl<R: Read> CaptureScans<R> {
+    /// The scans of the capture on `input` (its magic already checked);
+    /// `path` names it in messages.
+    pub fn new(reader: CaptureReader<R>, path: &Path) -> Self {
+        CaptureScans {
+            reader,
+            path: path.to_owned(),
+            index: 0,
+            cut: None,
+            done: false,
+        }
+    }
+
+    /// The cut ([`CaptureError::Truncated`]) the scans ended at, if any.
+    pub fn cut(&self) -> Option<&CaptureError> {
+        self.cut.as_ref()
+    }
+
+    /// Complete records read so far (scans and other telegrams).
+    pub fn records(&self) -> u64 {
+        self.reader.record
+    }
+
+    /// `B0` scans read so far.
+    pub fn scans(&self) -> usize {
+        self.index
+    }
+
+    /// The cut as a sentence for the user, if the file is cut.
+    pub fn cut_message(&self) -> Option<String> {
+        self.cut.as_ref().map(|e| {
+            format!(
+                "{}: {e}: the file is cut (a recording killed or a power loss?); \
+                 the {} complete records before it are used",
+                self.path.display(),
+                self.reader.record
+            )
+        })
+    }
+
+    fn next_scan(&mut self) -> Option<anyhow::Result<CapturedScan>> {
+        loop {
+            let rec = match self.reader.next_record() {
+                Ok(Some(r)) => r,
+                Ok(None) => return None,
+                Err(e @ CaptureError::Truncated { .. }) => {
+                    self.cut = Some(e);
+                    return None;
+                }
+                Err(e) => {
+                    return Some(Err(
+                        anyhow::Error::new(e).context(self.path.display().to_string())
+                    ))
+                }
+            };
+            let view = rec.view();
+            if view.command() != lms_core::telegram::measured::MEASURED_COMMAND {
+                continue;
             }
-        };
-        let view = rec.view();
-        if view.command() != lms_core::telegram::measured::MEASURED_COMMAND {
+            let i = self.index;
+            self.index += 1;
+            return Some(
+                MeasuredValues::parse(&view)
+                    .map(|values| CapturedScan {
+                        index: i,
+                        time_us: rec.time_us,
+                        values,
+                    })
+                    .map_err(|e| {
+                        anyhow::anyhow!("{}: scan {i}: B0 telegram: {e}", self.path.display())
+                    }),
+            );
+        }
+    }
+}
+
+impl<R: Read> Iterator for CaptureScans<R> {
+    type Item = anyhow::Result<CapturedScan>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
             return None;
         }
-        let i = index;
-        index += 1;
-        Some(
-            MeasuredValues::parse(&view)
-                .map(|values| CapturedScan {
-                    index: i,
-                    time_us: rec.time_us,
-                    values,
-                })
-                .map_err(|e| anyhow::anyhow!("{}: scan {i}: B0 telegram: {e}", path.display())),
-        )
-    }))
-}
-
-/// The `B0` records of a capture as `(time_us, frame in metres, raw values)`
-/// for `extract`; ranges use the default 13 range bits
-/// ([`RangeBits::Bits13`]).
-pub fn read_frames(
-    path: &Path,
-) -> anyhow::Result<impl Iterator<Item = anyhow::Result<(u64, Frame, MeasuredValues)>>> {
-    let path_owned = path.to_owned();
-    Ok(read_values(path)?.map(move |scan| {
-        let scan = scan?;
-        let frame = scan
-            .values
-            .to_frame(RangeBits::Bits13)
-            .map_err(|e| anyhow::anyhow!("{}: scan {}: {e}", path_owned.display(), scan.index))?;
-        Ok((scan.time_us, frame, scan.values))
-    }))
-}
-
-/// The scans of a capture selected by `range` as frames for `extract`
-/// (index = scan index in the file, no pose), and a description of the
-/// source for the summary line.
-pub fn input_frames(
-    path: &Path,
-    range: &crate::options::FrameRange,
-) -> anyhow::Result<(String, Vec<crate::extract::InputFrame>)> {
-    let mut inputs = Vec::new();
-    let mut total = 0usize;
-    let mut last_us = 0u64;
-    for item in read_frames(path)? {
-        let (time_us, frame, _) = item?;
-        if range.contains(total) {
-            inputs.push(crate::extract::InputFrame {
-                index: total,
-                frame,
-                pose: None,
-            });
-        }
-        total += 1;
-        last_us = time_us;
+        let next = self.next_scan();
+        self.done = !matches!(next, Some(Ok(_)));
+        next
     }
-    anyhow::ensure!(
-        !inputs.is_empty(),
-        "{}: --frames {range} selects no frame (the capture has {total} scans)",
-        path.display()
-    );
-    Ok((
-        format!(
-            "{} (capture, {total} scans over {:.2} s)",
-            path.display(),
-            last_us as f64 * 1e-6
-        ),
-        inputs,
-    ))
+}
+
+/// The `B0` scans of the capture at `path` ([`CaptureScans`]).
+pub fn read_values(path: &Path) -> anyhow::Result<CaptureScans<BufReader<File>>> {
+    Ok(CaptureScans::new(open(path)?, path))
+}
+
+/// A scan's frame in metres, ranges with the default 13 range bits
+/// ([`RangeBits::Bits13`]) as `extract` reads them.
+pub fn frame_of(scan: &CapturedScan) -> Result<Frame, lms_core::telegram::MeasuredError> {
+    scan.values.to_frame(RangeBits::Bits13)
 }
 
 #[cfg(test)]
@@ -773,15 +812,16 @@ mod tests {
         assert_eq!(done, path);
         assert!(!CaptureFile::partial_path(&path).exists());
         assert!(is_capture(&path).unwrap());
-        let frames: Vec<_> = read_frames(&path)
+        let scans: Vec<_> = read_values(&path)
             .unwrap()
             .collect::<anyhow::Result<_>>()
             .unwrap();
-        assert_eq!(frames.len(), 2);
-        assert_eq!(frames[1].0, 26_700);
-        assert_eq!(frames[0].1.len(), 181);
-        assert_eq!(frames[0].1.ranges()[0], 0.006);
-        assert_eq!(frames[1].2.units(), Unit::Millimetre);
+        assert_eq!(scans.len(), 2);
+        assert_eq!(scans[1].time_us, 26_700);
+        let frame = frame_of(&scans[0]).unwrap();
+        assert_eq!(frame.len(), 181);
+        assert_eq!(frame.ranges()[0], 0.006);
+        assert_eq!(scans[1].values.units(), Unit::Millimetre);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

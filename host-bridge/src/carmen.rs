@@ -8,19 +8,22 @@
 //!
 //! # Units (decision)
 //!
-//! * [`UnitMode::Auto`] (default): the file is in **mm** if any range value
-//!   of any `FLASER` line has three or more decimals (the Örebro log), else
-//!   in **cm** ([`lms_core::carmen::decide_unit`]).
+//! * [`UnitMode::Auto`] (default): the file is in **mm** if at least a
+//!   quarter of its range values show three or more decimals (the Örebro
+//!   log), in **cm** if none does, and ambiguous (read as cm, `--unit`
+//!   suggested) in between ([`lms_core::carmen::UnitVote`]).
 //! * [`UnitMode::Centimetre`] / [`UnitMode::Millimetre`] force the unit.
 //!
 //! Errors name the file and the 1-based line.
 
-use std::io::Read;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use lms_core::carmen::{decide_unit, Reader};
 pub use lms_core::carmen::{variant_for_beams, Meta as ScanMeta, Scan, SUPPORTED_BEAMS};
+pub use lms_core::carmen::{Cut, UnitVote, Verdict};
 pub use lms_core::Unit;
 
 /// Range unit of a log's readings (for error-code detection).
@@ -46,12 +49,63 @@ pub struct CarmenLog {
     pub scans: Vec<Scan>,
 }
 
-/// Read a CARMEN log (gzip or plain, decided by the magic bytes).
+/// Bytes read from the file, and decompressed, at a time: memory stays
+/// the same whatever the log's length (or a gzip bomb's ratio).
+pub const READ_BUFFER: usize = 64 * 1024;
+
+/// The text of a log, streamed: gunzipped if it starts with the gzip magic
+/// `1f 8b` (several members allowed), else as it is; buffers of
+/// [`READ_BUFFER`] bytes.
+pub fn open_text(path: &Path) -> Result<Box<dyn BufRead>> {
+    let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let mut file = BufReader::with_capacity(READ_BUFFER, file);
+    let gzip = file
+        .fill_buf()
+        .with_context(|| format!("cannot read {}", path.display()))?
+        .starts_with(&[0x1f, 0x8b]);
+    Ok(if gzip {
+        Box::new(BufReader::with_capacity(
+            READ_BUFFER,
+            flate2::bufread::MultiGzDecoder::new(file),
+        ))
+    } else {
+        Box::new(file)
+    })
+}
+
+/// The unit decision of the log at `path` (a first pass over the file):
+/// the counts, the verdict and the value that decided.
+pub fn decide(path: &Path) -> Result<UnitVote> {
+    lms_core::carmen::decide(open_text(path)?).with_context(|| format!("in {}", path.display()))
+}
+
+/// The scans of the log at `path`, streamed, in `unit` (see
+/// [`lms_core::carmen::Reader`], which also reports a cut log).
+pub fn stream(path: &Path, unit: Unit) -> Result<Reader<Box<dyn BufRead>>> {
+    Ok(Reader::new(open_text(path)?, unit))
+}
+
+/// Read a whole CARMEN log into memory (gzip or plain, decided by the
+/// magic bytes); a cut log keeps its complete scans and warns on stderr.
+/// Tools that go through a log once use [`crate::input`] instead.
 pub fn read_log(path: &Path, unit: UnitMode) -> Result<CarmenLog> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let text =
-        decompress(bytes).with_context(|| format!("cannot decompress {}", path.display()))?;
-    let (unit, scans) = parse_log(&text, unit).with_context(|| format!("in {}", path.display()))?;
+    let unit = match unit {
+        UnitMode::Centimetre => Unit::Centimetre,
+        UnitMode::Millimetre => Unit::Millimetre,
+        UnitMode::Auto => decide(path)?.unit(),
+    };
+    let mut reader = stream(path, unit)?;
+    let scans = reader
+        .by_ref()
+        .collect::<Result<Vec<_>, _>>()
+        .with_context(|| format!("in {}", path.display()))?;
+    if let Some(cut) = reader.cut() {
+        crate::input::warn(&format!(
+            "{}: {cut}; the {} complete scans before it are used",
+            path.display(),
+            scans.len()
+        ));
+    }
     Ok(CarmenLog {
         path: path.to_path_buf(),
         unit,
@@ -95,7 +149,7 @@ mod tests {
 
     #[test]
     fn the_unit_mode_decides_the_codes() {
-        let mut r = vec!["1.5"; 181];
+        let mut r = vec!["1.505"; 181];
         r[0] = "1.234";
         r[1] = "32.767";
         let text = line(181, &r.join(" "));

@@ -228,6 +228,16 @@ where
     I: IntoIterator<Item = Result<InputFrame>>,
     W: Write,
 {
+    extract_named(frames, params, out, "the output")
+}
+
+/// [`extract_to`], naming the output `name` in errors (e.g. the file).
+pub fn extract_named<I, W>(frames: I, params: &Params, out: W, name: &str) -> Result<Summary>
+where
+    I: IntoIterator<Item = Result<InputFrame>>,
+    W: Write,
+{
+    let cannot = || format!("cannot write {name}");
     let params = params
         .validate()
         .map_err(|e| anyhow::anyhow!("invalid parameters: {e}"))?;
@@ -254,12 +264,12 @@ where
                 summary.output_closed = true;
                 return Ok(summary);
             }
-            other => other.context("cannot write the output")?,
+            other => other.with_context(cannot)?,
         }
     }
     match out.flush() {
         Err(e) if e.kind() == io::ErrorKind::BrokenPipe => summary.output_closed = true,
-        other => other.context("cannot write the output")?,
+        other => other.with_context(cannot)?,
     }
     Ok(summary)
 }

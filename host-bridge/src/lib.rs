@@ -5,7 +5,8 @@
 //! 1. [`options`] — command-line pipeline parameters, frame selections and
 //!    the range-unit value ([`options::UnitArg`]).
 //! 2. Sources of frames: [`carmen`] (recorded CARMEN logs) and
-//!    [`synthetic`] (seeded scenes from `lms-scene`, the no-hardware demo).
+//!    [`synthetic`] (seeded scenes from `lms-scene`, the no-hardware demo);
+//!    [`input`] streams the scans of a log or a capture alike.
 //! 3. [`extract`] — run `lms_core::Extractor` per frame and build the JSON
 //!    Lines record ([`extract::FrameRecord`]).
 //! 4. [`plot`] — figures of one frame (scan with features, `D` per window).
@@ -33,6 +34,7 @@ pub mod client;
 pub mod coprocessor;
 pub mod emulated_link;
 pub mod extract;
+pub mod input;
 pub mod options;
 pub mod plot;
 pub mod pty;

@@ -20,8 +20,8 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 
-use host_bridge::carmen;
 use host_bridge::extract::{self, InputFrame};
+use host_bridge::input;
 use host_bridge::options::{FrameRange, ParamArgs, UnitArg};
 use host_bridge::synthetic::{self, SceneArgs};
 
@@ -92,86 +92,120 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("host-bridge: error: {e:#}");
+            // A closed stderr (a hung-up terminal) must not turn into a panic.
+            let _ = writeln!(io::stderr(), "host-bridge: error: {e:#}");
             ExitCode::FAILURE
         }
     }
 }
 
-/// The frames of the CARMEN log at `path` selected by `range`, and a
-/// description for the summary.
-fn log_inputs(
-    path: &Path,
-    args: &ExtractArgs,
-    range: &FrameRange,
-) -> Result<(String, Vec<InputFrame>)> {
-    let log = carmen::read_log(path, args.unit.carmen_mode())?;
-    let total = log.scans.len();
-    let inputs: Vec<InputFrame> = log
-        .scans
-        .into_iter()
-        .filter(|s| range.contains(s.index))
-        .map(|s| InputFrame {
-            index: s.index,
-            frame: s.frame,
-            pose: Some(s.meta.pose),
+/// The frames of a log or capture selected by `range`, streamed: reading
+/// stops after the range's end.
+fn file_inputs<'a>(
+    file: &'a mut input::ScanFile,
+    range: &'a FrameRange,
+) -> impl Iterator<Item = Result<InputFrame>> + 'a {
+    file.take_while(move |s| s.as_ref().map_or(true, |s| !range.is_past(s.index)))
+        .filter(move |s| s.as_ref().map_or(true, |s| range.contains(s.index)))
+        .map(|s| {
+            s.map(|s| InputFrame {
+                index: s.index,
+                frame: s.frame,
+                pose: s.pose,
+            })
         })
-        .collect();
-    if inputs.is_empty() {
-        bail!(
-            "{}: --frames {range} selects no frame (the log has {total} FLASER frames)",
-            path.display()
-        );
-    }
-    let about = format!("{} ({} frames, {} ranges)", path.display(), total, log.unit);
-    Ok((about, inputs))
 }
 
-/// The frames of the synthetic scene selected by `range`, and a
-/// description for the summary.
-fn scene_inputs(scene: &SceneArgs, range: &FrameRange) -> Result<(String, Vec<InputFrame>)> {
-    let all = synthetic::frames(scene)?;
-    let total = all.len();
-    let inputs: Vec<InputFrame> = all
-        .into_iter()
-        .filter(|f| range.contains(f.index))
-        .collect();
-    if inputs.is_empty() {
-        bail!("--frames {range} selects no frame of the {total} synthetic frames");
+/// The frames of the synthetic scene selected by `range`, streamed.
+fn scene_inputs<'a>(
+    scene: &'a SceneArgs,
+    range: &'a FrameRange,
+) -> Result<impl Iterator<Item = Result<InputFrame>> + 'a> {
+    Ok(synthetic::frames_iter(scene)?
+        .take_while(move |f| f.as_ref().map_or(true, |f| !range.is_past(f.index)))
+        .filter(move |f| f.as_ref().map_or(true, |f| range.contains(f.index))))
+}
+
+/// Refuse an output file that is the input (it would be truncated before
+/// it is read).
+fn check_output(output: &Path, input: Option<&Path>) -> Result<()> {
+    let Some(input) = input else { return Ok(()) };
+    if let (Ok(a), Ok(b)) = (std::fs::canonicalize(output), std::fs::canonicalize(input)) {
+        if a == b {
+            bail!(
+                "-o {}: that is the input file; writing it would destroy it",
+                output.display()
+            );
+        }
     }
-    let about = format!(
-        "scene {} (seed {}, {} frames, noise {} m, dropout {})",
-        scene.scene_name(),
-        scene.seed,
-        total,
-        scene.noise_sigma,
-        scene.dropout
-    );
-    Ok((about, inputs))
+    Ok(())
 }
 
 fn run_extract(args: ExtractArgs) -> Result<()> {
     let started = Instant::now();
     let params = args.params.to_params()?;
     let range = args.frames.unwrap_or_default();
-    let (source, inputs) = match &args.log {
-        // A capture recorded by `host-bridge scan` (told by its magic).
-        Some(path) if host_bridge::capture::is_capture(path).unwrap_or(false) => {
-            host_bridge::capture::input_frames(path, &range)?
-        }
-        Some(path) => log_inputs(path, &args, &range)?,
-        None => scene_inputs(&args.scene, &range)?,
+    if let Some(output) = &args.output {
+        check_output(output, args.log.as_deref())?;
+    }
+    // A log or a capture (told by its magic), streamed; or the scene.
+    let mut file = match &args.log {
+        Some(path) => Some(input::open(path, args.unit)?),
+        None => None,
     };
 
-    let out: Box<dyn Write> = match &args.output {
-        Some(path) => Box::new(
-            File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
+    let (out, out_name): (Box<dyn Write>, String) = match &args.output {
+        Some(path) => (
+            Box::new(
+                File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
+            ),
+            path.display().to_string(),
         ),
-        None => Box::new(io::stdout().lock()),
+        None => (Box::new(io::stdout().lock()), "standard output".to_string()),
     };
-    let summary = extract::extract_to(inputs.into_iter().map(Ok), &params, out)?;
+    let (summary, source) = match file.as_mut() {
+        Some(f) => {
+            let s = extract::extract_named(file_inputs(f, &range), &params, out, &out_name)?;
+            f.warn_if_cut();
+            let about = format!(
+                "{} ({}, {} scans read)",
+                f.path().display(),
+                f.describe(),
+                f.read()
+            );
+            (s, about)
+        }
+        None => {
+            let s = extract::extract_named(
+                scene_inputs(&args.scene, &range)?,
+                &params,
+                out,
+                &out_name,
+            )?;
+            let sc = &args.scene;
+            let about = format!(
+                "scene {} (seed {}, {} frames, noise {} m, dropout {})",
+                sc.scene_name(),
+                sc.seed,
+                sc.count,
+                sc.noise_sigma,
+                sc.dropout
+            );
+            (s, about)
+        }
+    };
+    if summary.frames == 0 && !summary.output_closed {
+        let total = file.as_ref().map_or(args.scene.count, |f| f.read());
+        bail!(
+            "{}--frames {range} selects no frame (there are {total} frames)",
+            args.log
+                .as_deref()
+                .map_or_else(String::new, |p| format!("{}: ", p.display()))
+        );
+    }
     let per_frame = summary.pipeline.as_secs_f64() * 1e3 / summary.frames.max(1) as f64;
-    eprintln!(
+    let _ = writeln!(
+        io::stderr(),
         "host-bridge extract: {source}: {} frames{}, {} lines, {} corners ({} well-conditioned); \
          pipeline {:.1} ms ({per_frame:.3} ms/frame at {} passes), total {:.1} ms",
         summary.frames,

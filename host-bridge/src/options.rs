@@ -135,6 +135,11 @@ impl FrameRange {
         index >= self.start && self.end.is_none_or(|e| index < e)
     }
 
+    /// `true` if `index` and every later index are past the selection.
+    pub fn is_past(&self, index: usize) -> bool {
+        self.end.is_some_and(|e| index >= e)
+    }
+
     /// The end clamped to `len` frames.
     pub fn end_within(&self, len: usize) -> usize {
         self.end.map_or(len, |e| e.min(len))
@@ -180,7 +185,12 @@ impl FromStr for FrameRange {
             let a = index(s_trim)?;
             FrameRange {
                 start: a,
-                end: Some(a + 1),
+                end: Some(a.checked_add(1).ok_or_else(|| {
+                    format!(
+                        "frame index {a} is too large: the largest is {}",
+                        usize::MAX - 1
+                    )
+                })?),
             }
         };
         if let Some(e) = range.end {

@@ -114,6 +114,12 @@ pub fn frame_from_readings(readings: &[Reading]) -> Result<Frame> {
 
 /// The frames of a synthetic scene, indexed from 0.
 pub fn frames(args: &SceneArgs) -> Result<Vec<InputFrame>> {
+    frames_iter(args)?.collect()
+}
+
+/// The frames of [`frames`], one at a time (memory independent of
+/// `--count`).
+pub fn frames_iter(args: &SceneArgs) -> Result<impl Iterator<Item = Result<InputFrame>>> {
     args.check()?;
     let (scene, mut rng) = args.scene_and_rng();
     let bearings = Bearings::lms_180_half_deg();
@@ -122,16 +128,14 @@ pub fn frames(args: &SceneArgs) -> Result<Vec<InputFrame>> {
     let noise = NoiseModel::gaussian(args.noise_sigma)
         .with_quantisation(lms_core::Unit::Millimetre)
         .with_dropout(args.dropout);
-    (0..args.count)
-        .map(|index| {
-            let readings = truth.noisy(&noise, &mut rng);
-            Ok(InputFrame {
-                index,
-                frame: frame_from_readings(&readings)?,
-                pose: None,
-            })
+    Ok((0..args.count).map(move |index| {
+        let readings = truth.noisy(&noise, &mut rng);
+        Ok(InputFrame {
+            index,
+            frame: frame_from_readings(&readings)?,
+            pose: None,
         })
-        .collect()
+    }))
 }
 
 #[cfg(test)]

@@ -1,12 +1,26 @@
 //! The streaming side of the CARMEN reader (feature `std`): [`Reader`] over
 //! any [`BufRead`], frame by frame, and the per-file unit decision
-//! [`decide_unit`]. Memory does not grow with the log: one line and one
-//! [`Frame`] at a time.
+//! [`decide_unit`] / [`decide`]. Memory does not grow with the log: one
+//! line (at most [`MAX_LINE_LEN`] bytes) and one [`Frame`] at a time.
+//!
+//! # Cut logs
+//!
+//! A log cut short (a recorder killed, a truncated download) keeps every
+//! complete scan: a last line without its newline that is not a valid
+//! `FLASER` line, or input that ends early or is corrupt (a cut gzip
+//! stream: `UnexpectedEof`, `InvalidData`, `InvalidInput`), ends the scans
+//! without an error, and [`Reader::cut`] says where and why. A bad line
+//! *inside* the log is still an error.
 
 use std::fmt;
 use std::io::BufRead;
 
 use super::{is_flaser, Flaser, Meta, UnitVote};
+
+/// Longest line kept (bytes): a 401-beam `FLASER` line with 12-character
+/// values is about 5 KiB. Longer `FLASER` lines are errors, longer other
+/// lines are skipped, so that no input can make the reader hold more.
+pub const MAX_LINE_LEN: usize = 64 * 1024;
 use crate::{Frame, Unit};
 
 /// One `FLASER` scan of a log.
@@ -35,6 +49,11 @@ pub enum ReadError {
         /// Line number.
         line: usize,
     },
+    /// A `FLASER` line is longer than [`MAX_LINE_LEN`] bytes.
+    LineTooLong {
+        /// Line number.
+        line: usize,
+    },
     /// A `FLASER` line is malformed (the [`LineError`](super::LineError)'s text).
     Line {
         /// Line number.
@@ -49,7 +68,9 @@ impl ReadError {
     pub fn line(&self) -> Option<usize> {
         match self {
             ReadError::Io(_) => None,
-            ReadError::NotUtf8 { line } | ReadError::Line { line, .. } => Some(*line),
+            ReadError::NotUtf8 { line }
+            | ReadError::LineTooLong { line }
+            | ReadError::Line { line, .. } => Some(*line),
         }
     }
 }
@@ -59,6 +80,10 @@ impl fmt::Display for ReadError {
         match self {
             ReadError::Io(e) => write!(f, "reading the log: {e}"),
             ReadError::NotUtf8 { line } => write!(f, "line {line}: FLASER line is not valid UTF-8"),
+            ReadError::LineTooLong { line } => write!(
+                f,
+                "line {line}: FLASER line longer than {MAX_LINE_LEN} bytes (not a CARMEN log?)"
+            ),
             ReadError::Line { line, message } => write!(f, "line {line}: {message}"),
         }
     }
@@ -73,12 +98,40 @@ impl std::error::Error for ReadError {
     }
 }
 
+/// Where and why a log ends early (see the [module docs](self)).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Cut {
+    /// The line the log is cut in (1-based): the first line not read.
+    pub line: usize,
+    /// Why.
+    pub reason: String,
+}
+
+impl fmt::Display for Cut {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "the log is cut at line {}: {}", self.line, self.reason)
+    }
+}
+
 /// The lines of a log, one buffer reused.
 struct Lines<R> {
     input: R,
     buf: Vec<u8>,
     /// Number of the line in `buf` (1-based; 0 before the first).
     number: usize,
+    /// The line in `buf` was longer than [`MAX_LINE_LEN`] (only its start kept).
+    overlong: bool,
+    /// The line in `buf` ended with a newline.
+    terminated: bool,
+    /// Set once the log turned out to be cut.
+    cut: Option<Cut>,
+}
+
+/// `true` for the read errors that mean "the data stop here" (a cut or
+/// corrupt gzip stream) rather than a failing device.
+fn is_cut(e: &std::io::Error) -> bool {
+    use std::io::ErrorKind::{InvalidData, InvalidInput, UnexpectedEof};
+    matches!(e.kind(), UnexpectedEof | InvalidData | InvalidInput)
 }
 
 impl<R: BufRead> Lines<R> {
@@ -87,28 +140,98 @@ impl<R: BufRead> Lines<R> {
             input,
             buf: Vec::new(),
             number: 0,
+            overlong: false,
+            terminated: false,
+            cut: None,
         }
     }
 
-    /// The next `FLASER` line and its number, or `None` at the end.
-    fn next_flaser(&mut self) -> Result<Option<(usize, &str)>, ReadError> {
+    /// Read the next line into `buf` (at most [`MAX_LINE_LEN`] bytes kept);
+    /// `false` at the end.
+    fn read_line(&mut self) -> std::io::Result<bool> {
+        self.buf.clear();
+        self.overlong = false;
+        self.terminated = false;
+        let mut any = false;
         loop {
-            self.buf.clear();
-            if self
-                .input
-                .read_until(b'\n', &mut self.buf)
-                .map_err(ReadError::Io)?
-                == 0
-            {
-                return Ok(None);
+            let avail = match self.input.fill_buf() {
+                Ok(b) => b,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(e),
+            };
+            if avail.is_empty() {
+                return Ok(any);
+            }
+            any = true;
+            let (take, found) = match avail.iter().position(|&b| b == b'\n') {
+                Some(i) => (i + 1, true),
+                None => (avail.len(), false),
+            };
+            let room = MAX_LINE_LEN.saturating_sub(self.buf.len());
+            if take > room {
+                self.overlong = true;
+            }
+            self.buf.extend_from_slice(&avail[..take.min(room)]);
+            self.input.consume(take);
+            if found {
+                self.terminated = true;
+                return Ok(true);
+            }
+        }
+    }
+
+    /// The next `FLASER` line, parsed, and its number; `None` at the end
+    /// or at a cut ([`Lines::cut`]).
+    fn next_parsed(&mut self) -> Result<Option<(usize, Flaser<'_>)>, ReadError> {
+        if self.cut.is_some() {
+            return Ok(None);
+        }
+        loop {
+            match self.read_line() {
+                Ok(false) => return Ok(None),
+                Ok(true) => {}
+                Err(e) if is_cut(&e) => {
+                    self.cut = Some(Cut {
+                        line: self.number + 1,
+                        reason: format!("the data end early or are corrupt ({e})"),
+                    });
+                    return Ok(None);
+                }
+                Err(e) => return Err(ReadError::Io(e)),
             }
             self.number += 1;
             if is_flaser(&self.buf) {
-                let line = self.number;
-                return std::str::from_utf8(&self.buf)
-                    .map(|text| Some((line, text)))
-                    .map_err(|_| ReadError::NotUtf8 { line });
+                break;
             }
+            // A last line cut inside the word FLASER.
+            let word = self.buf.trim_ascii();
+            if !self.terminated && !word.is_empty() && b"FLASER".starts_with(word) {
+                self.cut = Some(Cut {
+                    line: self.number,
+                    reason: "the last line has no newline and is incomplete".to_string(),
+                });
+                return Ok(None);
+            }
+        }
+        let line = self.number;
+        if self.overlong {
+            return Err(ReadError::LineTooLong { line });
+        }
+        let last = !self.terminated;
+        let parsed = match std::str::from_utf8(&self.buf) {
+            Ok(text) => Flaser::parse(text).map_err(|e| at_line(line, e)),
+            Err(_) => Err(ReadError::NotUtf8 { line }),
+        };
+        match parsed {
+            Ok(f) => Ok(Some((line, f))),
+            Err(e) if last => {
+                self.cut = Some(Cut {
+                    line,
+                    reason: format!("the last line has no newline and is incomplete ({e})"),
+                });
+                Ok(None)
+            }
+            Err(e) => Err(e),
         }
     }
 }
@@ -121,18 +244,23 @@ fn at_line(line: usize, e: super::LineError<'_>) -> ReadError {
     }
 }
 
-/// The unit of a whole log (a first pass over it): [`Unit::Millimetre`]
-/// if any range of any `FLASER` line shows three or more decimals, else
-/// [`Unit::Centimetre`] (see the [module docs](super)). Checks the syntax
-/// of every `FLASER` line on the way, so that a log's syntax errors are
-/// reported before the unit's range errors of [`Reader`].
-pub fn decide_unit<R: BufRead>(input: R) -> Result<Unit, ReadError> {
+/// The unit decision of a whole log (a first pass over it, see the
+/// [module docs](super)): the counts, the verdict and the value that
+/// decided. Checks the syntax of every `FLASER` line on the way, so that a
+/// log's syntax errors are reported before the unit's range errors of
+/// [`Reader`]. A cut log is decided on its complete lines.
+pub fn decide<R: BufRead>(input: R) -> Result<UnitVote, ReadError> {
     let mut lines = Lines::new(input);
     let mut vote = UnitVote::default();
-    while let Some((line, text)) = lines.next_flaser()? {
-        vote.observe(&Flaser::parse(text).map_err(|e| at_line(line, e))?);
+    while let Some((line, flaser)) = lines.next_parsed()? {
+        vote.observe_at(line, &flaser);
     }
-    Ok(vote.unit())
+    Ok(vote)
+}
+
+/// The unit of a whole log: [`decide`]'s [`UnitVote::unit`].
+pub fn decide_unit<R: BufRead>(input: R) -> Result<Unit, ReadError> {
+    decide(input).map(|v| v.unit())
 }
 
 /// The `FLASER` scans of a log in one unit, frame by frame.
@@ -160,20 +288,33 @@ impl<R: BufRead> Reader<R> {
         self.unit
     }
 
+    /// Scans read so far.
+    pub fn scans(&self) -> usize {
+        self.index
+    }
+
+    /// Lines read so far.
+    pub fn lines(&self) -> usize {
+        self.lines.number
+    }
+
+    /// Where and why the log is cut, once the scans have ended at a cut.
+    pub fn cut(&self) -> Option<&Cut> {
+        self.lines.cut.as_ref()
+    }
+
     /// The next scan into `frame` (no allocation): its index among the
     /// `FLASER` lines, its line number and the line itself (pose, time and
-    /// host name), or `None` at the end of the log.
+    /// host name), or `None` at the end of the log (or at a cut).
     pub fn read_into(
         &mut self,
         frame: &mut Frame,
     ) -> Result<Option<(usize, usize, Flaser<'_>)>, ReadError> {
-        let Some((line, text)) = self.lines.next_flaser()? else {
+        let unit = self.unit;
+        let Some((line, flaser)) = self.lines.next_parsed()? else {
             return Ok(None);
         };
-        let flaser = Flaser::parse(text).map_err(|e| at_line(line, e))?;
-        flaser
-            .fill(self.unit, frame)
-            .map_err(|e| at_line(line, e))?;
+        flaser.fill(unit, frame).map_err(|e| at_line(line, e))?;
         let index = self.index;
         self.index += 1;
         Ok(Some((index, line, flaser)))

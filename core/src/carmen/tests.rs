@@ -42,7 +42,9 @@ fn parses_cm_codes_and_geometry() {
 
 #[test]
 fn detects_mm_logs() {
-    let mut r = vec!["1.5"; 181];
+    // A mm log: most values show three decimals (CARMEN trims zeros: 1.5).
+    let mut r = vec!["1.505"; 181];
+    r[4] = "1.5";
     r[0] = "1.234";
     r[1] = "32.767";
     r[2] = "32.76"; // 32760 mm = offset 7
@@ -154,4 +156,96 @@ fn the_units_error_codes() {
         ),
         (32767, 32759)
     );
+}
+
+#[test]
+fn unit_decision_counts_and_names_the_value_that_decided() {
+    // One stray 3-decimal value in a cm log: ambiguous, read as cm, so the
+    // genuine 32.76 m reading stays a distance.
+    let mut r = vec!["1.50"; 181];
+    r[7] = "2.125";
+    r[8] = "32.76";
+    let text = format!(
+        "# c\n{}{}",
+        line(181, &vec!["1.5"; 181].join(" ")),
+        line(181, &r.join(" "))
+    );
+    let vote = decide(text.as_bytes()).unwrap();
+    assert_eq!(vote.verdict(), Verdict::Ambiguous);
+    assert_eq!(vote.unit(), Unit::Centimetre);
+    assert_eq!((vote.ranges(), vote.three_decimal_ranges()), (362, 1));
+    let e = vote.evidence().unwrap();
+    assert_eq!((e.line, e.beam, e.text()), (3, 7, "2.125"));
+    let why = vote.to_string();
+    assert!(
+        why.contains("ambiguous") && why.contains("\"2.125\", line 3, beam 7"),
+        "{why}"
+    );
+    assert!(why.contains("--unit"), "{why}");
+    let (_, scans) = read(&text).unwrap();
+    assert!(scans[1].frame.beams()[8].is_valid());
+    // A quarter of the values decide mm; none decides cm.
+    let mut r = vec!["1.50"; 181];
+    for v in r.iter_mut().take(46) {
+        *v = "1.505";
+    }
+    let vote = decide(line(181, &r.join(" ")).as_bytes()).unwrap();
+    assert_eq!(vote.verdict(), Verdict::Millimetre, "{vote}");
+    r[45] = "1.50";
+    let vote = decide(line(181, &r.join(" ")).as_bytes()).unwrap();
+    assert_eq!(vote.verdict(), Verdict::Ambiguous, "{vote}");
+    let vote = decide(line(181, &vec!["1.5"; 181].join(" ")).as_bytes()).unwrap();
+    assert_eq!(vote.verdict(), Verdict::Centimetre);
+    assert!(vote.evidence().is_none());
+}
+
+#[test]
+fn a_cut_log_keeps_its_complete_scans_and_says_where() {
+    let full = format!(
+        "{}{}",
+        line(181, &vec!["1.5"; 181].join(" ")),
+        line(181, &vec!["2.5"; 181].join(" "))
+    );
+    let first_len = full.find('\n').unwrap() + 1;
+    // Cut at every byte: every complete line is a scan, never an error.
+    for cut in 0..=full.len() {
+        let text = &full.as_bytes()[..cut];
+        let unit = decide_unit(text).unwrap();
+        let mut reader = Reader::new(text, unit);
+        let scans: Vec<Scan> = reader.by_ref().collect::<Result<_, _>>().unwrap();
+        // The last line without its newline is complete once all its fields
+        // are there (the logger time stamp may be cut to fewer digits).
+        let complete = usize::from(cut >= first_len - 4) + usize::from(cut >= full.len() - 4);
+        assert_eq!(scans.len(), complete, "cut at {cut}");
+        let cut_reported = reader.cut().is_some();
+        let clean = cut == 0 || (first_len - 4..=first_len).contains(&cut) || cut >= full.len() - 4;
+        assert_eq!(cut_reported, !clean, "cut at {cut}");
+        if let Some(c) = reader.cut() {
+            assert_eq!(c.line, scans.len() + 1, "cut at {cut}");
+            assert!(c.to_string().contains("no newline"), "{c}");
+        }
+    }
+    // A bad line inside the log is still an error.
+    let bad = format!("FLASER 181 1 2\n{full}");
+    assert!(Reader::new(bad.as_bytes(), Unit::Centimetre)
+        .next()
+        .unwrap()
+        .is_err());
+}
+
+#[test]
+fn overlong_lines_are_bounded() {
+    let long = format!(
+        "PARAM {}\n{}",
+        "x".repeat(MAX_LINE_LEN * 2),
+        line(181, &vec!["1.5"; 181].join(" "))
+    );
+    let (_, scans) = read(&long).unwrap();
+    assert_eq!((scans.len(), scans[0].line), (1, 2));
+    let long = format!("FLASER 181 {}\n", "1 ".repeat(MAX_LINE_LEN));
+    let e = Reader::new(long.as_bytes(), Unit::Centimetre)
+        .next()
+        .unwrap()
+        .unwrap_err();
+    assert!(matches!(e, ReadError::LineTooLong { line: 1 }), "{e}");
 }

@@ -75,7 +75,7 @@ impl fmt::Display for PassList {
 /// Options of `host-bridge plot`.
 #[derive(Args, Clone, Debug)]
 pub struct PlotArgs {
-    /// CARMEN log (gzip or plain); without it, a synthetic scene is used
+    /// CARMEN log (gzip or plain) or capture file from `scan`; without it, a synthetic scene is used
     pub log: Option<PathBuf>,
     /// Synthetic scene options (used without LOG).
     #[command(flatten)]
@@ -86,7 +86,7 @@ pub struct PlotArgs {
     /// Pipeline parameters, as for `extract`.
     #[command(flatten)]
     pub params: ParamArgs,
-    /// Frame to plot (index of the FLASER line, from 0; synthetic: 0..count)
+    /// Frame to plot (index of the FLASER line or of the capture's scan, from 0; synthetic: 0..count)
     #[arg(long, value_name = "K", default_value_t = 0)]
     pub frame: usize,
     /// Passes whose D is plotted, comma-separated [default: 1 and the last]

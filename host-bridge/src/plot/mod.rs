@@ -66,7 +66,6 @@ pub use style::{
     SCAN_SIZE, SMOOTHED, TAU, WELL_CONDITIONED,
 };
 
-use crate::carmen;
 use crate::extract::InputFrame;
 use crate::synthetic;
 
@@ -123,31 +122,39 @@ fn selected_passes(args: &PlotArgs, iterations: u16) -> Result<Vec<u16>> {
     Ok(passes)
 }
 
-/// Frame `k` of the CARMEN log at `path`, and a description for titles.
+/// Frame `k` of the log or capture at `path` (streamed: reading stops at
+/// frame `k`), and a description for titles.
 fn log_frame(path: &Path, args: &PlotArgs, k: usize) -> Result<(String, InputFrame)> {
-    let log = carmen::read_log(path, args.unit.carmen_mode())?;
-    let total = log.scans.len();
+    let mut file = crate::input::open(path, args.unit)?;
     let name = path.file_name().map_or_else(
         || path.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
     );
-    let source = format!("{name} ({} ranges)", log.unit);
-    let scan = log
-        .scans
-        .into_iter()
-        .find(|s| s.index == k)
-        .ok_or_else(|| {
-            anyhow!(
-                "{}: --frame {k} is out of range: the log has {total} FLASER frames (0..{total})",
-                path.display()
-            )
-        })?;
-    let input = InputFrame {
-        index: scan.index,
-        frame: scan.frame,
-        pose: Some(scan.meta.pose),
+    let source = match file.kind() {
+        crate::input::Kind::Log { unit, .. } => format!("{name} ({unit} ranges)"),
+        crate::input::Kind::Capture => format!("{name} (capture)"),
     };
-    Ok((source, input))
+    for scan in file.by_ref() {
+        let scan = scan?;
+        if scan.index == k {
+            let input = InputFrame {
+                index: scan.index,
+                frame: scan.frame,
+                pose: scan.pose,
+            };
+            return Ok((source, input));
+        }
+    }
+    file.warn_if_cut();
+    let total = file.read();
+    let (what, frames) = match file.kind() {
+        crate::input::Kind::Log { .. } => ("log has", "FLASER frames"),
+        crate::input::Kind::Capture => ("capture has", "scans"),
+    };
+    bail!(
+        "{}: --frame {k} is out of range: the {what} {total} {frames} (0..{total})",
+        path.display()
+    )
 }
 
 /// Frame `k` of the synthetic scene, and a description for titles.
@@ -159,10 +166,9 @@ fn scene_frame(args: &PlotArgs, k: usize) -> Result<(String, InputFrame)> {
         sc.count,
         sc.count
     );
-    let frames = synthetic::frames(sc)?;
-    let input = frames
-        .into_iter()
+    let input = synthetic::frames_iter(sc)?
         .nth(k)
+        .transpose()?
         .ok_or_else(|| anyhow!("--frame {k} is out of range"))?;
     let source = format!(
         "synthetic {} (seed {}, noise {} m, dropout {})",

@@ -9,7 +9,7 @@ use lms_core::device::emulator::ScanSource;
 use lms_core::{Frame, Unit, Variant};
 
 use super::source::variant_name;
-use crate::carmen::{self, UnitMode};
+use crate::carmen;
 use crate::resample::{self, field};
 /// The scans of a CARMEN log as a scan source (see the module docs).
 #[derive(Debug)]
@@ -29,52 +29,37 @@ pub struct ReplaySource {
 
 impl ReplaySource {
     /// Read a capture recorded by `host-bridge scan` (recognised by its
-    /// magic) or a CARMEN log (error codes per file as `carmen` decides).
+    /// magic) or a CARMEN log (error codes per file as `carmen` decides),
+    /// through [`crate::input`]: a cut file keeps its complete scans.
     pub fn open(path: &Path) -> Result<Self> {
-        if crate::capture::is_capture(path).unwrap_or(false) {
-            return Self::open_capture(path);
+        let mut file = crate::input::open(path, crate::options::UnitArg::Auto)?;
+        let capture = *file.kind() == crate::input::Kind::Capture;
+        let mut scans: Vec<Frame> = Vec::new();
+        for scan in file.by_ref() {
+            let scan = scan?;
+            if let Some(first) = scans.first() {
+                if first.len() != scan.frame.len() {
+                    let at = scan
+                        .line
+                        .map_or_else(|| format!("scan {}", scan.index), |l| format!("line {l}"));
+                    bail!(
+                        "{}: {at} has {} beams, the first scan {}; one beam count per file",
+                        path.display(),
+                        scan.frame.len(),
+                        first.len()
+                    );
+                }
+            }
+            scans.push(scan.frame);
         }
-        let log = carmen::read_log(path, UnitMode::Auto)?;
-        let first = log
-            .scans
-            .first()
-            .with_context(|| format!("{}: no FLASER scans", path.display()))?;
-        let beams = first.frame.len();
-        let variant = carmen::variant_for_beams(beams)
-            .with_context(|| format!("{}: {beams} beams per scan", path.display()))?;
-        if let Some(odd) = log.scans.iter().find(|s| s.frame.len() != beams) {
-            bail!(
-                "{}: line {} has {} beams, the first scan {beams}; one beam count per log",
-                path.display(),
-                odd.line,
-                odd.frame.len()
-            );
+        file.warn_if_cut();
+        let beams = scans.first().map_or(0, Frame::len);
+        let variant = if capture {
+            Variant::from_beams(beams)
+        } else {
+            carmen::variant_for_beams(beams)
         }
-        let scans = log.scans.into_iter().map(|s| s.frame).collect();
-        Ok(Self::from_scans(path, scans, variant, beams))
-    }
-
-    /// The `B0` scans of a capture, as frames in metres (so they can be
-    /// resampled and re-expressed in the units the client asks for).
-    fn open_capture(path: &Path) -> Result<Self> {
-        let mut scans = Vec::new();
-        for item in crate::capture::read_frames(path)? {
-            let (_, frame, _) = item?;
-            scans.push(frame);
-        }
-        let first = scans
-            .first()
-            .with_context(|| format!("{}: no B0 scans in the capture", path.display()))?;
-        let beams = first.len();
-        let variant = Variant::from_beams(beams)
-            .with_context(|| format!("{}: {beams} values per scan", path.display()))?;
-        if let Some(i) = scans.iter().position(|f| f.len() != beams) {
-            bail!(
-                "{}: scan {i} has {} values, the first {beams}; one variant per capture",
-                path.display(),
-                scans[i].len()
-            );
-        }
+        .with_context(|| format!("{}: {beams} beams per scan", path.display()))?;
         Ok(Self::from_scans(path, scans, variant, beams))
     }
 

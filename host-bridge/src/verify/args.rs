@@ -28,8 +28,8 @@ pub struct VerifyArgs {
     /// The synthetic scene (when no `--replay` log is given).
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Play the FLASER frames of a CARMEN log (gzip or plain) instead of the
-    /// synthetic scene
+    /// Play the scans of a CARMEN log (gzip or plain) or of a capture from
+    /// `scan` instead of the synthetic scene
     #[arg(long = "replay", value_name = "LOG")]
     pub log: Option<PathBuf>,
     /// Frames of the log to play: A..B (B exclusive), A..=B, A.., ..B or A

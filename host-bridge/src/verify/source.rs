@@ -7,7 +7,7 @@ use lms_core::device::emulator::ScanSource;
 use lms_core::{Frame, Invalid, Unit, Variant};
 
 use super::VerifyArgs;
-use crate::carmen::{self, UnitMode};
+use crate::carmen;
 use crate::resample;
 use crate::synthetic;
 
@@ -142,27 +142,35 @@ impl ScanSource for PlaySource {
 pub fn play_source(args: &VerifyArgs) -> Result<(PlaySource, String)> {
     let (mut source, about) = match &args.log {
         Some(path) => {
-            let log = carmen::read_log(path, UnitMode::Auto)?;
+            // A log or a capture, streamed: only the selection is kept.
+            let mut file = crate::input::open(path, crate::options::UnitArg::Auto)?;
             let range = args.frames.unwrap_or_default();
-            let total = log.scans.len();
-            let (labels, frames): (Vec<usize>, Vec<Frame>) = log
-                .scans
-                .into_iter()
-                .filter(|s| range.contains(s.index))
-                .map(|s| (s.index, resample_carmen(s.frame)))
-                .unzip();
+            let mut labels = Vec::new();
+            let mut frames = Vec::new();
+            for scan in file.by_ref() {
+                let scan = scan?;
+                if range.is_past(scan.index) {
+                    break;
+                }
+                if range.contains(scan.index) {
+                    labels.push(scan.index);
+                    frames.push(resample_carmen(scan.frame));
+                }
+            }
+            file.warn_if_cut();
             ensure!(
                 !frames.is_empty(),
-                "{}: --frames {range} selects no frame (the log has {total} FLASER frames)",
-                path.display()
+                "{}: --frames {range} selects no frame (the file has {} frames)",
+                path.display(),
+                file.read()
             );
             let beams = frames[0].len();
             let about = format!(
-                "{} frames {range} of {} ({} beams, {} ranges{})",
+                "{} frames {range} of {} ({} beams, {}{})",
                 frames.len(),
                 path.display(),
                 beams,
-                log.unit,
+                file.describe(),
                 if beams == 361 {
                     ""
                 } else {
