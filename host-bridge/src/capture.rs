@@ -199,14 +199,9 @@ impl fmt::Display for CaptureError {
     }
 }
 
-impl std::error::Error for CaptureError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            CaptureError::Io { source, .. } => Some(source),
-            _ => None,
-        }
-    }
-}
+/// The I/O error's text is part of the message already: no `source`, or
+/// `{:#}` would print it twice.
+impl std::error::Error for CaptureError {}
 
 /// Check one recorded telegram (see the [module docs](self)).
 pub fn check_telegram(bytes: &[u8]) -> Result<(), TelegramProblem> {

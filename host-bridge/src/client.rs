@@ -199,8 +199,9 @@ pub enum ClientError {
     NoSensor {
         /// The port.
         port: String,
-        /// The rates tried.
-        tried: Vec<Baud>,
+        /// The rates tried, each with what came back there (e.g.
+        /// `2 NAK, 1 telegrams`, or `nothing`).
+        tried: Vec<(Baud, String)>,
         /// The probe sent at each.
         sent: Sent,
         /// The longest wait at one rate.
@@ -266,14 +267,19 @@ impl fmt::Display for ClientError {
             } => {
                 let rates: Vec<String> = tried
                     .iter()
-                    .map(|b| b.bits_per_second().to_string())
+                    .map(|(b, _)| b.bits_per_second().to_string())
+                    .collect();
+                let heard: Vec<String> = tried
+                    .iter()
+                    .map(|(b, h)| format!("{} Bd: {h}", b.bits_per_second()))
                     .collect();
                 write!(
                     f,
                     "no LMS 2xx answers on {port}: sent {sent} at {} Bd and waited up to {} ms at each for ACK and the A0 reply \
-                     (is the sensor powered and connected?)",
+                     (is the sensor powered and connected?); heard: {}",
                     rates.join(", "),
-                    waited.as_millis()
+                    waited.as_millis(),
+                    heard.join("; ")
                 )
             }
             ClientError::Unsupported { detail } => f.write_str(detail),
@@ -281,14 +287,9 @@ impl fmt::Display for ClientError {
     }
 }
 
-impl std::error::Error for ClientError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            ClientError::Io { source, .. } => Some(source),
-            _ => None,
-        }
-    }
-}
+/// The I/O error's text is part of the message already: no `source`, or
+/// `{:#}` would print it twice ("Broken pipe: Broken pipe").
+impl std::error::Error for ClientError {}
 
 impl ClientError {
     /// `true` for the errors that mean "no (understandable) answer at this
@@ -328,6 +329,27 @@ impl Scan {
 const CHUNK: usize = 4096;
 
 /// A duration in whole µs (the machine's time unit), saturated.
+/// What the framer took in at one rate of the search, for the message.
+fn heard_at(before: &FramerStats, after: &FramerStats) -> String {
+    let d = |a: u32, b: u32| a.wrapping_sub(b);
+    let parts: Vec<String> = [
+        (d(after.telegrams, before.telegrams), "telegrams"),
+        (d(after.acks, before.acks), "ACK"),
+        (d(after.naks, before.naks), "NAK"),
+        (d(after.crc_errors, before.crc_errors), "CRC errors"),
+        (d(after.bytes_skipped, before.bytes_skipped), "noise bytes"),
+    ]
+    .iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!("{n} {what}"))
+    .collect();
+    if parts.is_empty() {
+        "nothing".to_string()
+    } else {
+        parts.join(", ")
+    }
+}
+
 fn micros(d: Duration) -> u64 {
     u64::try_from(d.as_micros()).unwrap_or(u64::MAX)
 }
@@ -657,27 +679,78 @@ impl<L: Link> Client<L> {
         result
     }
 
+    /// Tries at one rate where the sensor's telegrams are heard but the
+    /// probe is not answered (stray `06`/`15` bytes inside a stream left
+    /// running read as handshakes until the framer is in step).
+    const STREAM_TRIES: u32 = 4;
+
     fn probe(&mut self, mut probe: BaudProbe<'_>) -> Result<Baud, ClientError> {
         let mut longest = Duration::ZERO;
+        let mut heard = Vec::new();
         while let Some(rate) = probe.next_rate() {
             self.switch_link(rate)?;
-            match self.mode_change(&BaudProbe::REQUEST, self.timeouts.probe) {
+            let before = self.framer_stats();
+            let mut tries = 0;
+            let result = loop {
+                tries += 1;
+                let result = self.mode_change(&BaudProbe::REQUEST, self.timeouts.probe);
+                longest = longest.max(self.waits.ack);
+                let telegrams = self.framer_stats().telegrams.wrapping_sub(before.telegrams);
+                let naked = matches!(result, Err(ClientError::Nak { .. }));
+                // NAKs may be data bytes of a stream left running: listen
+                // (handshake bytes ignored) until the framer is in step
+                // with the telegrams, then ask again; likewise while
+                // telegrams show that a sensor talks at this rate.
+                match result {
+                    Err(e)
+                        if e.is_no_answer()
+                            && (naked || telegrams > 0)
+                            && tries < Self::STREAM_TRIES =>
+                    {
+                        self.listen(line_time(MAX_TELEGRAM_LEN, rate) + Duration::from_millis(20))?;
+                    }
+                    other => break other,
+                }
+            };
+            match result {
                 Ok(()) => {
                     self.streaming = false;
                     self.machine.set_handshake(Handshake::Expected);
                     return Ok(rate);
                 }
-                Err(ClientError::Timeout { waited, .. }) => longest = longest.max(waited),
                 Err(e) if e.is_no_answer() => {}
                 Err(e) => return Err(e),
             }
+            heard.push((rate, heard_at(&before, &self.framer_stats())));
         }
         Err(ClientError::NoSensor {
             port: self.link.name(),
-            tried: probe.rates().to_vec(),
+            tried: heard,
             sent: self.sent_or(&BaudProbe::REQUEST),
             waited: longest,
         })
+    }
+
+    /// Take what arrives for `span` with handshake bytes ignored: the
+    /// framer skips the rest of a telegram it dropped into and frames the
+    /// next ones (counted as ignored), so that it is in step afterwards.
+    fn listen(&mut self, span: Duration) -> Result<(), ClientError> {
+        self.machine.set_handshake(Handshake::Ignored);
+        let end = self.link.now() + span;
+        loop {
+            let input = self.pending.get(self.pending_at..).unwrap_or_default();
+            let (_, rest) = self.machine.feed(input, self.now_us());
+            self.pending_at += input.len() - rest.len();
+            if rest.is_empty() {
+                let now = self.link.now();
+                if now >= end {
+                    break;
+                }
+                self.receive(end - now)?;
+            }
+        }
+        self.machine.set_handshake(Handshake::Expected);
+        Ok(())
     }
 
     /// `20 25`: values on request only (the power-on mode). Stops a stream:

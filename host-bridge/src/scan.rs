@@ -15,11 +15,17 @@
 //!
 //! [`run`] wraps it for the command line: a real serial port, a progress
 //! bar on a terminal, the capture written to `NAME.partial` and renamed when
-//! all scans are in, and a summary on stderr. Ctrl-C (SIGINT) or SIGTERM
-//! ends the run after the scan being read: the stream is stopped, the
-//! sensor put back at 9600 Bd (unless `--keep-baud`), the scans so far are
-//! left in `NAME.partial`, and the exit status is non-zero; a second signal
-//! exits at once.
+//! all scans are in, and a summary on stderr. Every record is flushed to
+//! the file as it comes, so a kill or a power loss costs at most the
+//! record being written, and every reader keeps the complete records of a
+//! cut file. `-o` is checked before the sensor is touched (not a
+//! directory, in an existing directory); without `-o` the run is refused
+//! unless `--no-save` says so; a run that fails before the first scan
+//! leaves no file. Ctrl-C (SIGINT), SIGTERM or SIGHUP (a closed terminal)
+//! at any stage — the search for the sensor included — ends the run: the
+//! stream is stopped, the sensor put back at 9600 Bd (unless
+//! `--keep-baud`), the scans so far are left in `NAME.partial`, and the
+//! exit status is non-zero; a second signal exits at once.
 
 use std::fmt;
 use std::io::IsTerminal;
@@ -144,9 +150,18 @@ pub struct ScanArgs {
     /// Number of scans to record
     #[arg(long, default_value_t = 100, value_name = "N")]
     pub scans: usize,
-    /// Capture file to record the scans into (see the README's capture section)
-    #[arg(long, short, value_name = "CAPTURE")]
+    /// Capture file to record the scans into (see the README's capture section);
+    /// required unless --no-save
+    #[arg(
+        long,
+        short,
+        value_name = "CAPTURE",
+        required_unless_present = "no_save"
+    )]
     pub output: Option<PathBuf>,
+    /// Read the scans without saving them (a link test; without -o)
+    #[arg(long, conflicts_with = "output")]
+    pub no_save: bool,
     /// Request each scan with `30 01` instead of streaming (`20 24`)
     #[arg(long)]
     pub single: bool,
@@ -365,10 +380,43 @@ impl ScanArgs {
     }
 }
 
+/// Check `-o` before anything is sent: not a directory, in a directory
+/// that exists; the `.partial` file is created (so that it can be
+/// written) by [`CaptureFile::create`] right after.
+pub fn check_output(path: &std::path::Path) -> Result<()> {
+    ensure!(
+        !path.is_dir(),
+        "-o {}: that is a directory; give a capture file name, e.g. {}",
+        path.display(),
+        path.join("scans.lmscap").display()
+    );
+    let parent = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    ensure!(
+        parent.is_dir(),
+        "-o {}: the directory {} does not exist",
+        path.display(),
+        parent.display()
+    );
+    Ok(())
+}
+
 /// `host-bridge scan`.
 pub fn run(args: &ScanArgs) -> Result<()> {
     let plan = args.plan()?;
+    if let Some(path) = &args.output {
+        check_output(path)?;
+    }
+    // SIGINT / SIGTERM / SIGHUP at any stage (the search included): the
+    // link reports the signal at its next read, the session stops the
+    // stream and restores 9600 Bd, the scans so far stay in `.partial`;
+    // a second signal exits at once with status 130.
+    let interrupted = crate::stop::interrupt_flag()?;
     let link = SerialLink::open(&args.port, Baud::B9600)?;
+    let link = Interruptible::new(link, interrupted.clone());
+    let handled = link.handled();
     let mut client = Client::new(link, Baud::B9600, Timeouts::default());
     client.retries = args.retries;
     let mut capture = match &args.output {
@@ -376,9 +424,6 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         None => None,
     };
     let progress = progress_bar(plan.scans);
-    // Ctrl-C / SIGTERM: finish the scan in hand, then stop cleanly (see
-    // the module docs); a second signal exits at once with status 130.
-    let interrupted = crate::stop::interrupt_flag()?;
     let result = run_session(&mut client, &plan, |i, since_start, scan| {
         if let Some(c) = capture.as_mut() {
             let us = u64::try_from(since_start.as_micros()).unwrap_or(u64::MAX);
@@ -386,7 +431,13 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         }
         progress.inc(1);
         if interrupted.load(Ordering::Relaxed) {
-            bail!("interrupted after {} of {} scans", i + 1, plan.scans);
+            // Reported here: the link lets the clean-up through.
+            handled.store(true, Ordering::Relaxed);
+            bail!(
+                "interrupted by a signal after {} of {} scans",
+                i + 1,
+                plan.scans
+            );
         }
         Ok(())
     });
@@ -404,13 +455,88 @@ pub fn run(args: &ScanArgs) -> Result<()> {
                 path.display()
             )
         }
-        None => String::new(),
+        None => "\n  not saved (--no-save)".to_string(),
     };
     print_summary(args, &plan, &summary, &capture_line);
     if let Some(e) = &summary.restore_error {
-        eprintln!("host-bridge scan: warning: could not put the sensor back at 9600 Bd: {e}");
+        crate::input::warn(&format!(
+            "scan: could not put the sensor back at 9600 Bd: {e}"
+        ));
     }
     Ok(())
+}
+
+/// A [`Link`] that reports a signal: once `flag` is set, its next
+/// `receive` fails (once) with "interrupted by a signal", which ends
+/// whatever the client is doing — the search for the sensor included;
+/// after that it works again, so that the session can stop the stream and
+/// restore the rate. Waits are cut into slices of [`Interruptible::SLICE`].
+#[derive(Debug)]
+pub struct Interruptible<L> {
+    inner: L,
+    flag: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    fired: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl<L: Link> Interruptible<L> {
+    /// Longest wait between two looks at the flag.
+    pub const SLICE: Duration = Duration::from_millis(50);
+
+    /// Wrap `inner`; `flag` is set by the signal handler.
+    pub fn new(inner: L, flag: std::sync::Arc<std::sync::atomic::AtomicBool>) -> Self {
+        Interruptible {
+            inner,
+            flag,
+            fired: Default::default(),
+        }
+    }
+
+    /// Set once the signal has been reported (by the link, or by the
+    /// caller storing `true`): from then on the link works normally.
+    pub fn handled(&self) -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+        self.fired.clone()
+    }
+
+    fn check(&mut self) -> std::io::Result<()> {
+        if self.flag.load(Ordering::Relaxed) && !self.fired.swap(true, Ordering::Relaxed) {
+            return Err(std::io::Error::other("interrupted by a signal"));
+        }
+        Ok(())
+    }
+}
+
+impl<L: Link> Link for Interruptible<L> {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.inner.send(bytes)
+    }
+
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+        let end = self.inner.now() + timeout;
+        loop {
+            self.check()?;
+            let left = end.saturating_sub(self.inner.now());
+            let n = self.inner.receive(buf, left.min(Self::SLICE))?;
+            if n > 0 || left <= Self::SLICE {
+                return Ok(n);
+            }
+        }
+    }
+
+    fn set_baud(&mut self, baud: Baud) -> std::io::Result<()> {
+        self.inner.set_baud(baud)
+    }
+
+    fn discard_input(&mut self) -> std::io::Result<()> {
+        self.inner.discard_input()
+    }
+
+    fn now(&self) -> Duration {
+        self.inner.now()
+    }
+
+    fn name(&self) -> String {
+        self.inner.name()
+    }
 }
 
 /// A progress bar of `scans` on a terminal, hidden otherwise.
@@ -428,7 +554,8 @@ fn progress_bar(scans: usize) -> indicatif::ProgressBar {
 }
 
 /// The session's error, saying where the scans recorded so far are (the
-/// `.partial` file is kept, not renamed).
+/// `.partial` file is kept, not renamed); a `.partial` without a single
+/// scan is removed.
 fn incomplete_capture(
     e: anyhow::Error,
     capture: Option<CaptureFile>,
@@ -439,9 +566,18 @@ fn incomplete_capture(
     };
     let (records, partial) = (c.records(), c.partial().to_owned());
     drop(c);
+    if records == 0 {
+        return match std::fs::remove_file(&partial) {
+            Ok(()) => e.context("no scan was recorded (nothing saved)"),
+            Err(r) => e.context(format!(
+                "no scan was recorded; the empty {} could not be removed: {r}",
+                partial.display()
+            )),
+        };
+    }
     e.context(format!(
         "the capture is incomplete: {records} scans recorded so far are in {} \
-         (not renamed to {})",
+         (not renamed to {}; every reader takes it as it is)",
         partial.display(),
         args.output
             .as_deref()
@@ -452,8 +588,11 @@ fn incomplete_capture(
 
 /// The closing summary on stderr: scans, rate, line and handshake counters.
 fn print_summary(args: &ScanArgs, plan: &Plan, summary: &Summary, capture_line: &str) {
+    use std::io::Write as _;
     let h = &summary.handshake;
-    eprintln!(
+    // A closed stderr (a hung-up terminal) is not an error of the scan.
+    let _ = writeln!(
+        std::io::stderr(),
         "host-bridge scan: {} scans from {} ({}, {} values, {}) at {} Bd (sensor found at {} Bd) in {:.2} s: {:.1} scans/s\n  \
          line: {} CRC errors, {} resyncs, {} bytes skipped; handshake: {} NAK resends, {} wrong-address telegrams ignored{}",
         summary.scans,

@@ -166,6 +166,115 @@ fn fake_finds_a_sensor_left_streaming_at_another_rate() {
     assert_eq!(client.link().emulator().baud(), Baud::B9600);
 }
 
+/// A line on which, after the client switches to 500 kBd, the first bytes
+/// received are `tail`: the end of a telegram the client dropped into
+/// (`15` and `06` bytes of scan data), as when a client killed mid-stream
+/// is followed by a new one.
+struct MidTelegram {
+    inner: Fake,
+    tail: Vec<u8>,
+    pending: Vec<u8>,
+    at: Baud,
+}
+
+impl Link for MidTelegram {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.inner.send(bytes)
+    }
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+        if !self.pending.is_empty() {
+            let n = buf.len().min(self.pending.len());
+            buf[..n].copy_from_slice(&self.pending[..n]);
+            self.pending.drain(..n);
+            return Ok(n);
+        }
+        self.inner.receive(buf, timeout)
+    }
+    fn set_baud(&mut self, baud: Baud) -> std::io::Result<()> {
+        self.at = baud;
+        self.inner.set_baud(baud)
+    }
+    fn discard_input(&mut self) -> std::io::Result<()> {
+        if self.at == Baud::B500000 {
+            self.pending = self.tail.clone();
+        }
+        self.inner.discard_input()
+    }
+    fn now(&self) -> Duration {
+        self.inner.now()
+    }
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+}
+
+/// Issue 13.1: a stream left running at 500 kBd; the new client drops into
+/// the middle of a telegram whose data bytes read as `NAK`s and `ACK`s. They
+/// are not answers: the sensor is found at 500 kBd all the same.
+#[test]
+fn fake_stray_nak_and_ack_bytes_in_a_stream_left_running_are_not_handshakes() {
+    for tail in [
+        vec![0x15; 2],
+        vec![0x15, 0x06, 0x15, 0x15, 0x00, 0x15],
+        vec![0x15; 40],
+    ] {
+        let mut client = fake_client(fake_sensor());
+        client.set_baud(Baud::B500000).unwrap();
+        client.start_stream().unwrap();
+        client.next_scan().unwrap();
+        let line = MidTelegram {
+            inner: client.into_link(),
+            tail: tail.clone(),
+            pending: Vec::new(),
+            at: Baud::B9600,
+        };
+        let mut client = Client::new(line, Baud::B9600, Timeouts::default());
+        let plan = Plan {
+            target: None,
+            scans: 2,
+            ..Plan::default()
+        };
+        let mut got = 0;
+        let summary = run_session(&mut client, &plan, |_, _, _| {
+            got += 1;
+            Ok(())
+        })
+        .unwrap_or_else(|e| panic!("tail {tail:02X?}: {e:#}"));
+        assert_eq!((summary.found_baud, got), (Baud::B500000, 2), "{tail:02X?}");
+        assert!(
+            client.framer_stats().naks >= 2,
+            "{:?}",
+            client.framer_stats()
+        );
+    }
+}
+
+/// Issue 13.10: a peer that answers only NAKs: the message says what came
+/// back at each rate instead of "waited up to 0 ms".
+#[test]
+fn fake_no_sensor_message_says_what_the_peer_sent() {
+    let mut client = fake_client(fake_sensor());
+    client.link_mut().corrupt_next = 1000;
+    let e = client.find_baud(&[Baud::B9600]).unwrap_err();
+    let msg = e.to_string();
+    assert!(matches!(e, ClientError::NoSensor { .. }), "{msg}");
+    assert!(
+        msg.contains("heard: 9600 Bd: ") && msg.contains(" NAK"),
+        "{msg}"
+    );
+    assert!(!msg.contains("up to 0 ms"), "{msg}");
+    let mut sensor = fake_sensor();
+    sensor.mute = true;
+    let msg = fake_client(sensor)
+        .find_baud(&[Baud::B9600, Baud::B38400])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("heard: 9600 Bd: nothing; 38400 Bd: nothing"),
+        "{msg}"
+    );
+}
+
 #[test]
 fn fake_faults_on_the_line_are_skipped_counted_and_the_stream_goes_on() {
     let mut sensor = fake_sensor();
@@ -339,7 +448,14 @@ fn fake_scans_recorded_into_a_capture_read_back_bit_exact() {
 
 #[test]
 fn cli_port_that_does_not_exist_is_named() {
-    let out = run(&["scan", "--port", "/dev/no-such-lms-port", "--scans", "1"]);
+    let out = run(&[
+        "scan",
+        "--port",
+        "/dev/no-such-lms-port",
+        "--scans",
+        "1",
+        "--no-save",
+    ]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -367,8 +483,26 @@ fn cli_bad_arguments_are_explained() {
             &["scan", "--port", "/dev/null", "--scans", "0"][..],
             "--scans",
         ),
-        (&["scan", "--port", "/dev/null"][..], "not a serial port"),
+        (
+            &["scan", "--port", "/dev/null", "--no-save"][..],
+            "not a serial port",
+        ),
         (&["scan"][..], "--port"),
+        // Issue 13.3: no -o and no --no-save: refused before anything is sent.
+        (&["scan", "--port", "/dev/null"][..], "--output"),
+        (
+            &["scan", "--port", "/dev/null", "-o", "x.lmscap", "--no-save"][..],
+            "cannot be used with",
+        ),
+        // Issue 13.8: a directory, or a directory that does not exist.
+        (
+            &["scan", "--port", "/dev/null", "-o", "/tmp"][..],
+            "that is a directory",
+        ),
+        (
+            &["scan", "--port", "/dev/null", "-o", "/no-such-dir/a.lmscap"][..],
+            "does not exist",
+        ),
     ] {
         let out = run(args);
         assert!(!out.status.success(), "{args:?}");
@@ -409,19 +543,79 @@ fn cli_extract_reads_a_capture_and_rejects_a_broken_one() {
     let r0 = rec["ranges"][1].as_f64().unwrap();
     assert!((r0 - f64::from(sent.values()[1]) / 1000.0).abs() < 1e-6);
 
-    // Cut the file inside the second record: the error names the offset.
+    // Issue 13.2: cut inside the second record (a kill, a power loss):
+    // the complete first record is read, and the warning says where and why.
     let bytes = std::fs::read(&path).unwrap();
     let cut = dir.join("cut.lmscap");
     std::fs::write(&cut, &bytes[..bytes.len() - 100]).unwrap();
     let out = run(&["extract", cut.to_str().unwrap()]);
-    assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 1);
     let second = 8 + 10 + 732;
     assert!(
         err.contains("cut.lmscap") && err.contains(&format!("truncated record 1 at byte {second}")),
         "{err}"
     );
+    assert!(
+        err.contains("the 1 complete records before it are used"),
+        "{err}"
+    );
+    // Damage inside the file (not a cut) is still an error.
+    let mut bad = bytes.clone();
+    bad[8 + 10 + 20] ^= 0x01;
+    std::fs::write(&cut, &bad).unwrap();
+    let out = run(&["extract", cut.to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("record 0 at byte 8"));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Acceptance of issue 13: a capture cut at any byte yields every complete
+/// record before the cut, and says where it is cut.
+#[test]
+fn capture_cut_at_every_byte_keeps_every_complete_record() {
+    let mut client = fake_client(fake_sensor());
+    let mut w = CaptureWriter::new(Vec::new()).unwrap();
+    let mut ends = vec![8usize];
+    run_session(
+        &mut client,
+        &Plan {
+            scans: 3,
+            variant: Variant::Fov100Res100,
+            ..Plan::default()
+        },
+        |_, t, scan| {
+            w.write(t.as_micros() as u64, &scan.telegram)
+                .map_err(anyhow::Error::new)?;
+            ends.push(w.bytes() as usize);
+            Ok(())
+        },
+    )
+    .unwrap();
+    let full = w.finish().unwrap();
+    let sent = client.link().intact_scans()[..3].to_vec();
+    for cut in 8..=full.len() {
+        let reader = capture::CaptureReader::new(&full[..cut]).unwrap();
+        let mut scans = capture::CaptureScans::new(reader, std::path::Path::new("c.lmscap"));
+        let got: Vec<_> = scans.by_ref().collect::<anyhow::Result<_>>().unwrap();
+        let complete = ends.iter().filter(|&&e| e <= cut).count() - 1;
+        assert_eq!(got.len(), complete, "cut at byte {cut}");
+        for (g, s) in got.iter().zip(&sent) {
+            assert_eq!(&g.values, s, "cut at byte {cut}");
+        }
+        let at_boundary = ends.contains(&cut);
+        assert_eq!(scans.cut().is_none(), at_boundary, "cut at byte {cut}");
+        if let Some(m) = scans.cut_message() {
+            let start = ends[complete];
+            assert!(
+                m.contains(&format!("truncated record {complete} at byte {start}")),
+                "{m}"
+            );
+        }
+    }
+    // Shorter than the magic: not a capture.
+    assert!(capture::CaptureReader::new(&full[..7]).is_err());
 }
 
 // ---------------------------------------------------------------------------
@@ -821,19 +1015,14 @@ fn pty_cli_scan_writes_a_capture_that_extract_reads() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Ctrl-C during `scan`: it stops the stream, puts the sensor back at
-/// 9600 Bd, leaves the scans so far in the `.partial` file and exits
-/// non-zero.
-#[test]
-fn pty_cli_scan_interrupted_leaves_the_sensor_quiet() {
-    let sim = Simulator::start("interrupted");
-    let dir = scratch("pty-interrupted");
-    let capture_path = dir.join("scans.lmscap");
-    let partial = capture::CaptureFile::partial_path(&capture_path);
+/// Start `scan` streaming at 500 kBd into `capture_path` and wait until
+/// 20 scans are in the `.partial` file.
+fn scan_streaming(sim: &Simulator, capture_path: &std::path::Path) -> Child {
+    let partial = capture::CaptureFile::partial_path(capture_path);
     let child = Command::new(BIN)
         .args(["scan", "--port", sim.pty.to_str().unwrap()])
         .args(["--baud", "500000", "--scans", "100000", "--output"])
-        .arg(&capture_path)
+        .arg(capture_path)
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
@@ -843,25 +1032,128 @@ fn pty_cli_scan_interrupted_leaves_the_sensor_quiet() {
         assert!(std::time::Instant::now() < deadline, "no scans recorded");
         std::thread::sleep(Duration::from_millis(50));
     }
+    child
+}
+
+fn kill(child: &Child, signal: &str) {
     let ok = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([&format!("-{signal}"), &child.id().to_string()])
         .status()
         .unwrap()
         .success();
     assert!(ok);
+}
+
+/// Ctrl-C, SIGHUP (a closed terminal) or SIGTERM during `scan`: it stops
+/// the stream, puts the sensor back at 9600 Bd, leaves the scans so far in
+/// the `.partial` file (flushed record by record: every one readable) and
+/// exits non-zero.
+#[test]
+fn pty_cli_scan_interrupted_leaves_the_sensor_quiet() {
+    let sim = Simulator::start("interrupted");
+    for signal in ["INT", "HUP"] {
+        let dir = scratch(&format!("pty-interrupted-{signal}"));
+        let capture_path = dir.join("scans.lmscap");
+        let partial = capture::CaptureFile::partial_path(&capture_path);
+        let child = scan_streaming(&sim, &capture_path);
+        kill(&child, signal);
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "SIG{signal}: {err}");
+        assert!(err.contains("interrupted by a signal"), "{err}");
+        assert!(!err.contains("signal: interrupted"), "said twice: {err}");
+        assert!(err.contains("the capture is incomplete"), "{err}");
+        assert!(!capture_path.exists());
+        let mut scans = capture::read_values(&partial).unwrap();
+        let kept = scans.by_ref().filter(|s| s.is_ok()).count();
+        assert!(kept >= 20, "{kept} scans in the partial capture");
+        assert!(
+            scans.cut().is_none(),
+            "SIG{signal}: the file ends on a whole record"
+        );
+        // The sensor was told: stream stopped, then back to 9600 Bd.
+        let log = sim.log();
+        let stopped = log.rfind("continuous output stopped").expect(&log);
+        let back = log.rfind("line switched 500000 -> 9600 Bd");
+        assert!(back.is_some_and(|b| b > stopped), "SIG{signal}: {log}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+/// Issue 13.7: SIGTERM while `scan` looks for a sensor that does not
+/// answer ends the search at once, and the error says why.
+#[test]
+fn pty_cli_scan_signal_during_the_search_ends_it() {
+    let sim = Simulator::start("search-signal");
+    sim.freeze();
+    let dir = scratch("pty-search-signal");
+    let capture_path = dir.join("none.lmscap");
+    let child = Command::new(BIN)
+        .args(["scan", "--port", sim.pty.to_str().unwrap(), "-o"])
+        .arg(&capture_path)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(400));
+    let sent = std::time::Instant::now();
+    kill(&child, "TERM");
     let out = child.wait_with_output().unwrap();
+    let took = sent.elapsed();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(err.contains("interrupted after"), "{err}");
-    assert!(err.contains("the capture is incomplete"), "{err}");
-    assert!(!capture_path.exists());
-    let kept = capture::read_values(&partial).unwrap().count();
-    assert!(kept >= 20, "{kept} scans in the partial capture");
-    // The sensor was told: stream stopped, then back to 9600 Bd.
-    let log = sim.log();
-    let stopped = log.rfind("continuous output stopped").expect(&log);
-    let back = log.rfind("line switched 500000 -> 9600 Bd");
-    assert!(back.is_some_and(|b| b > stopped), "{log}");
+    assert!(
+        err.contains("looking for the sensor") && err.contains("interrupted by a signal"),
+        "{err}"
+    );
+    // The whole search takes over 1.2 s (4 rates × 300 ms): it was cut short.
+    assert!(took < Duration::from_millis(1000), "{took:?}");
+    assert!(
+        !CaptureFileExt::any_file(&dir),
+        "a file was left in {}",
+        dir.display()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+struct CaptureFileExt;
+
+impl CaptureFileExt {
+    fn any_file(dir: &std::path::Path) -> bool {
+        std::fs::read_dir(dir).unwrap().next().is_some()
+    }
+}
+
+/// Issue 13.1 as reported: a client killed with SIGKILL leaves the sensor
+/// streaming at 500 kBd; the next `scan` finds it every time.
+#[test]
+fn pty_cli_scan_after_a_killed_scan_finds_the_sensor() {
+    let sim = Simulator::start("killed");
+    let dir = scratch("pty-killed");
+    for round in 0..3 {
+        let child = scan_streaming(&sim, &dir.join(format!("a{round}.lmscap")));
+        kill(&child, "KILL");
+        let _ = child.wait_with_output().unwrap();
+        let b = dir.join(format!("b{round}.lmscap"));
+        let out = run(&[
+            "scan",
+            "--port",
+            sim.pty.to_str().unwrap(),
+            "--scans",
+            "5",
+            "-o",
+            b.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "round {round}: {err}\n{}", sim.log());
+        assert_eq!(capture::read_values(&b).unwrap().count(), 5);
+        // The killed run's partial file: every complete record readable.
+        let partial = capture::CaptureFile::partial_path(&dir.join(format!("a{round}.lmscap")));
+        let kept = capture::read_values(&partial)
+            .unwrap()
+            .filter(|s| s.is_ok())
+            .count();
+        assert!(kept >= 20, "{kept}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -938,8 +1230,13 @@ fn pty_cli_sensor_that_does_not_answer() {
         "{err}"
     );
     assert!(err.contains("9600, 19200, 38400, 500000"), "{err}");
-    assert!(err.contains("0 scans recorded so far"), "{err}");
+    // Issue 13.9: a failed search leaves no file at all.
+    assert!(
+        err.contains("no scan was recorded (nothing saved)"),
+        "{err}"
+    );
     assert!(!capture_path.exists());
+    assert!(!capture::CaptureFile::partial_path(&capture_path).exists());
     // Four rates, each 300 ms plus one longest telegram's line time.
     assert!(started.elapsed() < Duration::from_secs(10));
     std::fs::remove_dir_all(&dir).unwrap();

@@ -89,14 +89,9 @@ impl fmt::Display for ReadError {
     }
 }
 
-impl std::error::Error for ReadError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            ReadError::Io(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+/// The I/O error's text is part of the message already: no `source`, or
+/// `{:#}` would print it twice.
+impl std::error::Error for ReadError {}
 
 /// Where and why a log ends early (see the [module docs](self)).
 #[derive(Clone, Debug, PartialEq, Eq)]
