@@ -41,8 +41,14 @@ pub struct FrameRecord {
     pub corners: Vec<CornerRecord>,
     /// What the run dropped or rejected.
     pub stats: StatsRecord,
-    /// Laser pose `[x, y, θ]` from the log (m, m, rad); absent for synthetic frames.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Laser pose `[x, y, θ]` from the log (m, m, rad); absent for synthetic
+    /// frames and captures; a non-finite field is written `null` and read
+    /// back as NaN.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "pose_with_nulls"
+    )]
     pub pose: Option<[f64; 3]>,
 }
 
@@ -132,6 +138,12 @@ impl<'de> Deserialize<'de> for StatsRecord {
             .collect::<Result<Vec<u16>, D::Error>>()?;
         Ok(StatsRecord(Stats::from_fields(&values)))
     }
+}
+
+/// A pose whose `null` fields (non-finite values in the log) read as NaN.
+fn pose_with_nulls<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
+    let pose = Option::<[Option<f64>; 3]>::deserialize(d)?;
+    Ok(pose.map(|p| p.map(|v| v.unwrap_or(f64::NAN))))
 }
 
 fn finite(x: f32) -> Option<f32> {
@@ -323,6 +335,29 @@ mod tests {
         let mut ex = Extractor::new();
         ex.run(&frame, &lms_core::ValidParams::DEFAULT);
         assert_eq!(rec, FrameRecord::from_run(7, &frame, &ex));
+    }
+
+    /// Issue 13.14: a NaN pose field is written `null` and read back.
+    #[test]
+    fn nan_pose_round_trips() {
+        let frame = Frame::from_metres(Variant::Fov180Res100.geometry(), &[2.0; 181]).unwrap();
+        let mut out = Vec::new();
+        extract_to(
+            [Ok(InputFrame {
+                index: 0,
+                frame,
+                pose: Some([1.0, f64::NAN, f64::INFINITY]),
+            })],
+            &Params::default(),
+            &mut out,
+        )
+        .unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.contains("\"pose\":[1.0,null,null]"), "{text}");
+        let rec: FrameRecord = serde_json::from_str(text.trim_end()).unwrap();
+        let pose = rec.pose.unwrap();
+        assert_eq!(pose[0], 1.0);
+        assert!(pose[1].is_nan() && pose[2].is_nan());
     }
 
     fn libm_cos(x: f32) -> f32 {

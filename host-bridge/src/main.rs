@@ -105,15 +105,21 @@ fn file_inputs<'a>(
     file: &'a mut input::ScanFile,
     range: &'a FrameRange,
 ) -> impl Iterator<Item = Result<InputFrame>> + 'a {
-    file.take_while(move |s| s.as_ref().map_or(true, |s| !range.is_past(s.index)))
-        .filter(move |s| s.as_ref().map_or(true, |s| range.contains(s.index)))
-        .map(|s| {
-            s.map(|s| InputFrame {
-                index: s.index,
-                frame: s.frame,
-                pose: s.pose,
-            })
+    // Stop before reading past the selection's last frame.
+    std::iter::from_fn(move || {
+        if range.is_past(file.read()) {
+            return None;
+        }
+        file.next()
+    })
+    .filter(move |s| s.as_ref().map_or(true, |s| range.contains(s.index)))
+    .map(|s| {
+        s.map(|s| InputFrame {
+            index: s.index,
+            frame: s.frame,
+            pose: s.pose,
         })
+    })
 }
 
 /// The frames of the synthetic scene selected by `range`, streamed.

@@ -58,8 +58,9 @@ impl UnitArg {
 /// [`Params::default`] of ALGORITHM.md.
 #[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct ParamArgs {
-    /// Smoothing passes, the first scale parameter [default: 30]
-    #[arg(long, value_name = "N")]
+    /// Smoothing passes, the first scale parameter (1..=1000) [default: 30]
+    #[arg(long, value_name = "N",
+          value_parser = clap::value_parser!(u16).range(1..=i64::from(lms_core::params::MAX_ITERATIONS)))]
     pub iterations: Option<u16>,
     /// Process noise q (m²), the second scale parameter [default: 0]
     #[arg(long, value_name = "Q", allow_negative_numbers = true)]
@@ -70,8 +71,8 @@ pub struct ParamArgs {
     /// Segmentation gate tau on D [default: 9]
     #[arg(long, value_name = "T", allow_negative_numbers = true)]
     pub tau: Option<f32>,
-    /// Smallest segment kept, in points [default: 5]
-    #[arg(long, value_name = "N")]
+    /// Smallest segment kept, in points (at least 3) [default: 5]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(3..))]
     pub min_points: Option<u16>,
     /// Largest accepted line chi2 [default: 4]
     #[arg(long, value_name = "X", allow_negative_numbers = true)]
@@ -86,7 +87,8 @@ pub struct ParamArgs {
     /// Split before reject: levels a segment that is not one straight line
     /// may be split before the chi2 gate (docs/evaluation/FINDINGS.md P1; 8 is the
     /// evaluated proposal) [default: 0, as ALGORITHM.md]
-    #[arg(long, value_name = "LEVELS")]
+    #[arg(long, value_name = "LEVELS",
+          value_parser = clap::value_parser!(u8).range(..=i64::from(lms_core::params::MAX_SPLIT_DEPTH)))]
     pub split_depth: Option<u8>,
 }
 
@@ -108,8 +110,57 @@ impl ParamArgs {
         };
         p.validate()
             .map_err(|e| anyhow!("invalid parameters: {e}"))?;
+        if p.sigma > SIGMA_WARN_M {
+            crate::input::warn(&format!(
+                "--sigma {} m is far above an LMS's range noise (0.005–0.01 m): \
+                 every window passes the gate tau, so segments, lines and corners \
+                 may be few or none",
+                p.sigma
+            ));
+        }
         Ok(p)
     }
+}
+
+/// A `--sigma` above this (m) is warned about: no LMS is that noisy.
+pub const SIGMA_WARN_M: f32 = 1.0;
+
+/// Largest duration accepted on the command line (s): about 31 years, far
+/// inside what a `Duration` added to an `Instant` can hold.
+pub const MAX_SECONDS: f64 = 1e9;
+
+/// A duration in seconds on the command line: a finite number in
+/// `0..=MAX_SECONDS` (a value parser: checked when the arguments are read,
+/// so no duration can overflow later).
+pub fn seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of seconds"))?;
+    if !(v.is_finite() && (0.0..=MAX_SECONDS).contains(&v)) {
+        return Err(format!(
+            "`{s}` seconds is outside 0..={MAX_SECONDS:e} (0 s to about 31 years)"
+        ));
+    }
+    Ok(v)
+}
+
+/// Most frames of a synthetic scene (`--count`): `simulate` and `verify`
+/// keep the scene's scans in memory (about 2.5 KB each).
+pub const MAX_SCENE_FRAMES: usize = 100_000;
+
+/// `--count` of a synthetic scene: `1..=MAX_SCENE_FRAMES`.
+pub fn scene_count(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a count of frames"))?;
+    if !(1..=MAX_SCENE_FRAMES).contains(&n) {
+        return Err(format!(
+            "{n} frames: the scene has 1..={MAX_SCENE_FRAMES} frames"
+        ));
+    }
+    Ok(n)
 }
 
 /// A selection of frame indices, `start..end` (end exclusive, open if `None`).

@@ -35,7 +35,8 @@ pub struct SceneArgs {
     #[arg(long, default_value_t = 1, conflicts_with = "log")]
     pub seed: u64,
     /// Number of synthetic frames
-    #[arg(long, default_value_t = 10, conflicts_with = "log")]
+    #[arg(long, default_value_t = 10, conflicts_with = "log",
+          value_parser = crate::options::scene_count)]
     pub count: usize,
     /// Range noise of the synthetic sensor (m)
     #[arg(

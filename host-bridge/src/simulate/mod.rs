@@ -151,10 +151,10 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "N")]
     pub scans: Option<u64>,
     /// Exit after this many seconds
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", value_parser = crate::options::seconds)]
     pub quit_after: Option<f64>,
     /// Time from the 91 reply to a reset until the 90 power-on telegram (s)
-    #[arg(long, value_name = "SECONDS", default_value_t = 1.0)]
+    #[arg(long, value_name = "SECONDS", default_value_t = 1.0, value_parser = crate::options::seconds)]
     pub restart_delay: f64,
     /// Log requests, baud switches, connections and speed mismatches on
     /// stderr

@@ -11,12 +11,43 @@ use crate::synthetic::SceneArgs;
 /// source tree).
 pub const DEFAULT_ELF: &str = "firmware/target/thumbv7em-none-eabihf/release/lms-firmware";
 
+/// ELF `e_machine` of 32-bit ARM (the firmware's thumbv7em).
+pub const EM_ARM: u16 = 40;
+
+/// `--qemu ELF`: a file that exists and is a 32-bit little-endian ARM ELF
+/// (checked when the arguments are read: QEMU given anything else only
+/// reports a lock-up).
+pub fn arm_elf(s: &str) -> Result<PathBuf, String> {
+    use std::io::Read;
+    let path = PathBuf::from(s);
+    let mut head = [0u8; 20];
+    let mut file = std::fs::File::open(&path).map_err(|e| format!("cannot open {s}: {e}"))?;
+    let got = file
+        .read(&mut head)
+        .map_err(|e| format!("cannot read {s}: {e}"))?;
+    if got < head.len() || &head[..4] != b"\x7fELF" {
+        return Err(format!(
+            "{s} is not an ELF file (the firmware, e.g. {DEFAULT_ELF})"
+        ));
+    }
+    let machine = u16::from_le_bytes([head[18], head[19]]);
+    if head[4] != 1 || head[5] != 1 || machine != EM_ARM {
+        return Err(format!(
+            "{s} is not a 32-bit little-endian ARM ELF (class {}, data {}, machine {machine}; \
+             the firmware is built for thumbv7em-none-eabihf, machine {EM_ARM})",
+            head[4], head[5]
+        ));
+    }
+    Ok(path)
+}
+
 /// Options of `host-bridge verify`.
 #[derive(Args, Debug, Clone)]
 pub struct VerifyArgs {
     /// Run the firmware ELF under QEMU (netduinoplus2) [default ELF:
     /// firmware/target/thumbv7em-none-eabihf/release/lms-firmware]
-    #[arg(long, value_name = "ELF", num_args = 0..=1, conflicts_with_all = ["host", "ports"])]
+    #[arg(long, value_name = "ELF", num_args = 0..=1, conflicts_with_all = ["host", "ports"],
+          value_parser = arm_elf)]
     pub qemu: Option<Option<PathBuf>>,
     /// Run the co-processor natively in a thread behind two pseudo-terminals
     /// (the default)
@@ -40,7 +71,7 @@ pub struct VerifyArgs {
     pub scans: Option<usize>,
     /// Give up after this many seconds (the run then fails if fewer than
     /// --scans scans were checked)
-    #[arg(long, value_name = "S", default_value_t = 60.0)]
+    #[arg(long, value_name = "S", default_value_t = 60.0, value_parser = crate::options::seconds)]
     pub timeout: f64,
     /// Rate the client switches the host line to before streaming
     /// (9600 = no switch)

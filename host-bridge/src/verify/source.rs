@@ -147,11 +147,9 @@ pub fn play_source(args: &VerifyArgs) -> Result<(PlaySource, String)> {
             let range = args.frames.unwrap_or_default();
             let mut labels = Vec::new();
             let mut frames = Vec::new();
-            for scan in file.by_ref() {
+            while !range.is_past(file.read()) {
+                let Some(scan) = file.next() else { break };
                 let scan = scan?;
-                if range.is_past(scan.index) {
-                    break;
-                }
                 if range.contains(scan.index) {
                     labels.push(scan.index);
                     frames.push(resample_carmen(scan.frame));
