@@ -466,7 +466,27 @@ pub fn run_synthetic(
     Ok(out)
 }
 
-/// `lms-lab evaluate`: run every part and write the report.
+/// Add the logs that could not be read to the report, with the reason.
+fn append_left_out(report: &std::path::Path, left_out: &[(String, String)]) -> Result<()> {
+    use std::io::Write as _;
+    if left_out.is_empty() {
+        return Ok(());
+    }
+    let mut f = std::fs::OpenOptions::new()
+        .append(true)
+        .open(report)
+        .with_context(|| format!("cannot write {}", report.display()))?;
+    let mut text = String::from("\n## Logs left out\n\nThese logs of `--data` could not be read; the tables above do not include them.\n\n");
+    for (name, why) in left_out {
+        text.push_str(&format!("- `{name}`: {why}\n"));
+    }
+    f.write_all(text.as_bytes())
+        .with_context(|| format!("cannot write {}", report.display()))
+}
+
+/// `lms-lab evaluate`: run every part and write the report; logs that
+/// cannot be read are left out, listed in the report, and make the run
+/// fail after the report is written.
 pub fn run(args: &EvaluateArgs) -> Result<()> {
     ensure!(args.scans > 0, "--scans must be at least 1");
     ensure!(!args.sigmas.is_empty(), "--sigmas needs at least one value");
@@ -494,7 +514,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let logs = if args.no_real {
         Vec::new()
     } else {
-        real::find_logs(&args.data)
+        real::find_logs(&args.data)?
     };
     let real_units = real::count_units(&logs, args.real_every);
     let synthetic_units = (args.sigmas.len() * Family::ALL.len() * args.scans) as u64;
@@ -506,7 +526,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let t1 = Instant::now();
     let scale = scale::run(args, &bar)?;
     let t2 = Instant::now();
-    let real = real::run(args, &logs, &bar)?;
+    let (real, left_out) = real::run(args, &logs, &bar)?;
     let t3 = Instant::now();
     bar.set_message("writing the report");
     let timing = report::Timing {
@@ -516,7 +536,15 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         total: started.elapsed().as_secs_f64(),
     };
     let path = report::write(args, &synthetic, &scale, &real, timing)?;
+    append_left_out(&path, &left_out)?;
     bar.finish_and_clear();
+    ensure!(
+        left_out.is_empty(),
+        "{} of {} logs could not be evaluated (listed in {} and above); the report covers the rest",
+        left_out.len(),
+        logs.len(),
+        path.display()
+    );
     eprintln!(
         "lms-lab evaluate: wrote {} ({:.1} s)",
         path.display(),

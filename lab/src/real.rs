@@ -71,22 +71,32 @@ pub struct LogResult {
     pub plot: Option<(usize, String)>,
 }
 
-/// The `*.log.gz` / `*.log` files of `dir`, sorted (none if it is missing).
-pub fn find_logs(dir: &Path) -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map(|rd| {
-            rd.filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| {
-                    let n = p
-                        .file_name()
-                        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-                    n.ends_with(".log.gz") || n.ends_with(".log")
-                })
-                .collect()
+/// The `*.log.gz` / `*.log` files of `dir`, sorted; an error if `dir` is
+/// not a readable directory or holds no log (a mistyped `--data` must not
+/// evaluate no real scans in silence).
+pub fn find_logs(dir: &Path) -> Result<Vec<PathBuf>> {
+    let rd = std::fs::read_dir(dir).map_err(|e| {
+        anyhow::anyhow!(
+            "--data {}: {e} (give the folder of the CARMEN logs, or --no-real)",
+            dir.display()
+        )
+    })?;
+    let mut v: Vec<PathBuf> = rd
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            let n = p
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            n.ends_with(".log.gz") || n.ends_with(".log")
         })
-        .unwrap_or_default();
+        .collect();
     v.sort();
-    v
+    anyhow::ensure!(
+        !v.is_empty(),
+        "--data {}: no *.log or *.log.gz file in it (give the folder of the CARMEN logs, or --no-real)",
+        dir.display()
+    );
+    Ok(v)
 }
 
 /// Progress units known before the logs are read (they are added as each
@@ -151,10 +161,46 @@ pub fn run_logs(
     figures: Option<&Path>,
     bar: &indicatif::ProgressBar,
 ) -> Result<Vec<LogResult>> {
-    let methods = main_methods();
-    let mut ex = Extractor::new();
     let mut out = Vec::new();
     for path in logs {
+        out.push(run_log(path, every, figures, bar)?);
+    }
+    Ok(out)
+}
+
+/// Every log that can be read, and for each one that cannot its name and
+/// why: one bad log does not stop the others (the report lists it).
+pub fn run_logs_reporting(
+    logs: &[PathBuf],
+    every: usize,
+    figures: Option<&Path>,
+    bar: &indicatif::ProgressBar,
+) -> (Vec<LogResult>, Vec<(String, String)>) {
+    let mut out = Vec::new();
+    let mut failed = Vec::new();
+    for path in logs {
+        match run_log(path, every, figures, bar) {
+            Ok(r) => out.push(r),
+            Err(e) => {
+                let name = path.display().to_string();
+                bar.suspend(|| eprintln!("lms-lab evaluate: warning: {name} left out: {e:#}"));
+                failed.push((name, format!("{e:#}")));
+            }
+        }
+    }
+    (out, failed)
+}
+
+/// One log through every method.
+fn run_log(
+    path: &Path,
+    every: usize,
+    figures: Option<&Path>,
+    bar: &indicatif::ProgressBar,
+) -> Result<LogResult> {
+    let methods = main_methods();
+    let mut ex = Extractor::new();
+    {
         let log = carmen::read_log(path, UnitMode::Auto)?;
         let name = path
             .file_name()
@@ -229,7 +275,7 @@ pub fn run_logs(
             }
             _ => None,
         };
-        out.push(LogResult {
+        Ok(LogResult {
             outdoor: name.contains("campus"),
             name,
             unit: log.unit.to_string(),
@@ -239,18 +285,18 @@ pub fn run_logs(
             methods: stats,
             calibration,
             plot,
-        });
+        })
     }
-    Ok(out)
 }
 
-/// The real-scan part of `evaluate`.
+/// The real-scan part of `evaluate`: the logs evaluated, and those left
+/// out with the reason.
 pub fn run(
     args: &crate::EvaluateArgs,
     logs: &[PathBuf],
     bar: &indicatif::ProgressBar,
-) -> Result<Vec<LogResult>> {
+) -> Result<(Vec<LogResult>, Vec<(String, String)>)> {
     let figures =
         (!args.no_plots && crate::report::fonts_available()).then_some(args.output.as_path());
-    run_logs(logs, args.real_every, figures, bar)
+    Ok(run_logs_reporting(logs, args.real_every, figures, bar))
 }
