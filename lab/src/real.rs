@@ -168,6 +168,9 @@ pub fn run_logs(
     Ok(out)
 }
 
+/// A log that could not be read: its path and why.
+pub type LeftOut = (String, String);
+
 /// Every log that can be read, and for each one that cannot its name and
 /// why: one bad log does not stop the others (the report lists it).
 pub fn run_logs_reporting(
@@ -175,7 +178,7 @@ pub fn run_logs_reporting(
     every: usize,
     figures: Option<&Path>,
     bar: &indicatif::ProgressBar,
-) -> (Vec<LogResult>, Vec<(String, String)>) {
+) -> (Vec<LogResult>, Vec<LeftOut>) {
     let mut out = Vec::new();
     let mut failed = Vec::new();
     for path in logs {
@@ -295,7 +298,7 @@ pub fn run(
     args: &crate::EvaluateArgs,
     logs: &[PathBuf],
     bar: &indicatif::ProgressBar,
-) -> Result<(Vec<LogResult>, Vec<(String, String)>)> {
+) -> Result<(Vec<LogResult>, Vec<LeftOut>)> {
     let figures =
         (!args.no_plots && crate::report::fonts_available()).then_some(args.output.as_path());
     Ok(run_logs_reporting(logs, args.real_every, figures, bar))
