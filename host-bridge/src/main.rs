@@ -66,7 +66,7 @@ struct ExtractArgs {
     log: Option<PathBuf>,
     #[command(flatten)]
     scene: SceneArgs,
-    /// Range unit of the log's error codes: auto = mm if any value has 3 decimals
+    /// Range unit of the log's error codes: auto = mm if at least 1/4 of the values show 3 decimals, cm if none (warns when in between)
     #[arg(long, value_enum, default_value_t = UnitArg::Auto, requires = "log")]
     unit: UnitArg,
     #[command(flatten)]

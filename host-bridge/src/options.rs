@@ -16,7 +16,7 @@ use crate::carmen::UnitMode;
 /// (the sensor's units: `mm` or `cm` only, see [`UnitArg::sensor_parser`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum UnitArg {
-    /// mm if any range has three decimals, else cm.
+    /// mm if at least 1/4 of the ranges show three decimals, cm if none (ambiguous in between: cm, with a warning).
     Auto,
     /// Centimetres (ranges up to 81.82 m).
     Cm,
