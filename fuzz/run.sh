@@ -14,7 +14,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 secs="${1:-20}"; shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(framer parsers b0_frame features emulator pipeline coprocessor)
+[ ${#targets[@]} -gt 0 ] || targets=(framer parsers b0_frame features emulator pipeline coprocessor carmen capture)
 rustup toolchain list | grep -q '^nightly' || rustup toolchain install nightly --profile minimal
 command -v cargo-fuzz > /dev/null || cargo install -q --locked cargo-fuzz
 
@@ -23,7 +23,7 @@ command -v cargo-fuzz > /dev/null || cargo install -q --locked cargo-fuzz
 # co-processor.
 max_len() {
   case "$1" in
-    framer|features) echo 4096 ;;
+    framer|features|carmen|capture) echo 4096 ;;
     pipeline|emulator) echo 2048 ;;
     coprocessor) echo 16384 ;;
     *) echo 1024 ;;

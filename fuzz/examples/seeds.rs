@@ -272,6 +272,8 @@ fn main() {
         "emulator",
         "pipeline",
         "coprocessor",
+        "carmen",
+        "capture",
     ] {
         let _ = std::fs::remove_dir_all(root.join(target));
     }
@@ -534,5 +536,48 @@ fn main() {
         "bring-up-only",
         &cop_session(&cm, &[], 470_000, 2000),
     );
+    readers(&mut c, &data, &b0s);
     println!("wrote {} seed files under {}", c.files, c.root.display());
+}
+
+/// Seeds of the `carmen` and `capture` targets: the first lines of each
+/// log (buffer capacity, unit and cut bytes first), and captures of the
+/// `B0`s (cut bytes and the magic flag first; the magic in the file).
+fn readers(c: &mut Corpus, data: &Path, b0s: &[Vec<u8>]) {
+    use std::io::BufRead;
+    for (i, log) in [
+        "csail-corrected.log.gz",
+        "intel-corrected.log.gz",
+        "orebro-corrected.log.gz",
+        "acapulco-corrected.log.gz",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let text =
+            test_support::open_text(&data.join(log)).unwrap_or_else(|e| panic!("{log}: {e}"));
+        let mut head = Vec::new();
+        let mut flaser = 0;
+        for line in text.split(b'\n') {
+            let line = line.unwrap_or_else(|e| panic!("{log}: {e}"));
+            flaser += usize::from(line.starts_with(b"FLASER"));
+            head.extend_from_slice(&line);
+            head.push(b'\n');
+            if flaser == 3 {
+                break;
+            }
+        }
+        let mut seed = vec![(i * 17) as u8, i as u8, 0xA0, 0x7F];
+        seed.extend_from_slice(&head);
+        c.put("carmen", &format!("log-{i}"), &seed);
+    }
+    for (i, chunk) in b0s.chunks(3).enumerate() {
+        let mut w = host_bridge::capture::CaptureWriter::new(Vec::new()).unwrap();
+        for (k, t) in chunk.iter().enumerate() {
+            w.write(26_667 * k as u64, t).unwrap();
+        }
+        let mut seed = vec![0x00, 0xC0, 0x00];
+        seed.extend_from_slice(&w.finish().unwrap());
+        c.put("capture", &format!("capture-{i:02}"), &seed);
+    }
 }

@@ -10,70 +10,109 @@ use lms_core::{Frame, Unit, Variant};
 
 use super::source::variant_name;
 use crate::carmen;
+use crate::input::{self, Kind, ScanFile};
+use crate::options::UnitArg;
 use crate::resample::{self, field};
-/// The scans of a CARMEN log as a scan source (see the module docs).
-#[derive(Debug)]
+/// The scans of a CARMEN log or a capture as a scan source (see the
+/// module docs), streamed: one scan in memory, the file read again from
+/// the start at its end.
 pub struct ReplaySource {
     path: PathBuf,
-    scans: Vec<Frame>,
-    /// The variant of the log's beams, and its beam count (180 and 360 are
+    file: ScanFile,
+    /// The scan sent last (sent again if the file cannot be read again).
+    current: Frame,
+    /// Scans in the file (counted by the first pass).
+    scans: usize,
+    /// The variant of the file's beams, and its beam count (180 and 360 are
     /// CARMEN's 181/361 without the last beam).
     variant: Variant,
     beams: usize,
-    next: usize,
     /// Variants already announced on stderr.
     announced: HashSet<Variant>,
     /// Times the log started again from its first scan.
     pub loops: u64,
 }
 
+impl std::fmt::Debug for ReplaySource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ReplaySource")
+            .field("path", &self.path)
+            .field("scans", &self.scans)
+            .field("variant", &self.variant)
+            .field("loops", &self.loops)
+            .finish()
+    }
+}
+
 impl ReplaySource {
     /// Read a capture recorded by `host-bridge scan` (recognised by its
     /// magic) or a CARMEN log (error codes per file as `carmen` decides),
-    /// through [`crate::input`]: a cut file keeps its complete scans.
+    /// through [`crate::input`]: a first pass checks that every scan has the
+    /// first one's beam count (a cut file keeps its complete scans), then
+    /// the scans are streamed.
     pub fn open(path: &Path) -> Result<Self> {
-        let mut file = crate::input::open(path, crate::options::UnitArg::Auto)?;
-        let capture = *file.kind() == crate::input::Kind::Capture;
-        let mut scans: Vec<Frame> = Vec::new();
+        let mut file = input::open(path, UnitArg::Auto)?;
+        let capture = *file.kind() == Kind::Capture;
+        let first = file
+            .next()
+            .with_context(|| format!("{}: no scans", path.display()))??;
+        let beams = first.frame.len();
         for scan in file.by_ref() {
             let scan = scan?;
-            if let Some(first) = scans.first() {
-                if first.len() != scan.frame.len() {
-                    let at = scan
-                        .line
-                        .map_or_else(|| format!("scan {}", scan.index), |l| format!("line {l}"));
-                    bail!(
-                        "{}: {at} has {} beams, the first scan {}; one beam count per file",
-                        path.display(),
-                        scan.frame.len(),
-                        first.len()
-                    );
-                }
+            if scan.frame.len() != beams {
+                let at = scan
+                    .line
+                    .map_or_else(|| format!("scan {}", scan.index), |l| format!("line {l}"));
+                bail!(
+                    "{}: {at} has {} beams, the first scan {beams}; one beam count per file",
+                    path.display(),
+                    scan.frame.len()
+                );
             }
-            scans.push(scan.frame);
         }
         file.warn_if_cut();
-        let beams = scans.first().map_or(0, Frame::len);
+        let scans = file.read();
         let variant = if capture {
             Variant::from_beams(beams)
         } else {
             carmen::variant_for_beams(beams)
         }
         .with_context(|| format!("{}: {beams} beams per scan", path.display()))?;
-        Ok(Self::from_scans(path, scans, variant, beams))
-    }
-
-    /// Replay `scans` (of `beams` beams of `variant`) read from `path`.
-    fn from_scans(path: &Path, scans: Vec<Frame>, variant: Variant, beams: usize) -> Self {
-        ReplaySource {
+        Ok(ReplaySource {
             path: path.to_path_buf(),
+            file: input::open(path, UnitArg::Auto)?,
+            current: first.frame,
             scans,
             variant,
             beams,
-            next: 0,
             announced: HashSet::new(),
             loops: 0,
+        })
+    }
+
+    /// Start again from the first scan.
+    fn rewind(&mut self) {
+        match input::open(&self.path, UnitArg::Auto) {
+            Ok(f) => self.file = f,
+            Err(e) => input::warn(&format!("replay: {e:#}; the last scan is sent again")),
         }
+    }
+
+    /// The next scan of the file, from the start again after the last.
+    fn next_frame(&mut self) -> &Frame {
+        for _ in 0..2 {
+            match self.file.next() {
+                Some(Ok(scan)) if scan.frame.len() == self.beams => {
+                    self.current = scan.frame;
+                    return &self.current;
+                }
+                Some(Ok(_)) | Some(Err(_)) | None => {
+                    self.rewind();
+                    self.loops += 1;
+                }
+            }
+        }
+        &self.current
     }
 
     /// One line for the log.
@@ -81,7 +120,7 @@ impl ReplaySource {
         format!(
             "replay of {} ({} scans of {} beams, {}, looping)",
             self.path.display(),
-            self.scans.len(),
+            self.scans,
             self.beams,
             variant_name(self.variant)
         )
@@ -121,18 +160,11 @@ impl ReplaySource {
 impl ScanSource for ReplaySource {
     fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize {
         self.announce(variant);
-        if self.scans.is_empty() {
-            return 0;
-        }
-        if self.next >= self.scans.len() {
-            self.next = 0;
-            self.loops += 1;
-        }
-        let frame = &self.scans[self.next];
-        self.next += 1;
-        // The log's values in the sensor's units (the core's conversion),
+        let source = self.variant;
+        let frame = self.next_frame();
+        // The file's values in the sensor's units (the core's conversion),
         // nearest beam.
-        resample::frame_words(frame, self.variant, variant, units, out);
+        resample::frame_words(frame, source, variant, units, out);
         out.len()
     }
 
@@ -163,14 +195,14 @@ mod tests {
         assert_eq!(cm[180], 8191);
         // Second scan at 0.5°: even beams are the log's, odd ones repeat
         // the next.
-        src.next = 0;
+        src.rewind();
         let mut half = [0u16; 361];
         src.next_scan(Variant::Fov180Res50, Unit::Centimetre, &mut half);
         for j in 0..180 {
             assert_eq!(half[2 * j], cm[j]);
             assert_eq!(half[2 * j + 1], cm[j + 1]);
         }
-        src.next = 0;
+        src.rewind();
         let mut narrow = [0u16; 101];
         src.next_scan(Variant::Fov100Res100, Unit::Centimetre, &mut narrow);
         assert_eq!(&narrow[..], &cm[40..=140]);
@@ -179,7 +211,7 @@ mod tests {
         let mut src = ReplaySource::open(&log_path("csail-corrected.log.gz")).unwrap();
         let mut full = [0u16; 361];
         src.next_scan(Variant::Fov180Res50, Unit::Millimetre, &mut full);
-        src.next = 0;
+        src.rewind();
         let mut coarse = [0u16; 181];
         src.next_scan(Variant::Fov180Res100, Unit::Millimetre, &mut coarse);
         for j in 0..181 {
@@ -194,5 +226,28 @@ mod tests {
         };
         assert!(!src.supports(Variant::Fov180Res50));
         assert!(src.supports(Variant::Fov100Res25));
+    }
+
+    /// A cut log is replayed with its complete scans, looping, one scan in
+    /// memory.
+    #[test]
+    fn replay_of_a_cut_log_loops_over_its_complete_scans() {
+        let dir = std::env::temp_dir().join(format!("replay-cut-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let line = |r: &str| format!("FLASER 181 {} 0 0 0 0 0 0 1 h 1\n", vec![r; 181].join(" "));
+        let text = format!("{}{}{}", line("1.50"), line("2.50"), line("3.50"));
+        let path = dir.join("cut.log");
+        std::fs::write(&path, &text[..text.len() - 400]).unwrap();
+        let mut src = ReplaySource::open(&path).unwrap();
+        assert_eq!(src.scans, 2);
+        let mut out = [0u16; 181];
+        let mut firsts = Vec::new();
+        for _ in 0..5 {
+            src.next_scan(Variant::Fov180Res100, Unit::Centimetre, &mut out);
+            firsts.push(out[0]);
+        }
+        assert_eq!(firsts, [150, 250, 150, 250, 150]);
+        assert_eq!(src.loops, 2);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
