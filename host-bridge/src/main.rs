@@ -209,11 +209,17 @@ fn run_extract(args: ExtractArgs) -> Result<()> {
                 .map_or_else(String::new, |p| format!("{}: ", p.display()))
         );
     }
+    print_summary(&source, &summary, params.iterations, started);
+    Ok(())
+}
+
+/// The closing line of `extract` on stderr (a closed stderr is ignored).
+fn print_summary(source: &str, summary: &extract::Summary, passes: u16, started: Instant) {
     let per_frame = summary.pipeline.as_secs_f64() * 1e3 / summary.frames.max(1) as f64;
     let _ = writeln!(
         io::stderr(),
         "host-bridge extract: {source}: {} frames{}, {} lines, {} corners ({} well-conditioned); \
-         pipeline {:.1} ms ({per_frame:.3} ms/frame at {} passes), total {:.1} ms",
+         pipeline {:.1} ms ({per_frame:.3} ms/frame at {passes} passes), total {:.1} ms",
         summary.frames,
         if summary.output_closed {
             " (output closed early)"
@@ -224,8 +230,6 @@ fn run_extract(args: ExtractArgs) -> Result<()> {
         summary.corners,
         summary.well_conditioned,
         summary.pipeline.as_secs_f64() * 1e3,
-        params.iterations,
         started.elapsed().as_secs_f64() * 1e3,
     );
-    Ok(())
 }

@@ -18,9 +18,9 @@ use crate::resample::{self, field};
 /// the start at its end.
 pub struct ReplaySource {
     path: PathBuf,
-    file: ScanFile,
+    file: Box<ScanFile>,
     /// The scan sent last (sent again if the file cannot be read again).
-    current: Frame,
+    current: Box<Frame>,
     /// Scans in the file (counted by the first pass).
     scans: usize,
     /// The variant of the file's beams, and its beam count (180 and 360 are
@@ -80,8 +80,8 @@ impl ReplaySource {
         .with_context(|| format!("{}: {beams} beams per scan", path.display()))?;
         Ok(ReplaySource {
             path: path.to_path_buf(),
-            file: input::open(path, UnitArg::Auto)?,
-            current: first.frame,
+            file: Box::new(input::open(path, UnitArg::Auto)?),
+            current: Box::new(first.frame),
             scans,
             variant,
             beams,
@@ -93,7 +93,7 @@ impl ReplaySource {
     /// Start again from the first scan.
     fn rewind(&mut self) {
         match input::open(&self.path, UnitArg::Auto) {
-            Ok(f) => self.file = f,
+            Ok(f) => *self.file = f,
             Err(e) => input::warn(&format!("replay: {e:#}; the last scan is sent again")),
         }
     }
@@ -103,7 +103,7 @@ impl ReplaySource {
         for _ in 0..2 {
             match self.file.next() {
                 Some(Ok(scan)) if scan.frame.len() == self.beams => {
-                    self.current = scan.frame;
+                    *self.current = scan.frame;
                     return &self.current;
                 }
                 Some(Ok(_)) | Some(Err(_)) | None => {
