@@ -11,6 +11,11 @@
 
 use std::path::{Path, PathBuf};
 
+// host-bridge's capture writer, from its source file (see Cargo.toml).
+#[allow(dead_code)]
+#[path = "../../host-bridge/src/capture.rs"]
+mod capture;
+
 use lms_core::carmen::{self, ReadError};
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
@@ -572,7 +577,7 @@ fn readers(c: &mut Corpus, data: &Path, b0s: &[Vec<u8>]) {
         c.put("carmen", &format!("log-{i}"), &seed);
     }
     for (i, chunk) in b0s.chunks(3).enumerate() {
-        let mut w = host_bridge::capture::CaptureWriter::new(Vec::new()).unwrap();
+        let mut w = capture::CaptureWriter::new(Vec::new()).unwrap();
         for (k, t) in chunk.iter().enumerate() {
             w.write(26_667 * k as u64, t).unwrap();
         }

@@ -1,5 +1,5 @@
-//! The capture reader of `host-bridge` (`host_bridge::capture`) on
-//! arbitrary bytes as a capture file.
+//! The capture reader of `host-bridge` (`host_bridge::capture`, compiled
+//! here from its source file) on arbitrary bytes as a capture file.
 //!
 //! Input: bytes 0..1 say where the file is cut (a fraction); the rest is
 //! the file (the magic is put in front when byte 2 is odd, so that records
@@ -13,7 +13,12 @@
 //! `Truncated` cut, never another error.
 #![no_main]
 
-use host_bridge::capture::{
+// The reader itself, from host-bridge's source file.
+#[allow(dead_code)]
+#[path = "../../host-bridge/src/capture.rs"]
+mod capture;
+
+use capture::{
     frame_of, CaptureError, CaptureReader, CaptureScans, CaptureWriter, Record, MAGIC,
     RECORD_HEADER_LEN,
 };
