@@ -45,6 +45,9 @@
 //! [`CaptureFile::commit`], so a run that fails leaves no file under the
 //! final name.
 
+// This file is also compiled into the fuzz crate (`fuzz/fuzz_targets/
+// capture.rs`, by `#[path]`): it may use std, lms-core and anyhow only.
+
 use std::fmt;
 use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Write};
