@@ -25,8 +25,11 @@
 pub mod baselines;
 pub mod charts;
 pub mod figures;
+pub mod maptruth;
 pub mod metrics;
 pub mod real;
+pub mod realfigures;
+pub mod realtruth;
 pub mod report;
 pub mod scale;
 pub mod scenes;
@@ -85,6 +88,35 @@ pub struct EvaluateArgs {
     /// Write no figures (tables only)
     #[arg(long)]
     pub no_plots: bool,
+}
+
+/// Options of `lms-lab truth`.
+#[derive(Args, Clone, Debug)]
+pub struct TruthArgs {
+    /// Folder real-truth.md and its figures are written to (created if missing)
+    #[arg(long, short, value_name = "DIR", default_value = "evaluation")]
+    pub output: PathBuf,
+    /// Folder of CARMEN logs (*.log.gz)
+    #[arg(long, value_name = "DIR", default_value = "../shared/data/carmen")]
+    pub data: PathBuf,
+    /// Use every K-th frame of each log (the map is built from all)
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    pub every: usize,
+    /// Write no figures
+    #[arg(long)]
+    pub no_plots: bool,
+}
+
+/// `lms-lab truth`: the map-truth evaluation of the real logs alone.
+pub fn run_truth(args: &TruthArgs) -> Result<()> {
+    let started = Instant::now();
+    let path = realtruth::run_standalone(&args.data, &args.output, args.every, !args.no_plots)?;
+    eprintln!(
+        "lms-lab truth: wrote {} ({:.1} s)",
+        path.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 /// How a method cuts a scan into segments.
@@ -507,6 +539,9 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let scale = scale::run(args, &bar)?;
     let t2 = Instant::now();
     let real = real::run(args, &logs, &bar)?;
+    let truth_figures =
+        (!args.no_plots && report::fonts_available()).then_some(args.output.as_path());
+    let truth = realtruth::run_logs(&logs, args.real_every, truth_figures, &bar)?;
     let t3 = Instant::now();
     bar.set_message("writing the report");
     let timing = report::Timing {
@@ -515,7 +550,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         real: (t3 - t2).as_secs_f64(),
         total: started.elapsed().as_secs_f64(),
     };
-    let path = report::write(args, &synthetic, &scale, &real, timing)?;
+    let path = report::write(args, &synthetic, &scale, (&real, &truth), timing)?;
     bar.finish_and_clear();
     eprintln!(
         "lms-lab evaluate: wrote {} ({:.1} s)",

@@ -263,7 +263,7 @@ pub fn write(
     args: &EvaluateArgs,
     syn: &Synthetic,
     scale: &Scale,
-    real: &[LogResult],
+    (real, truth): (&[LogResult], &[crate::realtruth::LogTruth]),
     timing: Timing,
 ) -> Result<PathBuf> {
     let figures = !args.no_plots && fonts_available();
@@ -288,6 +288,10 @@ pub fn write(
     diagnosis(&mut md, &ctx)?;
     scale_space(&mut md, &ctx)?;
     real_scans(&mut md, &ctx);
+    if !truth.is_empty() {
+        md.push_str(&crate::realtruth::markdown(truth, args.real_every));
+        md.push('\n');
+    }
     reproduce(&mut md, &ctx, &timing);
     let path = args.output.join("README.md");
     std::fs::write(&path, md).with_context(|| format!("cannot write {}", path.display()))?;
