@@ -33,6 +33,7 @@ pub mod realtruth;
 pub mod report;
 pub mod scale;
 pub mod scenes;
+pub mod sensorfit;
 pub mod variants;
 
 use std::io::IsTerminal;
@@ -106,6 +107,9 @@ pub struct TruthArgs {
     #[arg(long)]
     pub no_plots: bool,
 }
+
+/// Synthetic scans drawn from each log's fitted sensor model.
+pub const SENSOR_FIT_SCANS: usize = 60;
 
 /// `lms-lab truth`: the map-truth evaluation of the real logs alone.
 pub fn run_truth(args: &TruthArgs) -> Result<()> {
@@ -542,6 +546,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let truth_figures =
         (!args.no_plots && report::fonts_available()).then_some(args.output.as_path());
     let truth = realtruth::run_logs(&logs, args.real_every, truth_figures, &bar)?;
+    let fits = sensorfit::run(&logs, SENSOR_FIT_SCANS)?;
     let t3 = Instant::now();
     bar.set_message("writing the report");
     let timing = report::Timing {
@@ -550,7 +555,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         real: (t3 - t2).as_secs_f64(),
         total: started.elapsed().as_secs_f64(),
     };
-    let path = report::write(args, &synthetic, &scale, (&real, &truth), timing)?;
+    let path = report::write(args, &synthetic, &scale, (&real, &truth, &fits), timing)?;
     bar.finish_and_clear();
     eprintln!(
         "lms-lab evaluate: wrote {} ({:.1} s)",

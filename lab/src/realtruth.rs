@@ -715,8 +715,13 @@ pub fn run_standalone(data: &Path, output: &Path, every: usize, plots: bool) -> 
     let bar = crate::progress(logs.len() as u64);
     let res = run_logs(&logs, every, figures, &bar)?;
     bar.finish_and_clear();
+    let fits = crate::sensorfit::run(&logs, crate::SENSOR_FIT_SCANS)?;
+    let md = format!(
+        "{}\n{}",
+        markdown(&res, every),
+        crate::sensorfit::markdown(&fits)
+    );
     let path = output.join("real-truth.md");
-    std::fs::write(&path, markdown(&res, every))
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    std::fs::write(&path, md).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path)
 }

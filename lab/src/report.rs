@@ -263,7 +263,11 @@ pub fn write(
     args: &EvaluateArgs,
     syn: &Synthetic,
     scale: &Scale,
-    (real, truth): (&[LogResult], &[crate::realtruth::LogTruth]),
+    (real, truth, fits): (
+        &[LogResult],
+        &[crate::realtruth::LogTruth],
+        &[crate::sensorfit::LogFit],
+    ),
     timing: Timing,
 ) -> Result<PathBuf> {
     let figures = !args.no_plots && fonts_available();
@@ -290,6 +294,10 @@ pub fn write(
     real_scans(&mut md, &ctx);
     if !truth.is_empty() {
         md.push_str(&crate::realtruth::markdown(truth, args.real_every));
+        md.push('\n');
+    }
+    if !fits.is_empty() {
+        md.push_str(&crate::sensorfit::markdown(fits));
         md.push('\n');
     }
     reproduce(&mut md, &ctx, &timing);

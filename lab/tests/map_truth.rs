@@ -200,3 +200,16 @@ fn on_a_real_log_the_truth_is_found_by_an_extractor_that_knows_the_walls() {
     assert!(s.true_pos > 0.8 && s.true_pos < 1.0, "{}", s.true_pos);
     assert!(s.coverage > 0.85);
 }
+
+#[test]
+fn the_sensor_fit_recovers_a_known_model() {
+    use lms_lab::sensorfit::{bins, fit, model_for, model_triples};
+    use lms_scene::LogMode;
+    // σ₀ = 8 mm, κ = 3 mrad, mm ranges, 1° (no interleave), no motion.
+    let model = model_for(LogMode::Mm32, 0.001, 0.008, 0.003);
+    let b = bins(&model_triples(&model, 0.0, &Bearings::lms_180_1deg(), 60));
+    let (s0, k, _) = fit(&b, 0.001, false);
+    eprintln!("fitted σ₀ {:.2} mm, κ {:.2} mrad", s0 * 1e3, k * 1e3);
+    assert!((s0 - 0.008).abs() < 0.0015, "σ₀ {s0}");
+    assert!((k - 0.003).abs() < 0.001, "κ {k}");
+}
