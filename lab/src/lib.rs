@@ -29,6 +29,7 @@ pub mod maptruth;
 pub mod metrics;
 pub mod real;
 pub mod realfigures;
+pub mod realistic;
 pub mod realtruth;
 pub mod report;
 pub mod scale;
@@ -106,6 +107,42 @@ pub struct TruthArgs {
     /// Write no figures
     #[arg(long)]
     pub no_plots: bool,
+    /// Synthetic scans per scene family and σ₀ from the realistic sensor model (0: none)
+    #[arg(long, value_name = "N", default_value_t = 100)]
+    pub synthetic_scans: usize,
+}
+
+/// The issue-14 parts of the report (sections 5–7).
+#[derive(Clone, Debug, Default)]
+pub struct Issue14 {
+    /// Real logs against map-derived truth.
+    pub truth: Vec<realtruth::LogTruth>,
+    /// The sensor model fitted to each log.
+    pub fits: Vec<sensorfit::LogFit>,
+    /// Synthetic scenes from the realistic model: (σ₀, method, tally).
+    pub realistic: Vec<(f64, String, metrics::Tally)>,
+    /// Scans per family and σ₀ of `realistic`.
+    pub realistic_scans: usize,
+}
+
+impl Issue14 {
+    /// Sections 5–7 in Markdown (those that ran).
+    pub fn markdown(&self, every: usize) -> String {
+        let mut md = String::new();
+        if !self.truth.is_empty() {
+            md.push_str(&realtruth::markdown(&self.truth, every));
+            md.push('\n');
+        }
+        if !self.fits.is_empty() {
+            md.push_str(&sensorfit::markdown(&self.fits));
+            md.push('\n');
+        }
+        if !self.realistic.is_empty() {
+            md.push_str(&realistic::markdown(&self.realistic, self.realistic_scans));
+            md.push('\n');
+        }
+        md
+    }
 }
 
 /// Synthetic scans drawn from each log's fitted sensor model.
@@ -114,7 +151,7 @@ pub const SENSOR_FIT_SCANS: usize = 60;
 /// `lms-lab truth`: the map-truth evaluation of the real logs alone.
 pub fn run_truth(args: &TruthArgs) -> Result<()> {
     let started = Instant::now();
-    let path = realtruth::run_standalone(&args.data, &args.output, args.every, !args.no_plots)?;
+    let path = realtruth::run_standalone(args)?;
     eprintln!(
         "lms-lab truth: wrote {} ({:.1} s)",
         path.display(),
@@ -547,6 +584,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         (!args.no_plots && report::fonts_available()).then_some(args.output.as_path());
     let truth = realtruth::run_logs(&logs, args.real_every, truth_figures, &bar)?;
     let fits = sensorfit::run(&logs, SENSOR_FIT_SCANS)?;
+    let realistic = realistic::run(args.scans, args.seed, &bar)?;
     let t3 = Instant::now();
     bar.set_message("writing the report");
     let timing = report::Timing {
@@ -555,7 +593,13 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         real: (t3 - t2).as_secs_f64(),
         total: started.elapsed().as_secs_f64(),
     };
-    let path = report::write(args, &synthetic, &scale, (&real, &truth, &fits), timing)?;
+    let issue14 = Issue14 {
+        truth,
+        fits,
+        realistic,
+        realistic_scans: args.scans,
+    };
+    let path = report::write(args, &synthetic, &scale, (&real, &issue14), timing)?;
     bar.finish_and_clear();
     eprintln!(
         "lms-lab evaluate: wrote {} ({:.1} s)",

@@ -704,24 +704,36 @@ fn table_row(md: &mut String, name: &str, s: &RealSummary) {
     );
 }
 
-/// `lms-lab truth`: the real-scan part alone, into `DIR/real-truth.md`.
-pub fn run_standalone(data: &Path, output: &Path, every: usize, plots: bool) -> Result<PathBuf> {
-    anyhow::ensure!(every > 0, "--every must be at least 1");
-    let logs = crate::real::find_logs(data);
-    anyhow::ensure!(!logs.is_empty(), "no CARMEN logs in {}", data.display());
+/// `lms-lab truth`: sections 5–7 of the report alone, into `DIR/real-truth.md`.
+pub fn run_standalone(args: &crate::TruthArgs) -> Result<PathBuf> {
+    anyhow::ensure!(args.every > 0, "--every must be at least 1");
+    let logs = crate::real::find_logs(&args.data);
+    anyhow::ensure!(
+        !logs.is_empty(),
+        "no CARMEN logs in {}",
+        args.data.display()
+    );
+    let output = args.output.as_path();
     std::fs::create_dir_all(output)
         .with_context(|| format!("cannot create {}", output.display()))?;
-    let figures = (plots && crate::report::fonts_available()).then_some(output);
+    let figures = (!args.no_plots && crate::report::fonts_available()).then_some(output);
     let bar = crate::progress(logs.len() as u64);
-    let res = run_logs(&logs, every, figures, &bar)?;
-    bar.finish_and_clear();
+    let truth = run_logs(&logs, args.every, figures, &bar)?;
     let fits = crate::sensorfit::run(&logs, crate::SENSOR_FIT_SCANS)?;
-    let md = format!(
-        "{}\n{}",
-        markdown(&res, every),
-        crate::sensorfit::markdown(&fits)
-    );
+    let realistic = if args.synthetic_scans > 0 {
+        crate::realistic::run(args.synthetic_scans, 1, &bar)?
+    } else {
+        Vec::new()
+    };
+    bar.finish_and_clear();
+    let issue14 = crate::Issue14 {
+        truth,
+        fits,
+        realistic,
+        realistic_scans: args.synthetic_scans,
+    };
     let path = output.join("real-truth.md");
-    std::fs::write(&path, md).with_context(|| format!("cannot write {}", path.display()))?;
+    std::fs::write(&path, issue14.markdown(args.every))
+        .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path)
 }

@@ -263,11 +263,7 @@ pub fn write(
     args: &EvaluateArgs,
     syn: &Synthetic,
     scale: &Scale,
-    (real, truth, fits): (
-        &[LogResult],
-        &[crate::realtruth::LogTruth],
-        &[crate::sensorfit::LogFit],
-    ),
+    (real, issue14): (&[LogResult], &crate::Issue14),
     timing: Timing,
 ) -> Result<PathBuf> {
     let figures = !args.no_plots && fonts_available();
@@ -292,14 +288,7 @@ pub fn write(
     diagnosis(&mut md, &ctx)?;
     scale_space(&mut md, &ctx)?;
     real_scans(&mut md, &ctx);
-    if !truth.is_empty() {
-        md.push_str(&crate::realtruth::markdown(truth, args.real_every));
-        md.push('\n');
-    }
-    if !fits.is_empty() {
-        md.push_str(&crate::sensorfit::markdown(fits));
-        md.push('\n');
-    }
+    md.push_str(&issue14.markdown(args.real_every));
     reproduce(&mut md, &ctx, &timing);
     let path = args.output.join("README.md");
     std::fs::write(&path, md).with_context(|| format!("cannot write {}", path.display()))?;

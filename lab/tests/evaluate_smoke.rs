@@ -69,6 +69,7 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
         "## 3. Scale space: passes and q",
         "**Against passes (q = 0).**",
         "## 4. Real scans",
+        "## 7. Synthetic scenes from the realistic sensor model",
         "[FINDINGS.md](FINDINGS.md)",
         "## Reproduce",
         "cargo run --release -p lms-lab -- evaluate -o docs/evaluation",
@@ -106,6 +107,8 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
             "truth table"
         );
         assert!(md.contains("| csail-corrected.log.gz · defaults (no flags) |"));
+        assert!(md.contains("## 6. Sensor model fitted to the real logs"));
+        assert!(md.contains("| csail-corrected.log.gz | 361 | 10 |"), "fit table");
     }
     if host_bridge::plot::find_font().is_some() {
         for f in [
