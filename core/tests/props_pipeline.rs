@@ -136,6 +136,7 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             0.0f32..2.0,
             0.0f32..=90.0,
             prop_oneof![Just(0u8), 1u8..=lms_core::params::MAX_SPLIT_DEPTH],
+            prop_oneof![Just(f32::INFINITY), Just(81.83f32), 0.5f32..100.0],
         ),
     )
         .prop_map(|(a, b, c, d)| Params {
@@ -153,6 +154,7 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             corner_gap: d.0,
             min_corner_angle_deg: d.1,
             split_depth: d.2,
+            max_range: d.3,
         })
 }
 
@@ -271,14 +273,16 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
     prop_assert_eq!(smoothed.len(), n);
     prop_assert_eq!(d.len(), n - 2);
 
-    // Smoothed ranges: finite for valid beams, untouched for invalid ones.
-    for (j, ((s, r), b)) in smoothed
+    // A beam takes part if it is valid and below max_range (§1 v2).
+    let usable = |j: usize| frame.beams()[j].is_valid() && frame.ranges()[j] < params.max_range;
+    // Smoothed ranges: finite for usable beams, untouched for the others.
+    for (j, ((s, r), _)) in smoothed
         .iter()
         .zip(frame.ranges())
         .zip(frame.beams())
         .enumerate()
     {
-        if b.is_valid() {
+        if usable(j) {
             prop_assert!(s.is_finite(), "beam {j}: smoothed {s} from {r}");
         } else {
             prop_assert_eq!(s.to_bits(), r.to_bits(), "invalid beam {} modified", j);
@@ -290,7 +294,7 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
             *x == f32::INFINITY || (x.is_finite() && *x >= 0.0),
             "window {i}: D = {x}"
         );
-        let all_valid = frame.beams()[i..i + 3].iter().all(|b| b.is_valid());
+        let all_valid = (i..i + 3).all(usable);
         if !all_valid {
             prop_assert_eq!(*x, f32::INFINITY, "window {} has an invalid beam", i);
         }
@@ -327,7 +331,12 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
         edges
     );
     prop_assert!(f.edges().windows(2).all(|w| w[0] < w[1]));
-    prop_assert_eq!(usize::from(f.stats().valid_beams), frame.valid_count());
+    let usable_count = (0..n).filter(|&j| usable(j)).count();
+    prop_assert_eq!(usize::from(f.stats().valid_beams), usable_count);
+    prop_assert_eq!(
+        usize::from(f.stats().beyond_max_range),
+        frame.valid_count() - usable_count
+    );
     prop_assert_eq!(
         usize::from(f.stats().invalid_windows),
         d.iter().filter(|x| !x.is_finite()).count()
@@ -375,7 +384,7 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
     let geometry = frame.geometry();
     for l in f.lines() {
         let beams = usize::from(l.first)..=usize::from(l.last);
-        let valid: Vec<usize> = beams.filter(|&j| frame.beams()[j].is_valid()).collect();
+        let valid: Vec<usize> = beams.filter(|&j| usable(j)).collect();
         let (ca, sa) = (f64::from(l.alpha).cos(), f64::from(l.alpha).sin());
         for (end, j) in [(0, valid[0]), (1, valid[valid.len() - 1])] {
             let (d, phi) = (f64::from(frame.ranges()[j]), f64::from(geometry.bearing(j)));

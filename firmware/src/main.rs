@@ -51,15 +51,13 @@ mod app {
     /// (180°/0.5°, mm, 500 kBd), built at compile time into `.bss`/`.data`.
     pub const INITIAL: App = CoProcessor::new(PARAMS, SensorSetup::DEFAULT);
 
-    /// The defaults of ALGORITHM.md with the passes of this build,
-    /// validated at compile time (an invalid setting fails the build).
+    /// The defaults of ALGORITHM.md v2 (split before reject, unshared
+    /// corner points; the feature `split-before-reject` is now the
+    /// default) with the passes of this build, validated at compile time
+    /// (an invalid setting fails the build).
     const PARAMS: ValidParams = {
         let mut p = Params::DEFAULT;
         p.iterations = crate::ITERATIONS;
-        if cfg!(feature = "split-before-reject") {
-            p.split_depth = 8;
-            p.fit_shared_points = false;
-        }
         match p.validate() {
             Ok(valid) => valid,
             Err(_) => panic!("the build's parameters are invalid (LMS_ITERATIONS?)"),

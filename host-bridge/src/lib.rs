@@ -30,6 +30,7 @@
 pub mod capture;
 pub mod carmen;
 pub mod client;
+pub mod defaults;
 pub mod emulated_link;
 pub mod extract;
 pub mod options;

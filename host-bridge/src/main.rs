@@ -147,8 +147,19 @@ fn scene_inputs(scene: &SceneArgs, range: &FrameRange) -> Result<(String, Vec<In
 
 fn run_extract(args: ExtractArgs) -> Result<()> {
     let started = Instant::now();
-    let params = args.params.to_params()?;
     let range = args.frames.unwrap_or_default();
+    // Defaults per data for a CARMEN log (σ, max_range; flags override).
+    let params = match &args.log {
+        Some(path) if !host_bridge::capture::is_capture(path).unwrap_or(false) => {
+            let (params, warning) =
+                host_bridge::defaults::for_log(path, args.unit.carmen_mode(), &args.params)?;
+            warning
+                .into_iter()
+                .for_each(|w| eprintln!("host-bridge extract: {w}"));
+            params
+        }
+        _ => args.params.to_params()?,
+    };
     let (source, inputs) = match &args.log {
         // A capture recorded by `host-bridge scan` (told by its magic).
         Some(path) if host_bridge::capture::is_capture(path).unwrap_or(false) => {

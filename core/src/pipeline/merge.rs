@@ -6,7 +6,8 @@
 use crate::features::{Line, Segment};
 use crate::frame::Beam;
 use crate::params::Params;
-use crate::pipeline::line_fit::{fit_line, parameter_distance, Bearings};
+use crate::pipeline::line_fit::{fit_piece, parameter_distance, Bearings, RawScan};
+use crate::pipeline::smoothing::usable;
 
 /// The beams fitted for segment `k`: the whole segment (§7), or, with
 /// `fit_shared_points == false`, without a first/last point it shares with
@@ -39,16 +40,26 @@ pub fn try_merge(
 ) -> Option<Line> {
     let gap_start = prev.last as usize + 1;
     let gap_end = next.first as usize; // exclusive
-    let valid_between = beams
-        .get(gap_start..gap_end.max(gap_start))
-        .map_or(0, |b| b.iter().filter(|b| b.is_valid()).count());
+    let max_range = params.max_range;
+    let valid_between = (gap_start..gap_end.max(gap_start))
+        .filter(|&j| match (beams.get(j), raw.get(j)) {
+            (Some(&b), Some(&d)) => usable(b, d, max_range),
+            _ => false,
+        })
+        .count();
     if valid_between > params.merge_gap_beams as usize {
         return None;
     }
     if !(parameter_distance(prev, next)? < params.merge_gate) {
         return None;
     }
-    let merged = fit_line(bearings, raw, beams, prev.first, next.last, params.sigma).ok()?;
+    let scan = RawScan {
+        bearings,
+        ranges: raw,
+        beams,
+        max_range,
+    };
+    let merged = fit_piece(&scan, prev.first, next.last, params.sigma).ok()?;
     if merged.chi2 <= params.max_chi2 {
         Some(merged)
     } else {

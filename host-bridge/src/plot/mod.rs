@@ -67,6 +67,7 @@ pub use style::{
 };
 
 use crate::carmen;
+use crate::defaults;
 use crate::extract::InputFrame;
 use crate::synthetic;
 
@@ -189,6 +190,17 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     let (source, input) = match &args.log {
         Some(path) => log_frame(path, args, k)?,
         None => scene_frame(args, k)?,
+    };
+    // Defaults per data for a CARMEN log (σ, max_range; flags override).
+    let params = match &args.log {
+        Some(path) => {
+            let (params, warning) = defaults::for_log(path, args.unit.carmen_mode(), &args.params)?;
+            warning
+                .into_iter()
+                .for_each(|w| eprintln!("host-bridge plot: {w}"));
+            params
+        }
+        None => params,
     };
     ensure_font()?;
     let fp = FramePlot::compute(source, &input, &params, &passes)?;
