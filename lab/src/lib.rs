@@ -209,11 +209,13 @@ impl Method {
         }
     }
 
-    /// The parameters for scans with noise `sigma`.
+    /// The parameters for scans with noise `sigma`: ALGORITHM.md v1's
+    /// defaults ([`Params::V1`], "the spec" of every table; the baselines
+    /// and variants replicate its back end) with σ, then the method's changes.
     pub fn params(&self, sigma: f64) -> Params {
         (self.adjust)(Params {
             sigma: sigma as f32,
-            ..Params::default()
+            ..Params::V1
         })
     }
 
@@ -583,7 +585,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let truth_figures =
         (!args.no_plots && report::fonts_available()).then_some(args.output.as_path());
     let truth = realtruth::run_logs(&logs, args.real_every, truth_figures, &bar)?;
-    let fits = sensorfit::run(&logs, SENSOR_FIT_SCANS)?;
+    let fits = sensorfit::run(&logs, SENSOR_FIT_SCANS.min(args.scans))?;
     let realistic = realistic::run(args.scans, args.seed, &bar)?;
     let t3 = Instant::now();
     bar.set_message("writing the report");

@@ -17,8 +17,8 @@ const TRUTH: RGBColor = RGBColor(0x33, 0xA0, 0x2C);
 const MATCHED: RGBColor = RGBColor(0x1F, 0x78, 0xB4);
 const FALSE: RGBColor = RGBColor(0xE3, 0x1A, 0x1C);
 const POINTS: RGBColor = RGBColor(0x99, 0x99, 0x99);
-/// Methods drawn (indices into the method list: no flags, v2 by unit, split-and-merge).
-const DRAWN: [usize; 3] = [0, 3, 6];
+/// Methods drawn (indices into the method list: no flags, v1 no flags, split-and-merge).
+const DRAWN: [usize; 3] = [0, 1, 6];
 
 fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("cannot draw the truth figure: {e}")
@@ -43,7 +43,7 @@ fn segment(l: &ScoredLine, scan: &Scan) -> Option<[(f64, f64); 2]> {
 pub fn draw(
     dir: &Path,
     name: &str,
-    log: &CarmenLog,
+    (log, no_flags): (&CarmenLog, &lms_core::Params),
     scans: &[&Scan],
     map: &Map,
     methods: &[RealMethod],
@@ -76,7 +76,7 @@ pub fn draw(
             let Some(method) = methods.get(m) else {
                 continue;
             };
-            let lines = extract(method, log.unit, &mut ex, scan, &tables, &truth);
+            let lines = extract(method, log.unit, no_flags, &mut ex, scan, &tables, &truth);
             draw_frame(area, method.name, scan, &truth, &lines)?;
         }
         root.present().map_err(err)?;

@@ -63,14 +63,16 @@ pub fn sample(
     Ok(Sample { frame, ..plain })
 }
 
-/// The methods: the defaults, ALGORITHM.md v2's defaults, split-and-merge.
+/// The methods: ALGORITHM.md v1's and v2's defaults, split-and-merge.
 pub fn methods() -> Vec<Method> {
     vec![
-        Method::new(crate::SPEC, Kind::Core),
-        Method::with("v2 defaults (split 8, no shared)", Kind::Core, |p| Params {
-            split_depth: crate::PROPOSED_SPLIT_DEPTH,
-            fit_shared_points: false,
-            ..p
+        Method::with("v1 defaults (Params::V1)", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            ..Params::V1
+        }),
+        Method::with("v2 defaults (Params::default)", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            ..Params::default()
         }),
         Method::new(crate::SPLIT_MERGE, Kind::SplitMerge { k: crate::SPLIT_K }),
     ]

@@ -30,9 +30,10 @@
 //!
 //! # Methods
 //! `no flags` is what `host-bridge extract LOG` does without options
-//! ([`no_flag_params`]); `σ by unit` is 10 mm for cm logs and 5 mm for mm
-//! logs ([`crate::real::sigma_for`]); `v2` is ALGORITHM.md v2's defaults
-//! (`split_depth = 8`, `fit_shared_points = false`); the oracle is a
+//! ([`no_flag_params`]: ALGORITHM.md v2's defaults — `split_depth = 8`,
+//! `fit_shared_points = false` — with σ and `max_range` from the data);
+//! `v1` is [`Params::V1`], the defaults before v2; `σ by unit` is 10 mm for
+//! cm logs and 5 mm for mm logs ([`crate::real::sigma_for`]); the oracle is a
 //! total-least-squares fit to each counted piece's own on-wall hits — what
 //! an extractor that knew the walls would report, so its TruePos is the
 //! ceiling of this truth and its σ the truth's own error.
@@ -61,19 +62,30 @@ pub const MIN_SIGHTINGS: usize = 5;
 /// Share of a wall's sightings it may be fragmented in (the goal).
 pub const FRAGMENT_GOAL: f64 = 0.05;
 
-/// The parameters `host-bridge extract` uses without options.
-pub fn no_flag_params(_unit: Unit) -> Params {
-    host_bridge::options::ParamArgs::default()
-        .to_params()
-        .unwrap_or_default()
+/// The parameters `host-bridge extract LOG` uses without options: the
+/// defaults for the log's data ([`host_bridge::defaults::for_log`]).
+pub fn no_flag_params(path: &Path) -> Result<Params> {
+    let args = host_bridge::options::ParamArgs::default();
+    Ok(host_bridge::defaults::for_log(path, UnitMode::Auto, &args)?.0)
+}
+
+/// Which parameters a method starts from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Base {
+    /// As without flags ([`no_flag_params`]: ALGORITHM.md v2, per data).
+    NoFlags,
+    /// ALGORITHM.md v1's defaults ([`Params::V1`]: σ = 5 mm, no split
+    /// before reject, shared corner points, no range limit) — what `extract`
+    /// without flags did before v2.
+    V1,
 }
 
 /// How a method picks σ.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SigmaChoice {
-    /// As without flags ([`no_flag_params`]).
-    NoFlags,
-    /// [`crate::real::sigma_for`] of the log's unit.
+    /// The base's σ.
+    Base,
+    /// [`crate::real::sigma_for`] of the log's unit (10 mm cm, 5 mm mm).
     ByUnit,
     /// A fixed σ (m).
     Fixed(f64),
@@ -97,68 +109,61 @@ pub struct RealMethod {
     pub name: &'static str,
     /// What it runs.
     pub kind: RealKind,
+    /// The parameters it starts from.
+    pub base: Base,
     /// σ.
     pub sigma: SigmaChoice,
-    /// Parameter changes after σ is set.
-    pub adjust: fn(Params) -> Params,
 }
 
 impl RealMethod {
-    /// The parameters on a log in `unit`.
-    pub fn params(&self, unit: Unit) -> Params {
-        let base = no_flag_params(unit);
+    /// The parameters on a log in `unit` whose no-flag parameters are `no_flags`.
+    pub fn params(&self, unit: Unit, no_flags: &Params) -> Params {
+        let base = match self.base {
+            Base::NoFlags => *no_flags,
+            Base::V1 => Params::V1,
+        };
         let sigma = match self.sigma {
-            SigmaChoice::NoFlags => base.sigma,
+            SigmaChoice::Base => base.sigma,
             SigmaChoice::ByUnit => crate::real::sigma_for(unit) as f32,
             SigmaChoice::Fixed(s) => s as f32,
         };
-        (self.adjust)(Params { sigma, ..base })
-    }
-}
-
-fn keep(p: Params) -> Params {
-    p
-}
-
-fn v2(p: Params) -> Params {
-    Params {
-        split_depth: crate::PROPOSED_SPLIT_DEPTH,
-        fit_shared_points: false,
-        ..p
+        Params { sigma, ..base }
     }
 }
 
 /// Name of the no-flags method.
-pub const NO_FLAGS: &str = "defaults (no flags)";
-/// Name of v2 at the no-flags σ.
-pub const V2_NO_FLAGS: &str = "v2 defaults (split 8, no shared)";
+pub const NO_FLAGS: &str = "defaults, no flags (v2, per data)";
+/// Name of v1's no-flags method.
+pub const V1_NO_FLAGS: &str = "v1 defaults, no flags (σ 5 mm)";
 /// Name of the oracle.
 pub const ORACLE: &str = "oracle (LS fit to the true beams)";
 
 /// The methods of the real-scan tables.
 pub fn methods() -> Vec<RealMethod> {
-    let m = |name, kind, sigma, adjust| RealMethod {
+    let m = |name, kind, base, sigma| RealMethod {
         name,
         kind,
+        base,
         sigma,
-        adjust,
     };
+    use Base::{NoFlags, V1};
     use RealKind::*;
-    use SigmaChoice::*;
+    use SigmaChoice::{ByUnit, Fixed};
+    let own = SigmaChoice::Base;
     vec![
-        m(NO_FLAGS, Core, NoFlags, keep),
-        m("σ by unit (10 mm cm, 5 mm mm)", Core, ByUnit, keep),
-        m(V2_NO_FLAGS, Core, NoFlags, v2),
-        m("v2, σ by unit", Core, ByUnit, v2),
-        m("v2, σ = 20 mm", Core, Fixed(0.02), v2),
-        m("v2, σ = 30 mm", Core, Fixed(0.03), v2),
+        m(NO_FLAGS, Core, NoFlags, own),
+        m(V1_NO_FLAGS, Core, V1, own),
+        m("v1, σ by unit (10 mm cm, 5 mm mm)", Core, V1, ByUnit),
+        m("v2, σ by unit", Core, NoFlags, ByUnit),
+        m("v2, σ = 20 mm", Core, NoFlags, Fixed(0.02)),
+        m("v2, σ = 30 mm", Core, NoFlags, Fixed(0.03)),
         m(
             "split-and-merge (4σ), σ by unit",
             SplitMerge(4.0),
+            NoFlags,
             ByUnit,
-            keep,
         ),
-        m(ORACLE, Oracle, NoFlags, keep),
+        m(ORACLE, Oracle, NoFlags, own),
     ]
 }
 
@@ -466,15 +471,17 @@ pub fn oracle_lines(scan: &Scan, truth: &FrameTruth) -> Vec<ScoredLine> {
 }
 
 /// One method's lines on one frame.
+#[allow(clippy::too_many_arguments)]
 pub fn extract(
     m: &RealMethod,
     unit: Unit,
+    no_flags: &Params,
     ex: &mut Extractor,
     scan: &Scan,
     tables: &Tables,
     truth: &FrameTruth,
 ) -> Vec<ScoredLine> {
-    let p = m.params(unit);
+    let p = m.params(unit, no_flags);
     let x: Extraction = match m.kind {
         RealKind::Core => run_core(ex, &scan.frame, &p),
         RealKind::SplitMerge(k) => baselines::split_and_merge(&scan.frame, tables, &p, k),
@@ -517,6 +524,7 @@ pub fn run_log(
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
     let map = build_map(&log.scans, cfg);
+    let no_flags = no_flag_params(path)?;
     let mut ex = Extractor::new();
     let mut tallies = vec![RealTally::default(); methods.len()];
     let mut prev: Vec<Option<(MatchedWalls, HashSet<usize>)>> = vec![None; methods.len()];
@@ -535,7 +543,7 @@ pub fn run_log(
         let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
         for (k, m) in methods.iter().enumerate() {
             let started = Instant::now();
-            let lines = extract(m, log.unit, &mut ex, scan, &tables, &truth);
+            let lines = extract(m, log.unit, &no_flags, &mut ex, scan, &tables, &truth);
             tallies[k].ms.push(started.elapsed().as_secs_f64() * 1e3);
             let (matched, _) = score_frame(&truth, &lines, &valid, &mut tallies[k]);
             if let Some((pm, _)) = &prev[k] {
@@ -553,7 +561,7 @@ pub fn run_log(
         Some(dir) => Some(crate::realfigures::draw(
             dir,
             &name,
-            &log,
+            (&log, &no_flags),
             &scans,
             &map,
             methods,

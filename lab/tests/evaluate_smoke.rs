@@ -106,9 +106,12 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
             md.contains("| csail-corrected.log.gz (cm) | 5 |"),
             "truth table"
         );
-        assert!(md.contains("| csail-corrected.log.gz · defaults (no flags) |"));
+        assert!(md.contains("| csail-corrected.log.gz · defaults, no flags (v2, per data) |"));
         assert!(md.contains("## 6. Sensor model fitted to the real logs"));
-        assert!(md.contains("| csail-corrected.log.gz | 361 | 10 |"), "fit table");
+        assert!(
+            md.contains("| csail-corrected.log.gz | 361 | 10 |"),
+            "fit table"
+        );
     }
     if host_bridge::plot::find_font().is_some() {
         for f in [
