@@ -161,11 +161,14 @@ where
             (d * phi.cos(), d * phi.sin())
         })
         .collect();
-    let reach = pts
-        .iter()
-        .map(|p| p.0.abs().max(p.1.abs()))
-        .fold(1.0, f64::max)
-        .min(40.0);
+    // Zoomed to the nearer 90 % of the points (a few far hits would make
+    // every line a dot).
+    let mut far: Vec<f64> = pts.iter().map(|p| p.0.abs().max(p.1.abs())).collect();
+    far.sort_by(f64::total_cmp);
+    let reach = far
+        .get(far.len() * 9 / 10)
+        .map_or(1.0, |r| 1.1 * r)
+        .clamp(1.0, 40.0);
     // Which lines match: score this frame alone.
     let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
     let mut t = RealTally::default();
