@@ -94,6 +94,9 @@ declare_stats! {
     /// §1: fill values, another mode's error codes), made invalid. Not in
     /// `valid_beams`; not carried by the `D0` telegram.
     beyond_max_range,
+    /// Lines dropped because the standard deviation of their α exceeds
+    /// `Params::max_alpha_sd_deg` (off by default). Not in `D0`.
+    rejected_wide,
 }
 
 impl Stats {

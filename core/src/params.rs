@@ -58,6 +58,17 @@ pub struct Params {
     /// the value of a unit and range mode ([`max_range_of`]). `+inf` turns
     /// the limit off (v1).
     pub max_range: f32,
+    /// Merge consecutive lines that are nearly collinear and touch (facing
+    /// endpoints closer than `corner_gap`, normals less than
+    /// `min_corner_angle_deg` apart) when the refit of their union passes
+    /// `max_chi2`, even where the §7.6 gates keep them apart (beyond
+    /// ALGORITHM.md, issue 14 item 6: otherwise an ill-conditioned "corner"
+    /// is reported between two pieces of one wall). Default on; off in v1.
+    pub merge_collinear: bool,
+    /// Largest standard deviation of a line's α (degrees): a line less
+    /// certain than this is dropped and counted (`Stats::rejected_wide`;
+    /// beyond ALGORITHM.md, issue 14 item 6). `+inf` keeps every line (v1).
+    pub max_alpha_sd_deg: f32,
 }
 
 impl Default for Params {
@@ -84,6 +95,8 @@ impl Params {
         min_corner_angle_deg: 30.0,
         split_depth: 8,
         max_range: max_range_of(crate::Unit::Centimetre, RangeMode::Bits13),
+        merge_collinear: true,
+        max_alpha_sd_deg: 5.0 / 3.0,
     };
 
     /// ALGORITHM.md v1: no split before reject, shared corner points in
@@ -92,6 +105,8 @@ impl Params {
         fit_shared_points: true,
         split_depth: 0,
         max_range: f32::INFINITY,
+        merge_collinear: false,
+        max_alpha_sd_deg: f32::INFINITY,
         ..Params::DEFAULT
     };
 }
@@ -131,6 +146,8 @@ pub enum ParamError {
     SplitDepth,
     /// `max_range` must be > 0 (`+inf` allowed).
     MaxRange,
+    /// `max_alpha_sd_deg` must be > 0 (`+inf` allowed).
+    MaxAlphaSd,
 }
 
 impl fmt::Display for ParamError {
@@ -148,6 +165,7 @@ impl fmt::Display for ParamError {
             ParamError::MinCornerAngle => "min_corner_angle_deg must be between 0 and 90",
             ParamError::SplitDepth => "split_depth must be at most 16",
             ParamError::MaxRange => "max_range must be > 0 (metres; inf for no limit)",
+            ParamError::MaxAlphaSd => "max_alpha_sd_deg must be > 0 (degrees; inf for no limit)",
         })
     }
 }
@@ -244,6 +262,9 @@ impl Params {
         }
         if !(self.max_range > 0.0) {
             return Err(ParamError::MaxRange);
+        }
+        if !(self.max_alpha_sd_deg > 0.0) {
+            return Err(ParamError::MaxAlphaSd);
         }
         Ok(ValidParams(*self))
     }

@@ -243,6 +243,14 @@ fn fit_lines(f: &mut Features, scan: &RawScan<'_>, params: &Params, stats: &mut 
     let before = f.lines.len();
     f.lines.retain(|l| l.length() >= params.min_length);
     stats.rejected_short = (before - f.lines.len()) as u16;
+    // Too uncertain to be useful (beyond ALGORITHM.md): σ_α above the limit.
+    let max_var = {
+        let sd = params.max_alpha_sd_deg * (core::f32::consts::PI / 180.0);
+        sd * sd
+    };
+    let before = f.lines.len();
+    f.lines.retain(|l| l.cov.a <= max_var);
+    stats.rejected_wide = (before - f.lines.len()) as u16;
 }
 
 /// §8: a corner for each pair of consecutive lines whose facing endpoints are

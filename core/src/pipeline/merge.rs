@@ -5,6 +5,7 @@
 
 use crate::features::{Line, Segment};
 use crate::frame::Beam;
+use crate::maths::wrap_angle;
 use crate::params::Params;
 use crate::pipeline::line_fit::{fit_piece, parameter_distance, Bearings, RawScan};
 use crate::pipeline::smoothing::usable;
@@ -47,10 +48,9 @@ pub fn try_merge(
             _ => false,
         })
         .count();
-    if valid_between > params.merge_gap_beams as usize {
-        return None;
-    }
-    if !(parameter_distance(prev, next)? < params.merge_gate) {
+    let gated = valid_between <= params.merge_gap_beams as usize
+        && parameter_distance(prev, next).is_some_and(|d| d < params.merge_gate);
+    if !(gated || (params.merge_collinear && collinear_and_touching(prev, next, params))) {
         return None;
     }
     let scan = RawScan {
@@ -65,4 +65,15 @@ pub fn try_merge(
     } else {
         None
     }
+}
+
+/// Whether `next` continues `prev` nearly collinearly: facing endpoints
+/// closer than `corner_gap` and normals less than `min_corner_angle_deg`
+/// apart (the pair would give an ill-conditioned corner).
+fn collinear_and_touching(prev: &Line, next: &Line, params: &Params) -> bool {
+    let gap_x = next.endpoints[0][0] - prev.endpoints[1][0];
+    let gap_y = next.endpoints[0][1] - prev.endpoints[1][1];
+    let close = libm::sqrtf(gap_x * gap_x + gap_y * gap_y) < params.corner_gap;
+    let apart = libm::fabsf(wrap_angle(next.alpha - prev.alpha));
+    close && apart < params.min_corner_angle_deg * (core::f32::consts::PI / 180.0)
 }
