@@ -259,6 +259,20 @@ impl Frame {
         }
     }
 
+    /// Every byte zero — not a valid frame (no beams, no geometry) until
+    /// [`Frame::reset`] or a decoder fills it: for an all-zero `static`.
+    pub(crate) const fn zeroed() -> Self {
+        Frame {
+            geometry: Geometry {
+                first_bearing: 0.0,
+                step: 0.0,
+            },
+            len: 0,
+            ranges: [0.0; MAX_BEAMS],
+            beams: [Beam::Invalid(Invalid::NoEcho); MAX_BEAMS],
+        }
+    }
+
     /// Make this frame an all-invalid frame of `variant`, in place (no
     /// 3 KiB temporary on the stack).
     pub fn reset(&mut self, variant: Variant) {

@@ -183,6 +183,26 @@ impl ValidParams {
     /// The defaults of ALGORITHM.md (valid by construction), `const`.
     pub const DEFAULT: ValidParams = ValidParams(Params::DEFAULT);
 
+    /// Every field zero — not valid, never given to the pipeline: the
+    /// placeholder of a co-processor not configured yet, so that a `static`
+    /// of it is all zero bytes (`.bss`, no flash image).
+    pub(crate) const UNSET: ValidParams = ValidParams(Params {
+        sigma: 0.0,
+        q: 0.0,
+        iterations: 0,
+        tau: 0.0,
+        min_points: 0,
+        max_chi2: 0.0,
+        min_length: 0.0,
+        fit_shared_points: false,
+        merge: false,
+        merge_gap_beams: 0,
+        merge_gate: 0.0,
+        corner_gap: 0.0,
+        min_corner_angle_deg: 0.0,
+        split_depth: 0,
+    });
+
     /// The parameters.
     #[inline]
     pub const fn get(&self) -> &Params {

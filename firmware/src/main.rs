@@ -158,9 +158,10 @@ impl Watch {
     fn sensor_queue(&mut self, app: &mut app::App, board: &board::Board) {
         let losses = board.sensor.rx_counts().lost();
         if losses != self.sensor_losses_seen {
+            let new = losses.wrapping_sub(self.sensor_losses_seen);
             self.sensor_losses_seen = losses;
             defmt::warn!("sensor receive queue lost bytes ({=u32} so far)", losses);
-            app.note_sensor_overflow();
+            app.note_sensor_lost(new);
         }
     }
 

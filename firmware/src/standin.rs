@@ -56,6 +56,11 @@ impl Forwarder {
         self.counters.scans_dropped = self.counters.scans_dropped.wrapping_add(1);
     }
 
+    /// Count `bytes` lost in the sensor receive queue (one loss).
+    pub fn note_sensor_lost(&mut self, _bytes: u32) {
+        self.note_sensor_overflow();
+    }
+
     /// Move what is waiting on either side to the other. Never blocks on input.
     pub fn poll<S, H>(
         &mut self,

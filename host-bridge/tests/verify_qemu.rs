@@ -105,3 +105,23 @@ fn verify_qemu_reports_a_firmware_that_does_not_boot() {
         let _ = std::fs::remove_dir_all(dir);
     }
 }
+
+/// verify's default `--max-in-flight` under QEMU rests on the size of the
+/// firmware's sensor receive queue: the two sources must agree.
+#[test]
+fn verify_knows_the_firmware_sensor_queue() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let constant = |path: &str, name: &str| -> usize {
+        let text = std::fs::read_to_string(root.join(path)).unwrap();
+        let line = text
+            .lines()
+            .find(|l| l.contains(&format!("const {name}: usize =")))
+            .unwrap_or_else(|| panic!("{name} not in {path}"));
+        let value = line.split('=').nth(1).unwrap().trim().trim_end_matches(';');
+        value.replace('_', "").parse().unwrap()
+    };
+    let slots = constant("firmware/src/board.rs", "SENSOR_RX_SLOTS");
+    let queue = constant("host-bridge/src/verify/session.rs", "FIRMWARE_SENSOR_QUEUE");
+    // A heapless::spsc queue of N slots holds N − 1 bytes.
+    assert_eq!(queue, slots - 1);
+}

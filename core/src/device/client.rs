@@ -195,9 +195,9 @@ struct Exchange {
     /// Stream: the allowed gap between scans (µs) and the wait's start.
     stream_wait_us: Option<u64>,
     stream_since_us: u64,
-    /// The last reply or scan, `STX` … `CRC`.
-    telegram: [u8; MAX_TELEGRAM_LEN],
-    telegram_len: usize,
+    /// The last outcome was a reply or scan: its bytes are still the
+    /// framer's [`Framer::delivered`] (no copy of the scan is kept here).
+    kept: bool,
     stats: ClientStats,
 }
 
@@ -211,10 +211,19 @@ impl Client {
     /// A client for the sensor at `address` (0..=0x7F; replies carry
     /// `0x80 | address`), with nothing to send yet.
     pub const fn new(address: u8) -> Self {
+        let mut client = Client::zeroed();
+        client.framer.set_direction(Direction::SensorToHost);
+        client.x.address = address & 0x7F;
+        client
+    }
+
+    /// [`Client::new`] with every byte zero (its framer's direction not set:
+    /// [`Client::set_sensor_side`] before use), for an all-zero `static`.
+    pub(crate) const fn zeroed() -> Self {
         Client {
-            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
+            framer: Framer::new(Direction::HostToSensor, Handshake::Expected),
             x: Exchange {
-                address: address & 0x7F,
+                address: 0,
                 request: [0; REQUEST_CAPACITY],
                 request_len: 0,
                 expected: 0,
@@ -229,11 +238,16 @@ impl Client {
                 acked_us: None,
                 stream_wait_us: None,
                 stream_since_us: 0,
-                telegram: [0; MAX_TELEGRAM_LEN],
-                telegram_len: 0,
+                kept: false,
                 stats: ClientStats::ZERO,
             },
         }
+    }
+
+    /// Make a [`Client::zeroed`] client what [`Client::new`] makes.
+    pub(crate) const fn set_sensor_side(&mut self, address: u8) {
+        self.framer.set_direction(Direction::SensorToHost);
+        self.x.address = address & 0x7F;
     }
 
     /// The sensor's address.
@@ -272,6 +286,7 @@ impl Client {
     /// Drop every byte received and not framed yet (e.g. after a baud-rate
     /// change; counted as skipped).
     pub fn discard(&mut self) {
+        self.x.kept = false;
         self.framer.discard();
     }
 
@@ -279,6 +294,7 @@ impl Client {
     /// time-out: a late reply's start would hold the next one back).
     /// `false` if none was being collected.
     pub fn abandon(&mut self) -> bool {
+        self.x.kept = false;
         self.framer.abandon()
     }
 
@@ -343,12 +359,15 @@ impl Client {
     }
 
     /// The last reply or scan reported, `STX` … `CRC` (until the next
-    /// [`feed`](Client::feed)).
+    /// [`feed`](Client::feed), [`poll`](Client::poll),
+    /// [`abandon`](Client::abandon) or [`discard`](Client::discard); read in
+    /// place in the framer).
     pub fn telegram_bytes(&self) -> &[u8] {
-        self.x
-            .telegram
-            .get(..self.x.telegram_len)
-            .unwrap_or_default()
+        if self.x.kept {
+            self.framer.delivered()
+        } else {
+            &[]
+        }
     }
 
     /// [`telegram_bytes`](Client::telegram_bytes) as a telegram.
@@ -381,7 +400,11 @@ impl Client {
     /// The time-out, if the wait is over at `now_us` (see the
     /// [module docs](self) for the `None` after a false `STX`).
     pub fn poll(&mut self, now_us: u64) -> Option<Outcome> {
-        if !self.expired(now_us) || self.framer.abandon() {
+        if !self.expired(now_us) {
+            return None;
+        }
+        self.x.kept = false;
+        if self.framer.abandon() {
             return None;
         }
         let awaited = match self.x.phase {
@@ -398,6 +421,7 @@ impl Client {
     /// input was taken without an outcome.
     pub fn feed<'i>(&mut self, input: &'i [u8], now_us: u64) -> (Option<Outcome>, &'i [u8]) {
         let mut input = input;
+        self.x.kept = false;
         // Each round consumes input or takes an event; the bound only
         // guards against a framer bug.
         for _ in 0..input.len().saturating_add(MAX_TELEGRAM_LEN) {
@@ -476,12 +500,9 @@ impl Exchange {
         }
     }
 
-    /// Copy the telegram out of the framer.
-    fn keep(&mut self, t: &Telegram<&[u8]>) {
-        let bytes = t.as_bytes();
-        let n = bytes.len().min(MAX_TELEGRAM_LEN);
-        crate::telegram::copy_into(&mut self.telegram, bytes);
-        self.telegram_len = n;
+    /// The telegram (still in the framer) is the outcome's.
+    fn keep(&mut self, _t: &Telegram<&[u8]>) {
+        self.kept = true;
     }
 }
 
@@ -510,6 +531,18 @@ impl<'r> BaudProbe<'r> {
     /// The rates to try, as given.
     pub fn rates(&self) -> &'r [Baud] {
         self.rates
+    }
+
+    /// A search over `rates` that has already handed out `tried` of them
+    /// (a driver that keeps only the count, e.g. to stay all-zero in a
+    /// `static`, rebuilds its probe with this).
+    pub const fn resume(rates: &'r [Baud], tried: usize) -> Self {
+        BaudProbe { rates, next: tried }
+    }
+
+    /// Rates handed out so far by [`next_rate`](BaudProbe::next_rate).
+    pub fn tried(&self) -> usize {
+        self.next
     }
 
     /// The next rate to try (`None`: every rate went unanswered). A probe

@@ -81,8 +81,10 @@ pub struct Counters {
     pub sensor_bytes_skipped: u32,
     /// Telegrams from the host with a bad checksum (answered with NAK).
     pub host_crc_errors: u32,
-    /// Scans lost because processing fell behind (receive queue overflow
-    /// or a scan that completed while the previous one was still waiting).
+    /// Scans of the sensor's stream lost on the way in: damaged on the line,
+    /// cut by a receive queue overflow, or missing (counted by the
+    /// co-processor's sensor link from the stream's bytes between good
+    /// scans).
     pub scans_dropped: u32,
     /// Scans that could not be processed (unsupported value count, …).
     pub scans_rejected: u32,

@@ -217,10 +217,17 @@ impl Framer {
         self.handshake
     }
 
+    /// Frame telegrams travelling in `direction` from now on (a framer built
+    /// all-zero in a `static` is given its direction at start-up).
+    #[inline]
+    pub const fn set_direction(&mut self, direction: Direction) {
+        self.direction = direction;
+    }
+
     /// Report `ACK`/`NAK` bytes from now on (or stop, e.g. in continuous
     /// mode, where the sensor sends none).
     #[inline]
-    pub fn set_handshake(&mut self, handshake: Handshake) {
+    pub const fn set_handshake(&mut self, handshake: Handshake) {
         self.handshake = handshake;
     }
 
@@ -234,6 +241,15 @@ impl Framer {
     #[inline]
     pub fn reset_stats(&mut self) {
         self.stats = FramerStats::default();
+    }
+
+    /// The telegram handed out by the last [`feed`](Framer::feed), until the
+    /// next `feed`, [`abandon`](Framer::abandon) or
+    /// [`discard`](Framer::discard) (empty if that call found none): read
+    /// it here rather than copy it out.
+    #[inline]
+    pub fn delivered(&self) -> &[u8] {
+        self.buf.get(..self.delivered).unwrap_or_default()
     }
 
     /// Bytes held for a telegram not complete yet (not counting a telegram

@@ -175,6 +175,7 @@ fn reach_coprocessor(
     if black_box(false) {
         cop.note_sensor_overflow();
     }
+    cop.note_sensor_lost(black_box(7));
     black_box(cop.counters());
     black_box(cop.features().lines().len());
     black_box(cop.link().step());

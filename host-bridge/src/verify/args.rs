@@ -52,6 +52,11 @@ pub struct VerifyArgs {
     /// queue); else 0, as a real sensor never waits]
     #[arg(long, value_name = "N")]
     pub max_in_flight: Option<usize>,
+    /// Switch the simulated LMS off and on once, after this many scans of the
+    /// selection have come back (with nothing in flight): the co-processor
+    /// must stream again by itself within one second (recovery test)
+    #[arg(long, value_name = "N")]
+    pub power_cycle_sensor_after: Option<usize>,
     /// Pipeline parameters: the co-processor's in --host mode; in every mode
     /// those the D0 summary does not echo (min points, max chi2, merging)
     #[command(flatten)]

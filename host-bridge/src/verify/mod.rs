@@ -38,9 +38,11 @@
 //! * from the moment the co-processor has started the sensor's stream until
 //!   the client's `20 24` is acknowledged, so that no scan of the selection
 //!   is spent before the host side streams;
-//! * while `--max-in-flight` scans are out and not back (default 8 with
-//!   `--qemu`: QEMU moves only ~10 KB/s into a UART, a third of the 500 kBd
-//!   line rate, and the rest would pile up in its socket; off otherwise);
+//! * while `--max-in-flight` scans (the warm-up scan included) are out and
+//!   not back (default with `--qemu`: as many 732-byte `B0`s as fit the
+//!   firmware's 4095-byte sensor receive queue, 5; QEMU moves only ~10 KB/s
+//!   into a UART, a third of the 500 kBd line rate, so all of them may be
+//!   waiting in that queue; off otherwise);
 //! * after the last scan of the selection has gone out, or at `--timeout`.
 //!
 //! The LMS's first mirror tick falls at the very start of its stream, so
@@ -71,9 +73,11 @@
 //! ```
 //!
 //! and the run ends with `N/N scans bit-identical`, the scans lost (sent by
-//! the sensor side, never back with features, found by counting), and the
+//! the sensor side, never back with features, found by counting; the
+//! co-processor's own `scans_dropped` must agree), and the
 //! co-processor's counters from the final `55`. The exit status is 1 on any
-//! mismatch or lost scan (not back although the host line went quiet for
+//! mismatch, on a restart of the sensor's bring-up by the co-processor
+//! while the selection plays, or on any lost scan (not back although the host line went quiet for
 //! 3 s), when fewer than `--scans` scans were checked before `--timeout`
 //! (those still on their way are reported as such), or without the final
 //! counters.

@@ -12,10 +12,14 @@ use super::report::Outcome;
 use super::session::Session;
 use super::{CLOSING, QUIET, TICK};
 
-/// The scans of the selection not back at the end: (`lost`, `late`).
+/// The scans not back at the end.
 struct Missing {
+    /// Of the selection, given up once the host line was quiet.
     lost: usize,
+    /// Of the selection, still on their way at `--timeout`.
     late: usize,
+    /// Outside the selection (the warm-up scan), not back.
+    other_lost: usize,
 }
 
 impl Session {
@@ -75,8 +79,46 @@ impl Session {
         self.log(format!("playing {} scans", self.wanted));
         while self.play_sent < self.wanted && Instant::now() < deadline {
             self.pump(TICK)?;
+            self.maybe_power_cycle(deadline)?;
         }
         self.finished = true;
+        Ok(())
+    }
+
+    /// `--power-cycle-sensor-after N`: once N scans are back, hold the
+    /// sensor until nothing is in flight, then switch it off and on (its
+    /// `90`, 9600 Bd, values on request); note when the co-processor has
+    /// it streaming again and when the next scan comes back.
+    fn maybe_power_cycle(&mut self, deadline: Instant) -> Result<()> {
+        let back = self.checker.tally.play_back;
+        if let Some(pc) = self.power_cycle.as_mut() {
+            if pc.back_us.is_none() && back > pc.after {
+                pc.back_us = Some(self.clock.now_us());
+            }
+            return Ok(());
+        }
+        if self.power_cycle_after.is_none_or(|n| back < n) {
+            return Ok(());
+        }
+        self.quiesce = true;
+        while Instant::now() < deadline {
+            let t = &self.checker.tally;
+            if t.play_back + t.other_back >= self.sent && self.emu.line_idle() {
+                break;
+            }
+            self.pump(TICK)?;
+        }
+        self.quiesce = false;
+        self.clock.release();
+        let on = self.clock.now_us();
+        self.log("sensor side: switched off and on");
+        self.emu.power_on(on);
+        self.sensor_streaming = false;
+        self.power_cycle = Some(super::session::PowerCycle {
+            after: self.checker.tally.play_back,
+            on_us: Some(on),
+            ..Default::default()
+        });
         Ok(())
     }
 
@@ -85,7 +127,8 @@ impl Session {
     /// are late, not lost).
     fn await_rest(&mut self, deadline: Instant) -> Result<Missing> {
         let timed_out = loop {
-            if self.checker.tally.play_back >= self.play_sent {
+            let t = &self.checker.tally;
+            if t.play_back + t.other_back >= self.sent {
                 break false;
             }
             if Instant::now() >= deadline {
@@ -96,17 +139,18 @@ impl Session {
             }
             self.pump(TICK)?;
         };
-        let missing = self.play_sent.saturating_sub(self.checker.tally.play_back);
-        Ok(if timed_out {
-            Missing {
-                lost: 0,
-                late: missing,
-            }
+        let t = &self.checker.tally;
+        let missing = self.play_sent.saturating_sub(t.play_back);
+        let other_lost = (self.sent.saturating_sub(self.play_sent)).saturating_sub(t.other_back);
+        let (lost, late) = if timed_out {
+            (0, missing)
         } else {
-            Missing {
-                lost: missing,
-                late: 0,
-            }
+            (missing, 0)
+        };
+        Ok(Missing {
+            lost,
+            late,
+            other_lost,
         })
     }
 
@@ -148,7 +192,13 @@ impl Session {
             wanted: self.wanted,
             lost: missing.lost,
             late: missing.late,
+            other_lost: missing.other_lost,
             play_sent: self.play_sent,
+            sensor_restarts: self.sensor_restarts,
+            power_cycle: self
+                .power_cycle_after
+                .map(|_| self.power_cycle.unwrap_or_default()),
+            timeout: self.timeout,
             tally: c.tally,
             counters,
             counters_error,

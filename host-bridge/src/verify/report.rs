@@ -6,17 +6,28 @@ use anyhow::{bail, Result};
 use lms_core::telegram::features::Counters;
 
 use super::checker::Tally;
+use super::session::PowerCycle;
+use super::QUIET;
 
 /// The run's outcome.
 #[derive(Debug)]
 pub(super) struct Outcome {
     pub(super) wanted: usize,
     /// Scans of the selection sent and not back although the host line
-    /// went quiet.
+    /// went quiet for [`QUIET`].
     pub(super) lost: usize,
     /// Scans of the selection sent and not back yet at `--timeout`.
     pub(super) late: usize,
+    /// Scans outside the selection (the warm-up) sent and not back.
+    pub(super) other_lost: usize,
     pub(super) play_sent: usize,
+    /// Times the co-processor stopped the sensor's stream while the
+    /// selection played.
+    pub(super) sensor_restarts: usize,
+    /// `--timeout`.
+    pub(super) timeout: Duration,
+    /// `--power-cycle-sensor-after`, if given: what happened.
+    pub(super) power_cycle: Option<PowerCycle>,
     pub(super) tally: Tally,
     pub(super) counters: Option<Counters>,
     pub(super) counters_error: Option<String>,
@@ -26,14 +37,53 @@ pub(super) struct Outcome {
 }
 
 impl Outcome {
+    /// Every scan the sensor side sent and never got back with features.
+    pub(super) fn all_lost(&self) -> usize {
+        self.lost + self.other_lost
+    }
+
+    /// The co-processor's `scans_dropped` disagrees with verify's own count
+    /// of lost scans (only when both are known: no scan still late).
+    fn dropped_miscounted(&self) -> Option<u32> {
+        let c = self.counters.as_ref()?;
+        let counted = usize::try_from(c.scans_dropped).ok()?;
+        (self.late == 0 && counted != self.all_lost()).then_some(c.scans_dropped)
+    }
+
     pub(super) fn ok(&self) -> bool {
         self.tally.problems == 0
-            && self.lost == 0
+            && self.all_lost() == 0
             && self.late == 0
+            && self.sensor_restarts == 0
             && self.tally.play_back >= self.wanted
             && self.tally.play_identical == self.tally.play_back
             && self.tally.other_identical == self.tally.other_back
             && self.counters.is_some()
+            && self.dropped_miscounted().is_none()
+            && self.power_cycle_problem().is_none()
+    }
+
+    /// Longest time from the LMS's power-on to the first scan back (µs).
+    pub(super) const POWER_CYCLE_LIMIT_US: u64 = 1_000_000;
+
+    /// What went wrong with `--power-cycle-sensor-after`, if anything.
+    fn power_cycle_problem(&self) -> Option<String> {
+        let pc = self.power_cycle?;
+        let Some(on) = pc.on_us else {
+            return Some(format!(
+                "the sensor was never power-cycled (fewer than {} scans back)",
+                pc.after
+            ));
+        };
+        match pc.back_us {
+            None => Some("no scan came back after the sensor's power cycle".into()),
+            Some(back) if back - on > Self::POWER_CYCLE_LIMIT_US => Some(format!(
+                "the first scan came back {} ms after the sensor's power cycle (limit {} ms)",
+                (back - on) / 1000,
+                Self::POWER_CYCLE_LIMIT_US / 1000
+            )),
+            Some(_) => None,
+        }
     }
 
     /// `Ok` if the run passed, else an error naming why it failed.
@@ -45,17 +95,43 @@ impl Outcome {
         if self.tally.problems > 0 {
             why.push(format!("{} mismatches", self.tally.problems));
         }
-        if self.lost > 0 {
-            why.push(format!("{} scans lost", self.lost));
-        }
-        if self.tally.play_back < self.wanted {
+        if self.all_lost() > 0 {
             why.push(format!(
-                "{} of {} scans checked before --timeout",
-                self.tally.play_back, self.wanted
+                "{} scans lost (sent by the sensor side, not back although the host line \
+                 was quiet for {} s)",
+                self.all_lost(),
+                QUIET.as_secs()
+            ));
+        }
+        if let Some(counted) = self.dropped_miscounted() {
+            why.push(format!(
+                "the co-processor counted scans_dropped={counted}, verify {} lost",
+                self.all_lost()
+            ));
+        }
+        if self.sensor_restarts > 0 {
+            why.push(format!(
+                "the co-processor restarted the sensor {} times during the run",
+                self.sensor_restarts
+            ));
+        }
+        let secs = self.timeout.as_secs_f64();
+        if self.play_sent < self.wanted {
+            why.push(format!(
+                "--timeout ({secs} s) ran out after {} of {} scans were sent",
+                self.play_sent, self.wanted
+            ));
+        } else if self.late > 0 {
+            why.push(format!(
+                "--timeout ({secs} s) ran out with {} scans still on their way",
+                self.late
             ));
         }
         if let Some(e) = &self.counters_error {
             why.push(format!("no counters at the end: {e}"));
+        }
+        if let Some(p) = self.power_cycle_problem() {
+            why.push(p);
         }
         bail!("verify failed: {}", why.join(", "));
     }
@@ -65,8 +141,14 @@ impl Outcome {
 pub(super) fn report(o: &Outcome) {
     let mut line = format!(
         "host-bridge verify: {}/{} scans bit-identical; {} lost ({} sent by the sensor side, {} back with features)",
-        o.tally.play_identical, o.tally.play_back, o.lost, o.play_sent, o.tally.play_back
+        o.tally.play_identical, o.tally.play_back, o.all_lost(), o.play_sent, o.tally.play_back
     );
+    if o.all_lost() > 0 {
+        line.push_str(&match &o.counters {
+            Some(c) => format!("; the co-processor counted {} dropped", c.scans_dropped),
+            None => "; the co-processor's count is unknown".into(),
+        });
+    }
     if o.late > 0 {
         line.push_str(&format!("; {} still on their way at --timeout", o.late));
     }
@@ -98,6 +180,19 @@ pub(super) fn report(o: &Outcome) {
         ),
         (None, Some(e)) => println!("host-bridge verify: no counters at the end: {e}"),
         (None, None) => {}
+    }
+    if let Some(pc) = o.power_cycle {
+        let ms = |t: Option<u64>| match (t, pc.on_us) {
+            (Some(t), Some(on)) => format!("{:.1} ms", (t - on) as f64 / 1000.0),
+            _ => "never".into(),
+        };
+        println!(
+            "host-bridge verify: sensor power-cycled after {} scans: streaming again after {}, \
+             first scan back after {} (sensor clock)",
+            pc.after,
+            ms(pc.streaming_us),
+            ms(pc.back_us)
+        );
     }
     if let Some(r) = &o.firmware_report {
         println!("host-bridge verify: firmware report: {r}");

@@ -44,7 +44,7 @@ impl EmuClock {
         }
     }
 
-    fn now_us(&self) -> u64 {
+    pub(super) fn now_us(&self) -> u64 {
         let now = self.held_since.unwrap_or_else(Instant::now);
         let t = now.duration_since(self.origin).saturating_sub(self.held);
         u64::try_from(t.as_micros()).unwrap_or(u64::MAX)
@@ -56,20 +56,45 @@ impl EmuClock {
         }
     }
 
-    fn release(&mut self) {
+    pub(super) fn release(&mut self) {
         if let Some(t) = self.held_since.take() {
             self.held += t.elapsed();
         }
     }
 }
 
-/// Both ends of the co-processor and everything verify keeps.
-/// Scans out at once with `--qemu`: whole 361-value `B0`s (732 bytes) that
-/// fit the firmware's 4096-byte sensor receive queue (5 × 732 = 3660). QEMU
-/// drains a UART at about 10 KB/s, a third of the line rate; 8 in flight
-/// (5856 bytes) overflowed the queue and lost 3–4 of 200 scans.
-const QEMU_MAX_IN_FLIGHT: usize = 5;
+/// Bytes the firmware's sensor receive queue holds: `SENSOR_RX_SLOTS` − 1
+/// in `firmware/src/board.rs` (a `heapless::spsc` queue of 4096 slots;
+/// checked against that file by `tests/verify_qemu.rs`).
+pub(super) const FIRMWARE_SENSOR_QUEUE: usize = 4095;
 
+/// Scans out at once with `--qemu` (the default of `--max-in-flight`): as
+/// many whole 361-value `B0`s (732 bytes) as fit the firmware's sensor
+/// receive queue, 4095 / 732 = 5 (3660 bytes). QEMU drains a UART at about
+/// 10 KB/s, a third of the line rate, so the scans not back yet may all be
+/// waiting in that queue; 8 in flight (5856 bytes) overflowed it and lost
+/// 2–6 of 100 scans.
+pub(super) fn qemu_max_in_flight() -> usize {
+    // The count word and 361 value words (the played variant, 180°/0.5°).
+    let data = 2 + 2 * lms_core::Variant::Fov180Res50.beams();
+    let b0 = lms_core::telegram::buffer_len(data, Direction::SensorToHost);
+    (FIRMWARE_SENSOR_QUEUE / b0).max(1)
+}
+
+/// The LMS power cycle of `--power-cycle-sensor-after` (emulator clock, µs).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct PowerCycle {
+    /// Scans of the selection back when it was switched off and on.
+    pub(super) after: usize,
+    /// When it was switched on again.
+    pub(super) on_us: Option<u64>,
+    /// When the co-processor had started its stream again.
+    pub(super) streaming_us: Option<u64>,
+    /// When the first scan of the selection came back after it.
+    pub(super) back_us: Option<u64>,
+}
+
+/// Both ends of the co-processor and everything verify keeps.
 pub(super) struct Session {
     /// First, so that it is dropped first: QEMU is killed before its peers
     /// disconnect (it spins when they do).
@@ -90,6 +115,16 @@ pub(super) struct Session {
     pub(super) max_in_flight: usize,
     /// Nothing more is to be sent (the selection is out, or time is up).
     pub(super) finished: bool,
+    /// Times the co-processor stopped the sensor's stream while the
+    /// selection played (a restart of its bring-up: e.g. its scan time-out).
+    pub(super) sensor_restarts: usize,
+    /// `--timeout`.
+    pub(super) timeout: Duration,
+    /// `--power-cycle-sensor-after`: wanted, and what happened.
+    pub(super) power_cycle_after: Option<usize>,
+    pub(super) power_cycle: Option<PowerCycle>,
+    /// Hold the sensor until nothing is in flight (before the power cycle).
+    pub(super) quiesce: bool,
     pub(super) framer: Framer,
     pub(super) assembler: FeatureAssembler,
     /// The last `B0` on the host line, waiting for its features.
@@ -117,7 +152,7 @@ impl Session {
         let wanted = source.len();
         let emu = Emulator::new(source, Settings::default(), clock.now_us());
         let max_in_flight = args.max_in_flight.unwrap_or(if args.qemu.is_some() {
-            QEMU_MAX_IN_FLIGHT
+            qemu_max_in_flight()
         } else {
             0
         });
@@ -135,6 +170,11 @@ impl Session {
             wanted,
             max_in_flight,
             finished: false,
+            sensor_restarts: 0,
+            timeout: Duration::from_secs_f64(args.timeout),
+            power_cycle_after: args.power_cycle_sensor_after,
+            power_cycle: None,
+            quiesce: false,
             framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
             assembler: FeatureAssembler::new(),
             pending_b0: None,
@@ -207,8 +247,12 @@ impl Session {
     /// docs).
     fn update_hold(&mut self) {
         let armed = self.emu.source().armed();
-        let in_flight = self.play_sent.saturating_sub(self.checker.tally.play_back);
+        // Every scan not back, the warm-up scan too: they may all sit in
+        // the firmware's sensor queue.
+        let tally = &self.checker.tally;
+        let in_flight = self.sent.saturating_sub(tally.play_back + tally.other_back);
         let hold = self.finished
+            || self.quiesce
             || (self.sensor_streaming && !armed)
             || (armed && self.play_sent >= self.wanted)
             || (armed && self.max_in_flight > 0 && in_flight >= self.max_in_flight);
@@ -239,12 +283,24 @@ impl Session {
                     }
                     EmuEvent::StreamStarted => {
                         self.sensor_streaming = true;
+                        if let Some(pc) = self.power_cycle.as_mut() {
+                            pc.streaming_us.get_or_insert(self.clock.now_us());
+                        }
                         // Held until the client's stream is on.
                         self.update_hold();
                         self.log("sensor stream started (bring-up done)");
                     }
                     EmuEvent::StreamStopped => {
                         self.sensor_streaming = false;
+                        if self.emu.source().armed() && !self.finished {
+                            self.sensor_restarts += 1;
+                            eprintln!(
+                                "host-bridge verify: the co-processor stopped the sensor's stream \
+                                 while the selection played ({} scans sent): it restarted its \
+                                 bring-up",
+                                self.play_sent
+                            );
+                        }
                         self.log("sensor stream stopped by the co-processor");
                     }
                     EmuEvent::ScanSent { .. } => {

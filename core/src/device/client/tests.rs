@@ -50,8 +50,13 @@ fn ack_then_reply() {
     assert_eq!(c.deadline_us(), Some(1_100));
     assert!(feed_all(&mut c, &[ACK], 500).is_empty());
     assert_eq!(c.deadline_us(), Some(5_500));
-    assert_eq!(feed_all(&mut c, &a0(), 600), [Outcome::Reply]);
-    assert_eq!(c.telegram_bytes(), &a0()[..]);
+    let reply = a0();
+    let (outcome, rest) = c.feed(&reply, 600);
+    assert_eq!((outcome, rest.len()), (Some(Outcome::Reply), 0));
+    // Read in place in the framer, until the next feed.
+    assert_eq!(c.telegram_bytes(), &reply[..]);
+    assert_eq!(c.feed(&[], 600).0, None);
+    assert_eq!(c.telegram_bytes(), &[] as &[u8]);
     assert_eq!(c.deadline_us(), None);
     assert_eq!(c.stats().sent, 1);
     assert_eq!(c.stats().missing_acks, 0);
@@ -140,11 +145,18 @@ fn the_stream_takes_scans_and_counts_bad_ones() {
     // 180 values at 9600 Bd: 383 ms per scan.
     let mut buf = [0u8; 4096];
     let n = emu.transmit(2_000_000, &mut buf);
-    let outcomes = feed_all(&mut c, &buf[..n], 2_000_000);
+    let (mut outcomes, mut input) = (Vec::new(), &buf[..n]);
+    while let (Some(o), rest) = c.feed(input, 2_000_000) {
+        input = rest;
+        outcomes.push(o);
+        if o == Outcome::Scan {
+            assert_eq!(c.telegram().command(), 0xB0);
+            assert_eq!(c.telegram_bytes().len(), 10 + 2 * 181);
+        }
+    }
     assert!(outcomes.len() >= 4, "{outcomes:?}");
     assert_eq!(outcomes[0], Outcome::PowerOn);
     assert!(outcomes[1..].iter().all(|&o| o == Outcome::Scan));
-    assert_eq!(c.telegram().command(), 0xB0);
     // The power-on telegram and the A0 were not scans; the ACK is noise.
     assert_eq!(c.framer_stats().bytes_skipped, 1);
     assert_eq!(c.stats().ignored, 2);

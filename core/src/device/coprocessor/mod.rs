@@ -45,11 +45,13 @@ pub struct LatestScan {
 }
 
 impl LatestScan {
+    /// Every byte zero (no scan yet; the variant is set by
+    /// [`CoProcessor::configure`]).
     const fn new() -> Self {
         LatestScan {
-            values: [8191; MAX_VALUES],
+            values: [0; MAX_VALUES],
             count: 0,
-            variant: Variant::Fov180Res50,
+            variant: Variant::Fov180Res100,
             counters: Counters {
                 scans_in: 0,
                 feature_scans_out: 0,
@@ -142,6 +144,8 @@ pub struct CoProcessor {
     beams: u16,
     /// The latest scan in metres, decoded in place.
     frame: Frame,
+    /// [`CoProcessor::configure`] has run.
+    configured: bool,
 }
 
 impl CoProcessor {
@@ -150,22 +154,43 @@ impl CoProcessor {
     /// passing through the stack; call [`CoProcessor::start`] before the
     /// first poll.
     pub const fn new(params: ValidParams, setup: SensorSetup) -> Self {
-        let mut settings = Settings::DEFAULT;
-        settings.variant = setup.variant;
-        settings.external_scans = true;
-        let mut latest = LatestScan::new();
-        latest.variant = setup.variant;
+        let mut cop = CoProcessor::unconfigured();
+        cop.configure(params, setup);
+        cop
+    }
+
+    /// A co-processor with nothing set: every byte zero, so that a `static`
+    /// of it lands in `.bss` (no flash image, nothing copied at boot).
+    /// [`configure`](CoProcessor::configure) it before
+    /// [`start`](CoProcessor::start); until then [`poll`](CoProcessor::poll)
+    /// touches no port.
+    pub const fn unconfigured() -> Self {
         CoProcessor {
-            params,
-            link: SensorLink::new(setup),
+            params: ValidParams::UNSET,
+            link: SensorLink::zeroed(),
             extractor: Extractor::new(),
-            host: Emulator::off(latest, settings),
+            host: Emulator::unpowered(LatestScan::new()),
             counters: LatestScan::new().counters,
             scan_counter: 0,
             have_features: false,
             beams: 0,
-            frame: Frame::empty(),
+            frame: Frame::zeroed(),
+            configured: false,
         }
+    }
+
+    /// Set the parameters and the sensor set-up of an
+    /// [`unconfigured`](CoProcessor::unconfigured) co-processor (in place,
+    /// no copy through the stack).
+    pub const fn configure(&mut self, params: ValidParams, setup: SensorSetup) {
+        let mut settings = Settings::DEFAULT;
+        settings.variant = setup.variant;
+        settings.external_scans = true;
+        self.params = params;
+        self.link.configure(setup);
+        self.host.set_settings(settings);
+        self.host.source_mut().variant = setup.variant;
+        self.configured = true;
     }
 
     /// Switch the host-side face on at `now_us`: like an LMS at power-on it
@@ -190,9 +215,18 @@ impl CoProcessor {
     }
 
     /// Count bytes the board lost before they reached [`CoProcessor::poll`]
-    /// (receive queue overflow): the scan they belonged to is dropped.
+    /// (receive queue overflow), when it does not know how many: one scan
+    /// dropped. Prefer [`note_sensor_lost`](CoProcessor::note_sensor_lost).
     pub fn note_sensor_overflow(&mut self) {
         self.counters.scans_dropped = self.counters.scans_dropped.wrapping_add(1);
+    }
+
+    /// `bytes` from the sensor were lost before they reached
+    /// [`CoProcessor::poll`] (receive queue overflow, overrun): every scan
+    /// they cut is counted in `scans_dropped` (see
+    /// [`SensorLink::take_missed`]).
+    pub fn note_sensor_lost(&mut self, bytes: u32) {
+        self.link.note_lost(bytes);
     }
 
     /// Move bytes both ways, process every complete scan, answer the host.
@@ -210,6 +244,9 @@ impl CoProcessor {
         H: Read + ReadReady + Write,
     {
         let mut outcome = PollOutcome::default();
+        if !self.configured {
+            return Ok(outcome);
+        }
         let mut buf = [0u8; MAX_TELEGRAM_LEN];
 
         // 1. Host requests into the emulator; its replies out.
@@ -249,12 +286,17 @@ impl CoProcessor {
             }
         }
 
-        // 3. The next bring-up request, if one is due.
-        if let Some(request) = self
-            .link
-            .due_request(now_us, &mut buf)
-            .and_then(|n| buf.get(..n))
-        {
+        // 3. Time-outs: the baud search's next rate, a silent stream.
+        if let Some(LinkEvent::SwitchBaud(b)) = self.link.poll(now_us) {
+            outcome.sensor_baud = Some(b);
+        }
+        // 4. The next bring-up request, if one is due (none in a poll that
+        // switches the sensor UART: the board switches after it returns).
+        let due = match outcome.sensor_baud {
+            Some(_) => None,
+            None => self.link.due_request(now_us, &mut buf),
+        };
+        if let Some(request) = due.and_then(|n| buf.get(..n)) {
             sensor.write_all(request).map_err(PollError::Sensor)?;
         }
         self.sync_counters();
@@ -348,6 +390,8 @@ impl CoProcessor {
 
     /// Copy the framer counters into [`Counters`] and the host-visible copy.
     fn sync_counters(&mut self) {
+        let missed = self.link.take_missed();
+        self.counters.scans_dropped = self.counters.scans_dropped.wrapping_add(missed);
         let s = self.link.framer_stats();
         self.counters.sensor_crc_errors = s.crc_errors;
         self.counters.sensor_resyncs = s.resyncs;

@@ -246,10 +246,42 @@ impl<S: ScanSource> Emulator<S> {
         }
     }
 
+    /// [`Emulator::off`] with every byte zero but the source's (settings
+    /// zero, mode `00`), for an all-zero `static`: [`set_settings`], then
+    /// [`power_on`] sets the rest.
+    ///
+    /// [`set_settings`]: Emulator::set_settings
+    /// [`power_on`]: Emulator::power_on
+    pub const fn unpowered(source: S) -> Self {
+        let zero = Settings {
+            address: 0,
+            variant: Variant::Fov180Res100,
+            config: Config::ZERO,
+            status: 0,
+            restart_us: 0,
+            external_scans: false,
+        };
+        let mut emulator = Emulator::off(source, zero);
+        emulator.mode = OperatingMode::Installation;
+        emulator.framer.set_handshake(Handshake::Expected);
+        emulator
+    }
+
+    /// Replace the settings of an emulator that is off (before
+    /// [`Emulator::power_on`]; `const`, for a face built all-zero in a
+    /// `static` and configured at start-up).
+    pub const fn set_settings(&mut self, settings: Settings) {
+        self.settings = settings;
+        self.settings.address &= 0x7F;
+        self.variant = settings.variant;
+        self.config = settings.config;
+    }
+
     /// Switch the sensor off and on at `now_us`: whatever was queued or on
     /// the line is lost; 9600 Bd, mode `25`, the power-on variant, the `90`
     /// telegram. The configuration is kept (EEPROM).
     pub fn power_on(&mut self, now_us: u64) {
+        self.framer.set_handshake(Handshake::Ignored);
         self.set_baud(Baud::B9600);
         self.mode = OperatingMode::OnRequest;
         self.variant = self.settings.variant;
@@ -354,7 +386,7 @@ impl<S: ScanSource> Emulator<S> {
     }
 
     /// The scan source, to change it.
-    pub fn source_mut(&mut self) -> &mut S {
+    pub const fn source_mut(&mut self) -> &mut S {
         &mut self.source
     }
 }

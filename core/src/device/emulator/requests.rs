@@ -254,7 +254,7 @@ impl<S: ScanSource> Emulator<S> {
         if let Some(stream) = self.stream.as_mut() {
             *stream = Stream {
                 start_us: now_us,
-                last: None,
+                sent: 0,
             };
         }
     }

@@ -61,11 +61,19 @@ pub(super) struct Pending {
 pub(super) struct Stream {
     /// Time of scan 0 (µs).
     pub(super) start_us: u64,
-    /// Index of the last scan sent.
-    pub(super) last: Option<u64>,
+    /// Index of the last scan sent plus one, 0 before the first. Not an
+    /// `Option`: `None` of an `Option<Stream>` would then take the tag's
+    /// niche (a non-zero byte), and the co-processor's face must be all
+    /// zero in a `static`.
+    pub(super) sent: u64,
 }
 
 impl Stream {
+    /// Index of the last scan sent.
+    fn last(&self) -> Option<u64> {
+        self.sent.checked_sub(1)
+    }
+
     /// Time scan `k` is complete (µs).
     fn tick_us(&self, k: u64, turns: u64) -> u64 {
         let offset = k.saturating_mul(turns * TURN_US_TIMES_3) / 3;
@@ -79,7 +87,7 @@ impl Stream {
         let free = free_us.max(self.start_us);
         let elapsed = free.saturating_sub(self.start_us);
         let newest = elapsed.saturating_mul(3) / (turns * TURN_US_TIMES_3);
-        let k = match self.last {
+        let k = match self.last() {
             Some(last) if newest <= last => last.saturating_add(1),
             _ => newest,
         };
@@ -163,7 +171,7 @@ impl<S: ScanSource> Emulator<S> {
                     } else {
                         self.stream = Some(Stream {
                             start_us: end,
-                            last: None,
+                            sent: 0,
                         });
                     }
                     self.event(Event::StreamStarted);
@@ -227,11 +235,11 @@ impl<S: ScanSource> Emulator<S> {
         if tick > now_us {
             return;
         }
-        let skipped = match stream.last {
+        let skipped = match stream.last() {
             Some(last) => k.saturating_sub(last).saturating_sub(1),
             None => k,
         };
-        stream.last = Some(k);
+        stream.sent = k.saturating_add(1);
         let skipped = u32::try_from(skipped).unwrap_or(u32::MAX);
         self.start_scan(
             tick,
