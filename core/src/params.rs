@@ -201,6 +201,9 @@ impl ValidParams {
         corner_gap: 0.0,
         min_corner_angle_deg: 0.0,
         split_depth: 0,
+        max_range: 0.0,
+        merge_collinear: false,
+        max_alpha_sd_deg: 0.0,
     });
 
     /// The parameters.
