@@ -90,6 +90,13 @@ declare_stats! {
     /// Split before reject: pieces dropped because they are still not one
     /// straight line (a circle explains them, or the depth is reached).
     split_rejected,
+    /// Beams with a range at or beyond `Params::max_range` (ALGORITHM.md v2
+    /// §1: fill values, another mode's error codes), made invalid. Not in
+    /// `valid_beams`; not carried by the `D0` telegram.
+    beyond_max_range,
+    /// Lines dropped because the standard deviation of their α exceeds
+    /// `Params::max_alpha_sd_deg` (off by default). Not in `D0`.
+    rejected_wide,
 }
 
 impl Stats {

@@ -67,7 +67,7 @@ pub use features::{
 };
 pub use frame::MAX_BEAMS;
 pub use frame::{Beam, Frame, Geometry, Invalid, Variant};
-pub use params::{ParamError, Params, ValidParams};
+pub use params::{DataProfile, DataSurvey, ParamError, Params, RangeMode, ValidParams};
 pub use pipeline::extractor::Extractor;
 pub use pipeline::line_fit::FitError;
 pub use units::Unit;

@@ -3,6 +3,9 @@
 
 use core::fmt;
 
+mod data;
+pub use data::{max_range_of, sigma_for_step, DataProfile, DataSurvey, RangeMode};
+
 /// All tunable parameters. Build with [`Params::default`] and adjust the
 /// fields; [`Params::validate`] refuses nonsense and gives the
 /// [`ValidParams`] the pipeline runs with.
@@ -24,11 +27,11 @@ pub struct Params {
     /// Shortest accepted line, endpoint to endpoint (m). Default 0.1.
     pub min_length: f32,
     /// Fit each line to all points of its segment, including a corner point
-    /// shared with the neighbouring segment (§6–7, default `true`). With
-    /// `false` the shared point is left out of both fits: it lies on neither
-    /// line exactly, and including it makes the corner covariance
+    /// shared with the neighbouring segment (§7.5). Default `false`
+    /// (ALGORITHM.md v2): the shared point is left out of both fits: it lies
+    /// on neither line exactly, and including it makes the corner covariance
     /// over-confident (measured corner NEES 2.73 with it, 1.92 without, on
-    /// 400 draws of a 90° corner at σ = 5 mm; ideal 2).
+    /// 400 draws of a 90° corner at σ = 5 mm; ideal 2). `true` is v1.
     pub fit_shared_points: bool,
     /// Merge consecutive agreeing lines (§7.6). Default on.
     pub merge: bool,
@@ -42,13 +45,30 @@ pub struct Params {
     /// Smallest angle between lines for a well-conditioned corner (degrees,
     /// 0..=90). Default 30.
     pub min_corner_angle_deg: f32,
-    /// Split before reject (not in ALGORITHM.md; proposal P1 of
-    /// docs/evaluation/FINDINGS.md): how many levels a segment that is not one straight
-    /// line may be split at its farthest point before the §7 gates
-    /// ([`crate::pipeline::split`]). 0 (the default) is the spec; 8 is the evaluated
-    /// proposal (TruePos 0.66 → 0.97 at σ = 20 mm). At most
+    /// Split before reject (ALGORITHM.md v2 §7.4): how many levels a
+    /// segment that is not one straight line may be split at its farthest
+    /// point before the §7 gates ([`crate::pipeline::split`]). Default 8
+    /// (TruePos 0.66 → 0.97 at σ = 20 mm); 0 is v1. At most
     /// [`MAX_SPLIT_DEPTH`].
     pub split_depth: u8,
+    /// Largest true range (m, ALGORITHM.md v2 §1): a beam at or beyond it is
+    /// invalid (counted in `Stats::beyond_max_range`), so fill values of
+    /// recorded logs never become walls. Default 81.83 m, the largest true
+    /// range of any LMS 2xx unit and mode (cm); [`Params::for_data`] gives
+    /// the value of a unit and range mode ([`max_range_of`]). `+inf` turns
+    /// the limit off (v1).
+    pub max_range: f32,
+    /// Merge consecutive lines that are nearly collinear and touch (facing
+    /// endpoints closer than `corner_gap`, normals less than
+    /// `min_corner_angle_deg` apart) when the refit of their union passes
+    /// `max_chi2`, even where the §7.6 gates keep them apart (beyond
+    /// ALGORITHM.md, issue 14 item 6: otherwise an ill-conditioned "corner"
+    /// is reported between two pieces of one wall). Default on; off in v1.
+    pub merge_collinear: bool,
+    /// Largest standard deviation of a line's α (degrees): a line less
+    /// certain than this is dropped and counted (`Stats::rejected_wide`;
+    /// beyond ALGORITHM.md, issue 14 item 6). `+inf` keeps every line (v1).
+    pub max_alpha_sd_deg: f32,
 }
 
 impl Default for Params {
@@ -58,7 +78,7 @@ impl Default for Params {
 }
 
 impl Params {
-    /// The defaults of ALGORITHM.md, usable in `const` contexts.
+    /// The defaults of ALGORITHM.md v2, usable in `const` contexts.
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
@@ -67,13 +87,27 @@ impl Params {
         min_points: 5,
         max_chi2: 4.0,
         min_length: 0.1,
-        fit_shared_points: true,
+        fit_shared_points: false,
         merge: true,
         merge_gap_beams: 3,
         merge_gate: 9.21,
         corner_gap: 0.2,
         min_corner_angle_deg: 30.0,
+        split_depth: 8,
+        max_range: max_range_of(crate::Unit::Centimetre, RangeMode::Bits13),
+        merge_collinear: true,
+        max_alpha_sd_deg: 5.0 / 3.0,
+    };
+
+    /// ALGORITHM.md v1: no split before reject, shared corner points in
+    /// both fits, no range limit beyond the sensor's error codes.
+    pub const V1: Params = Params {
+        fit_shared_points: true,
         split_depth: 0,
+        max_range: f32::INFINITY,
+        merge_collinear: false,
+        max_alpha_sd_deg: f32::INFINITY,
+        ..Params::DEFAULT
     };
 }
 
@@ -110,6 +144,10 @@ pub enum ParamError {
     MinCornerAngle,
     /// `split_depth` must be at most [`MAX_SPLIT_DEPTH`].
     SplitDepth,
+    /// `max_range` must be > 0 (`+inf` allowed).
+    MaxRange,
+    /// `max_alpha_sd_deg` must be > 0 (`+inf` allowed).
+    MaxAlphaSd,
 }
 
 impl fmt::Display for ParamError {
@@ -126,6 +164,8 @@ impl fmt::Display for ParamError {
             ParamError::CornerGap => "corner_gap must be finite and >= 0 (metres)",
             ParamError::MinCornerAngle => "min_corner_angle_deg must be between 0 and 90",
             ParamError::SplitDepth => "split_depth must be at most 16",
+            ParamError::MaxRange => "max_range must be > 0 (metres; inf for no limit)",
+            ParamError::MaxAlphaSd => "max_alpha_sd_deg must be > 0 (degrees; inf for no limit)",
         })
     }
 }
@@ -161,6 +201,9 @@ impl ValidParams {
         corner_gap: 0.0,
         min_corner_angle_deg: 0.0,
         split_depth: 0,
+        max_range: 0.0,
+        merge_collinear: false,
+        max_alpha_sd_deg: 0.0,
     });
 
     /// The parameters.
@@ -239,6 +282,12 @@ impl Params {
         }
         if self.split_depth > MAX_SPLIT_DEPTH {
             return Err(ParamError::SplitDepth);
+        }
+        if !(self.max_range > 0.0) {
+            return Err(ParamError::MaxRange);
+        }
+        if !(self.max_alpha_sd_deg > 0.0) {
+            return Err(ParamError::MaxAlphaSd);
         }
         Ok(ValidParams(*self))
     }

@@ -56,15 +56,13 @@ mod app {
     /// flash image, nothing copied at boot); [`start`] configures it in place.
     pub const INITIAL: App = CoProcessor::unconfigured();
 
-    /// The defaults of ALGORITHM.md with the passes of this build,
-    /// validated at compile time (an invalid setting fails the build).
+    /// The defaults of ALGORITHM.md v2 (split before reject, unshared
+    /// corner points; the feature `split-before-reject` is now the
+    /// default) with the passes of this build, validated at compile time
+    /// (an invalid setting fails the build).
     const PARAMS: ValidParams = {
         let mut p = Params::DEFAULT;
         p.iterations = crate::ITERATIONS;
-        if cfg!(feature = "split-before-reject") {
-            p.split_depth = 8;
-            p.fit_shared_points = false;
-        }
         match p.validate() {
             Ok(valid) => valid,
             Err(_) => panic!("the build's parameters are invalid (LMS_ITERATIONS?)"),

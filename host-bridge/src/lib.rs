@@ -32,6 +32,7 @@ pub mod capture;
 pub mod carmen;
 pub mod client;
 pub mod coprocessor;
+pub mod defaults;
 pub mod emulated_link;
 pub mod extract;
 pub mod input;

@@ -149,7 +149,6 @@ fn check_output(output: &Path, input: Option<&Path>) -> Result<()> {
 
 fn run_extract(args: ExtractArgs) -> Result<()> {
     let started = Instant::now();
-    let params = args.params.to_params()?;
     let range = args.frames.unwrap_or_default();
     if let Some(output) = &args.output {
         check_output(output, args.log.as_deref())?;
@@ -158,6 +157,19 @@ fn run_extract(args: ExtractArgs) -> Result<()> {
     let mut file = match &args.log {
         Some(path) => Some(input::open(path, args.unit)?),
         None => None,
+    };
+    // Defaults per data for a CARMEN log (σ, max_range; flags override).
+    let params = match &args.log {
+        Some(path) => match host_bridge::defaults::for_log(path, args.unit, &args.params)? {
+            Some((params, warning)) => {
+                if let Some(w) = warning {
+                    let _ = writeln!(io::stderr(), "host-bridge extract: {w}");
+                }
+                params
+            }
+            None => args.params.to_params()?,
+        },
+        None => args.params.to_params()?,
     };
 
     let (out, out_name): (Box<dyn Write>, String) = match &args.output {

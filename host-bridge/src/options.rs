@@ -81,21 +81,35 @@ pub struct ParamArgs {
     #[arg(long)]
     pub no_merge: bool,
     /// Leave a corner point shared by two segments out of both line fits
-    /// (better calibrated corner covariances; docs/evaluation/FINDINGS.md P2)
-    #[arg(long)]
+    /// (the default of ALGORITHM.md v2; kept for old command lines)
+    #[arg(long, conflicts_with = "shared_points")]
     pub no_shared_points: bool,
+    /// Fit a corner point shared by two segments into both lines
+    /// (ALGORITHM.md v1)
+    #[arg(long)]
+    pub shared_points: bool,
     /// Split before reject: levels a segment that is not one straight line
-    /// may be split before the chi2 gate (docs/evaluation/FINDINGS.md P1; 8 is the
-    /// evaluated proposal) [default: 0, as ALGORITHM.md]
+    /// may be split before the chi2 gate; 0 is ALGORITHM.md v1 [default: 8]
     #[arg(long, value_name = "LEVELS",
           value_parser = clap::value_parser!(u8).range(..=i64::from(lms_core::params::MAX_SPLIT_DEPTH)))]
     pub split_depth: Option<u8>,
+    /// Largest true range (m): beams at or beyond it are invalid (fill
+    /// values); inf for no limit [default: the data's unit and range mode,
+    /// 81.83 m for cm data]
+    #[arg(long, value_name = "M")]
+    pub max_range: Option<f32>,
 }
 
 impl ParamArgs {
     /// The parameters, checked with [`Params::validate`].
     pub fn to_params(&self) -> Result<Params> {
-        let d = Params::default();
+        self.to_params_over(Params::default())
+    }
+
+    /// The parameters given, the others from `d` (e.g. the defaults for
+    /// the data, [`lms_core::DataProfile::params`]), checked with
+    /// [`Params::validate`].
+    pub fn to_params_over(&self, d: Params) -> Result<Params> {
         let p = Params {
             iterations: self.iterations.unwrap_or(d.iterations),
             q: self.q.unwrap_or(d.q),
@@ -104,8 +118,10 @@ impl ParamArgs {
             min_points: self.min_points.unwrap_or(d.min_points),
             max_chi2: self.max_chi2.unwrap_or(d.max_chi2),
             merge: !self.no_merge,
-            fit_shared_points: !self.no_shared_points,
+            fit_shared_points: self.shared_points
+                || (!self.no_shared_points && d.fit_shared_points),
             split_depth: self.split_depth.unwrap_or(d.split_depth),
+            max_range: self.max_range.unwrap_or(d.max_range),
             ..d
         };
         p.validate()

@@ -25,11 +25,16 @@
 pub mod baselines;
 pub mod charts;
 pub mod figures;
+pub mod maptruth;
 pub mod metrics;
 pub mod real;
+pub mod realfigures;
+pub mod realistic;
+pub mod realtruth;
 pub mod report;
 pub mod scale;
 pub mod scenes;
+pub mod sensorfit;
 pub mod variants;
 
 use std::io::IsTerminal;
@@ -87,6 +92,74 @@ pub struct EvaluateArgs {
     pub no_plots: bool,
 }
 
+/// Options of `lms-lab truth`.
+#[derive(Args, Clone, Debug)]
+pub struct TruthArgs {
+    /// Folder real-truth.md and its figures are written to (created if missing)
+    #[arg(long, short, value_name = "DIR", default_value = "evaluation")]
+    pub output: PathBuf,
+    /// Folder of CARMEN logs (*.log.gz)
+    #[arg(long, value_name = "DIR", default_value = "../shared/data/carmen")]
+    pub data: PathBuf,
+    /// Use every K-th frame of each log (the map is built from all)
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    pub every: usize,
+    /// Write no figures
+    #[arg(long)]
+    pub no_plots: bool,
+    /// Synthetic scans per scene family and σ₀ from the realistic sensor model (0: none)
+    #[arg(long, value_name = "N", default_value_t = 100)]
+    pub synthetic_scans: usize,
+}
+
+/// The issue-14 parts of the report (sections 5–7).
+#[derive(Clone, Debug, Default)]
+pub struct Issue14 {
+    /// Real logs against map-derived truth.
+    pub truth: Vec<realtruth::LogTruth>,
+    /// The sensor model fitted to each log.
+    pub fits: Vec<sensorfit::LogFit>,
+    /// Synthetic scenes from the realistic model: (σ₀, method, tally).
+    pub realistic: Vec<(f64, String, metrics::Tally)>,
+    /// Scans per family and σ₀ of `realistic`.
+    pub realistic_scans: usize,
+}
+
+impl Issue14 {
+    /// Sections 5–7 in Markdown (those that ran).
+    pub fn markdown(&self, every: usize) -> String {
+        let mut md = String::new();
+        if !self.truth.is_empty() {
+            md.push_str(&realtruth::markdown(&self.truth, every));
+            md.push('\n');
+        }
+        if !self.fits.is_empty() {
+            md.push_str(&sensorfit::markdown(&self.fits));
+            md.push('\n');
+        }
+        if !self.realistic.is_empty() {
+            md.push_str(&realistic::markdown(&self.realistic, self.realistic_scans));
+            md.push('\n');
+        }
+        md
+    }
+}
+
+/// Synthetic scans drawn from each log's fitted sensor model.
+pub const SENSOR_FIT_SCANS: usize = 60;
+
+/// `lms-lab truth`: the map-truth evaluation of the real logs alone.
+pub fn run_truth(args: &TruthArgs) -> Result<()> {
+    let started = Instant::now();
+    let path = realtruth::run_standalone(args)?;
+    eprintln!(
+        "lms-lab truth: wrote {} ({:.1} s)",
+        path.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
 /// How a method cuts a scan into segments.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Kind {
@@ -136,11 +209,13 @@ impl Method {
         }
     }
 
-    /// The parameters for scans with noise `sigma`.
+    /// The parameters for scans with noise `sigma`: ALGORITHM.md v1's
+    /// defaults ([`Params::V1`], "the spec" of every table; the baselines
+    /// and variants replicate its back end) with σ, then the method's changes.
     pub fn params(&self, sigma: f64) -> Params {
         (self.adjust)(Params {
             sigma: sigma as f32,
-            ..Params::default()
+            ..Params::V1
         })
     }
 
@@ -527,6 +602,20 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let scale = scale::run(args, &bar)?;
     let t2 = Instant::now();
     let (real, left_out) = real::run(args, &logs, &bar)?;
+    // The map truth and the sensor fit read only the logs that could be read.
+    let logs: Vec<_> = logs
+        .into_iter()
+        .filter(|p| {
+            !left_out
+                .iter()
+                .any(|(name, _)| *name == p.display().to_string())
+        })
+        .collect();
+    let truth_figures =
+        (!args.no_plots && report::fonts_available()).then_some(args.output.as_path());
+    let truth = realtruth::run_logs(&logs, args.real_every, truth_figures, &bar)?;
+    let fits = sensorfit::run(&logs, SENSOR_FIT_SCANS.min(args.scans))?;
+    let realistic = realistic::run(args.scans, args.seed, &bar)?;
     let t3 = Instant::now();
     bar.set_message("writing the report");
     let timing = report::Timing {
@@ -535,7 +624,13 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         real: (t3 - t2).as_secs_f64(),
         total: started.elapsed().as_secs_f64(),
     };
-    let path = report::write(args, &synthetic, &scale, &real, timing)?;
+    let issue14 = Issue14 {
+        truth,
+        fits,
+        realistic,
+        realistic_scans: args.scans,
+    };
+    let path = report::write(args, &synthetic, &scale, (&real, &issue14), timing)?;
     append_left_out(&path, &left_out)?;
     bar.finish_and_clear();
     ensure!(

@@ -27,12 +27,16 @@ enum Command {
     /// space, two baselines and real scans; write the tables and SVG
     /// figures of a Markdown report into a folder
     Evaluate(lms_lab::EvaluateArgs),
+    /// Real scans against truth from each log's SLAM map (the real-scan
+    /// part of `evaluate` alone): writes DIR/real-truth.md and figures
+    Truth(lms_lab::TruthArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Evaluate(args) => lms_lab::run(&args),
+        Command::Truth(args) => lms_lab::run_truth(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

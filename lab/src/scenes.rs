@@ -61,7 +61,7 @@ impl Family {
         }
     }
 
-    fn salt(self) -> u64 {
+    pub(crate) fn salt(self) -> u64 {
         match self {
             Family::RandomRoom => 0x1000_0000,
             Family::Corridor => 0x2000_0000,

@@ -28,7 +28,7 @@ fn evaluate_back_end_and_smoothing_replicas_match_the_core_bit_for_bit() {
                     sigma: sigma as f32,
                     fit_shared_points: shared,
                     iterations,
-                    ..Params::default()
+                    ..Params::V1
                 };
                 let tables = Tables::for_frame(&s.frame);
                 let f = ex.run(&s.frame, &params.validate().unwrap()).clone();

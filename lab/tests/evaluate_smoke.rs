@@ -69,6 +69,7 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
         "## 3. Scale space: passes and q",
         "**Against passes (q = 0).**",
         "## 4. Real scans",
+        "## 7. Synthetic scenes from the realistic sensor model",
         "[FINDINGS.md](FINDINGS.md)",
         "## Reproduce",
         "cargo run --release -p lms-lab -- evaluate -o docs/evaluation",
@@ -99,6 +100,18 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
     );
     if have_log {
         assert!(md.contains("| csail-corrected.log.gz | 5 × 361 (cm) | spec (defaults) |"));
+        // The map-derived truth: the map from all 406 frames, 5 scored.
+        assert!(md.contains("## 5. Real scans against map-derived truth"));
+        assert!(
+            md.contains("| csail-corrected.log.gz (cm) | 5 |"),
+            "truth table"
+        );
+        assert!(md.contains("| csail-corrected.log.gz · defaults, no flags (v2, per data) |"));
+        assert!(md.contains("## 6. Sensor model fitted to the real logs"));
+        assert!(
+            md.contains("| csail-corrected.log.gz | 361 | 10 |"),
+            "fit table"
+        );
     }
     if host_bridge::plot::find_font().is_some() {
         for f in [
@@ -118,6 +131,12 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
                 .filter(|e| e.file_name().to_string_lossy().starts_with("real-csail"))
                 .collect();
             assert_eq!(real.len(), 1);
+            let truth = std::fs::read_dir(&out)
+                .unwrap()
+                .filter_map(|e| e.ok())
+                .filter(|e| e.file_name().to_string_lossy().starts_with("truth-csail"))
+                .count();
+            assert_eq!(truth, 1);
         }
     }
     let _ = std::fs::remove_dir_all(&out);

@@ -21,6 +21,10 @@
 //! 5. [`noise`] — a [`NoiseModel`] (Gaussian σ, dropouts, mm/cm
 //!    quantisation) turns a [`TrueScan`] into [`Reading`]s, which convert to
 //!    LMS raw values (error code 8191 for no echo) or `f32` metres.
+//! 6. [`lms`] — [`LmsModel`], a sensor that looks like a real LMS: the
+//!    interleaved mirror turns with platform motion, beam footprint and
+//!    mixed pixels, incidence-dependent noise, quantisation (mm, cm, 5 cm),
+//!    each mode's error codes and the fill values logs use, dropouts.
 //!
 //! ```
 //! use lms_scene::{Bearings, NoiseModel, Pose, Scene, seeded_rng};
@@ -38,6 +42,7 @@
 pub mod bearings;
 mod builtin;
 pub mod geometry;
+pub mod lms;
 pub mod noise;
 pub mod scene;
 pub mod truth;
@@ -47,6 +52,7 @@ mod tests;
 
 pub use bearings::Bearings;
 pub use geometry::{wrap_angle, Point, PolarLine, Pose};
+pub use lms::{LmsModel, LogMode, LogValue, NoEcho};
 pub use noise::{
     quantise, to_f32_metres, to_raw, NoiseModel, Reading, Unit, NO_RETURN_F32, RAW_ABOVE_MAX,
     RAW_NO_ECHO,

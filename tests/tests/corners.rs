@@ -106,7 +106,9 @@ fn summary(v: &[f64]) -> (f64, f64) {
 #[test]
 fn a_right_angle_corner_is_found_with_an_honest_covariance() {
     const DRAWS: usize = 400;
-    let params = Params::default();
+    // "As extracted" is ALGORITHM.md v1 (the shared beam in both fits, no
+    // split before reject); the v2 default is the refit below.
+    let params = Params::V1;
     let mut rng = ChaCha8Rng::seed_from_u64(90);
     let mut ex = Extractor::new();
     let mut ex_excluding = Extractor::new();
@@ -143,11 +145,9 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
         );
         as_extracted.push(nees(e, &c.cov));
 
-        // The extractor's option that leaves the shared beam out of both fits.
-        let excluding = Params {
-            fit_shared_points: false,
-            ..params
-        };
+        // The v2 default: the shared beam out of both fits (and split
+        // before reject).
+        let excluding = Params::default();
         let f2 = ex_excluding.run(&frame, &excluding.validate().unwrap());
         let good2: Vec<_> = f2.corners().iter().filter(|c| c.well_conditioned).collect();
         assert_eq!(good2.len(), 1, "draw {draw}: corners {:?}", f2.corners());

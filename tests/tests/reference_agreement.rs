@@ -133,8 +133,13 @@ fn compare(case: &Case, worst_by_pass: &mut [WorstAt; 2]) -> Vec<String> {
         let worst = &mut worst_by_pass[slot];
         let range_tol = range_tol(passes);
         let d_tol = d_tol(passes);
+        // §2–6 only: with split before reject (§7.4, v2) the core's
+        // `segments()` are the pieces it fits, not §6's segments; the split
+        // is checked against the evaluation's f64 prototype instead
+        // (lab/tests/split_before_reject.rs).
         let params = Params {
             iterations: passes,
+            split_depth: 0,
             ..case.params
         };
         let mut ex = Extractor::new();

@@ -12,10 +12,10 @@ use crate::frame::{Frame, Geometry, MAX_BEAMS};
 use crate::params::{Params, ValidParams};
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
-use crate::pipeline::line_fit::{fit_line, Bearings, RawScan};
+use crate::pipeline::line_fit::{fit_piece, Bearings, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::segment;
-use crate::pipeline::smoothing::{smoothing_pass, valid_windows};
+use crate::pipeline::smoothing::{smoothing_pass, usable, usable_windows};
 use crate::pipeline::split::split_before_reject;
 
 /// All working memory of the pipeline, reused frame after frame.
@@ -52,6 +52,10 @@ impl Extractor {
     }
 
     /// Run the whole pipeline on `frame`; see [`Extractor::run_observed`].
+    ///
+    /// Never inlined: its entry and return are where an instruction
+    /// counter (tools/qemu-icount) measures exactly one frame's pipeline.
+    #[inline(never)]
     pub fn run(&mut self, frame: &Frame, params: &ValidParams) -> &Features {
         self.run_observed(frame, params, |_, _, _| {})
     }
@@ -90,8 +94,10 @@ impl Extractor {
             &mut f.segments,
             &mut f.edges,
         );
+        let (usable_beams, beyond) = count_usable(frame, params.max_range);
         let mut stats = Stats {
-            valid_beams: frame.valid_count() as u16,
+            valid_beams: usable_beams,
+            beyond_max_range: beyond,
             invalid_windows: d.iter().filter(|d| !d.is_finite()).count() as u16,
             short_segments: counts.short_segments,
             segment_overflow: counts.segment_overflow,
@@ -108,6 +114,7 @@ impl Extractor {
             bearings,
             ranges: frame.ranges(),
             beams: frame.beams(),
+            max_range: params.max_range,
         };
         if params.split_depth > 0 {
             split_before_reject(&scan, params, &mut f.segments, &mut stats);
@@ -135,7 +142,12 @@ impl Extractor {
         for (s, &r) in self.smoothed.iter_mut().zip(frame.ranges()) {
             *s = r;
         }
-        valid_windows(frame.beams(), &mut self.window_ok[..windows]);
+        usable_windows(
+            frame.beams(),
+            frame.ranges(),
+            params.max_range,
+            &mut self.window_ok[..windows],
+        );
         let filter = WindowFilter::new(frame.geometry().step, params.sigma, params.q);
         for pass in 1..=params.iterations {
             smoothing_pass(
@@ -180,6 +192,20 @@ impl Extractor {
     }
 }
 
+/// Beams of `frame` that are valid and below `max_range`, and valid beams
+/// at or beyond it (§1 v2), saturated to `u16`.
+fn count_usable(frame: &Frame, max_range: f32) -> (u16, u16) {
+    let (mut ok, mut beyond) = (0u16, 0u16);
+    for (&b, &d) in frame.beams().iter().zip(frame.ranges()) {
+        if usable(b, d, max_range) {
+            ok = ok.saturating_add(1);
+        } else if b.is_valid() {
+            beyond = beyond.saturating_add(1);
+        }
+    }
+    (ok, beyond)
+}
+
 /// §7: a line per segment, χ²-gated, merged with its predecessor where §7.6
 /// allows it, then judged on length (after merging, so that a wall cut by a
 /// no-echo beam is judged whole).
@@ -187,7 +213,7 @@ fn fit_lines(f: &mut Features, scan: &RawScan<'_>, params: &Params, stats: &mut 
     let (bearings, raw, beams) = (scan.bearings, scan.ranges, scan.beams);
     for k in 0..f.segments.len() {
         let (first, last) = fit_span(&f.segments, k, params.fit_shared_points);
-        let line = match fit_line(bearings, raw, beams, first, last, params.sigma) {
+        let line = match fit_piece(scan, first, last, params.sigma) {
             Ok(line) => line,
             Err(_) => {
                 stats.degenerate_fits = stats.degenerate_fits.saturating_add(1);
@@ -217,6 +243,14 @@ fn fit_lines(f: &mut Features, scan: &RawScan<'_>, params: &Params, stats: &mut 
     let before = f.lines.len();
     f.lines.retain(|l| l.length() >= params.min_length);
     stats.rejected_short = (before - f.lines.len()) as u16;
+    // Too uncertain to be useful (beyond ALGORITHM.md): σ_α above the limit.
+    let max_var = {
+        let sd = params.max_alpha_sd_deg * (core::f32::consts::PI / 180.0);
+        sd * sd
+    };
+    let before = f.lines.len();
+    f.lines.retain(|l| l.cov.a <= max_var);
+    stats.rejected_wide = (before - f.lines.len()) as u16;
 }
 
 /// §8: a corner for each pair of consecutive lines whose facing endpoints are

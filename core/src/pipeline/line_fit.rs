@@ -11,9 +11,15 @@
 //! 4. quality `chi2 = Σ e² / (sigma²·(m − 2))`;
 //! 5. endpoints: the first and last points projected onto the line.
 //!
-//! Bearings enter through per-beam tables of `cos phi_j` and `sin phi_j`, so
-//! the only transcendentals per fit are one `atan2`, and one `cos`/`sin` of
-//! `α` per Gauss–Newton step.
+//! Bearings enter through per-beam tables of `cos phi_j` and `sin phi_j`,
+//! and the line's direction is carried as the unit normal `(cos α, sin α)`:
+//! the start's normal comes from the scatter matrix by half-angle formulas,
+//! each Gauss–Newton step rotates it by `Δα` with a short Taylor series of
+//! `cos Δα`, `sin Δα` (exact to f32 for `|Δα| ≤ 0.25`; a larger step falls
+//! back to `cosf`/`sinf`), and `α = atan2(sin α, cos α)` once at the end.
+//! So a fit needs no `sinf`/`cosf`, which on the M4F run in software f64
+//! (measured: they were about a fifth of the pipeline's instructions on
+//! noisy scans with split before reject).
 
 use crate::features::Line;
 use crate::frame::Beam;
@@ -70,6 +76,8 @@ pub struct RawScan<'a> {
     pub ranges: &'a [f32],
     /// Status per beam (invalid beams are skipped).
     pub beams: &'a [Beam],
+    /// Beams at or beyond this range (m) are skipped too (§1 v2).
+    pub max_range: f32,
 }
 
 /// Fit a line to the valid beams of `first..=last` of `ranges` (m), with
@@ -82,14 +90,29 @@ pub fn fit_line(
     last: u16,
     sigma: f32,
 ) -> Result<Line, FitError> {
-    let span = Span::new(bearings, ranges, beams, first, last).ok_or(FitError::TooFewPoints)?;
+    let scan = RawScan {
+        bearings,
+        ranges,
+        beams,
+        max_range: f32::INFINITY,
+    };
+    fit_piece(&scan, first, last, sigma)
+}
+
+/// [`fit_line`] on the beams of `scan` that are valid and below its
+/// `max_range`.
+pub fn fit_piece(scan: &RawScan<'_>, first: u16, last: u16, sigma: f32) -> Result<Line, FitError> {
+    let span = Span::new(scan, first, last).ok_or(FitError::TooFewPoints)?;
     // 1. Total least squares start.
-    let (m, alpha, r) = span.total_least_squares()?;
+    let (m, start) = span.total_least_squares()?;
     // 2. Gauss–Newton in the range direction.
-    let (alpha, r) = span.gauss_newton(alpha, r)?;
-    let (alpha, r) = facing_sensor(alpha, r);
+    let Normal { ca, sa, r } = span.gauss_newton(start)?.facing_sensor();
+    // atan2 gives [−π, π]; α is in (−π, π].
+    let alpha = match libm::atan2f(sa, ca) {
+        a if a <= -core::f32::consts::PI => core::f32::consts::PI,
+        a => a,
+    };
     // 3.–4. Covariance and chi2 at the solution.
-    let (ca, sa) = (libm::cosf(alpha), libm::sinf(alpha));
     let (jtj, sum_e2) = span.normal_matrix_and_residual(ca, sa, r)?;
     let var = sigma * sigma;
     let cov = jtj.inverse_spd().ok_or(FitError::Degenerate)?.scale(var);
@@ -114,17 +137,13 @@ struct Span<'a> {
     beams: &'a [Beam],
     cos: &'a [f32],
     sin: &'a [f32],
+    max_range: f32,
 }
 
 impl<'a> Span<'a> {
     /// The span, or `None` if it holds no beam.
-    fn new(
-        bearings: Bearings<'a>,
-        ranges: &'a [f32],
-        beams: &'a [Beam],
-        first: u16,
-        last: u16,
-    ) -> Option<Self> {
+    fn new(scan: &RawScan<'a>, first: u16, last: u16) -> Option<Self> {
+        let (bearings, ranges, beams) = (scan.bearings, scan.ranges, scan.beams);
         let n = ranges
             .len()
             .min(beams.len())
@@ -140,6 +159,7 @@ impl<'a> Span<'a> {
             beams: beams.get(lo..hi)?,
             cos: bearings.cos.get(lo..hi)?,
             sin: bearings.sin.get(lo..hi)?,
+            max_range: scan.max_range,
         })
     }
 
@@ -149,13 +169,13 @@ impl<'a> Span<'a> {
             .iter()
             .zip(self.beams)
             .zip(self.cos.iter().zip(self.sin))
-            .filter(|((_, b), _)| b.is_valid())
+            .filter(|((&d, b), _)| b.is_valid() && d < self.max_range)
             .map(|((&d, _), (&c, &s))| (d, c, s))
     }
 
     /// §7.1: the total-least-squares line through the valid points
-    /// (centroid and central second moments): `(m, α, r)` with `r ≥ 0`.
-    fn total_least_squares(&self) -> Result<(u32, f32, f32), FitError> {
+    /// (centroid and central second moments): `(m, line)` with `r ≥ 0`.
+    fn total_least_squares(&self) -> Result<(u32, Normal), FitError> {
         let mut m = 0u32;
         let (mut sx, mut sy) = (0.0f32, 0.0f32);
         for (d, c, s) in self.valid() {
@@ -175,17 +195,37 @@ impl<'a> Span<'a> {
             syy += dy * dy;
             sxy += dx * dy;
         }
-        let alpha = 0.5 * libm::atan2f(-2.0 * sxy, syy - sxx);
-        let r = xm * libm::cosf(alpha) + ym * libm::sinf(alpha);
-        let (alpha, r) = facing_sensor(alpha, r);
-        Ok((m, alpha, r))
+        // α = ½·atan2(−2·Sxy, Syy − Sxx) ∈ (−π/2, π/2], by half angles:
+        // cos 2α = (Syy − Sxx)/h, sin 2α = −2·Sxy/h.
+        let (c2, s2) = (syy - sxx, -2.0 * sxy);
+        let h = libm::sqrtf(c2 * c2 + s2 * s2);
+        let (ca, sa) = if !(h > 0.0) {
+            (1.0, 0.0) // no preferred direction (atan2(0, 0) = 0)
+        } else if c2 >= 0.0 {
+            let ca = libm::sqrtf(0.5 * (1.0 + c2 / h));
+            (ca, s2 / h / (2.0 * ca))
+        } else {
+            let sa = libm::sqrtf(0.5 * (1.0 - c2 / h));
+            let sa = if s2 < 0.0 { -sa } else { sa };
+            (s2 / h / (2.0 * sa), sa)
+        };
+        let line = Normal {
+            ca,
+            sa,
+            r: xm * ca + ym * sa,
+        };
+        Ok((m, line.facing_sensor()))
     }
 
     /// §7.2: at most [`MAX_GN_STEPS`] Gauss–Newton steps on the range model
-    /// `d_j = r / cos(phi_j − α)`, from `(alpha, r)`.
-    fn gauss_newton(&self, mut alpha: f32, mut r: f32) -> Result<(f32, f32), FitError> {
+    /// `d_j = r / cos(phi_j − α)`, from `start`.
+    fn gauss_newton(&self, start: Normal) -> Result<Normal, FitError> {
+        let Normal {
+            mut ca,
+            mut sa,
+            mut r,
+        } = start;
         for _ in 0..MAX_GN_STEPS {
-            let (ca, sa) = (libm::cosf(alpha), libm::sinf(alpha));
             let mut jte = [0.0f32; 2];
             let mut jtj = Sym2::default();
             for (d, c, s) in self.valid() {
@@ -203,13 +243,13 @@ impl<'a> Span<'a> {
             let inv = jtj.inverse_spd().ok_or(FitError::Degenerate)?;
             let d_alpha = inv.a * jte[0] + inv.b * jte[1];
             let d_r = inv.b * jte[0] + inv.c * jte[1];
-            alpha = wrap_angle(alpha + d_alpha);
+            (ca, sa) = rotate(ca, sa, d_alpha);
             r += d_r;
             if libm::fabsf(d_alpha) < GN_STEP_TOLERANCE && libm::fabsf(d_r) < GN_STEP_TOLERANCE {
                 break;
             }
         }
-        Ok((alpha, r))
+        Ok(Normal { ca, sa, r })
     }
 
     /// §7.3–7.4: `JᵀJ` and `Σ e²` at the solution `(cos α, sin α, r)`.
@@ -255,13 +295,47 @@ impl<'a> Span<'a> {
     }
 }
 
-/// The same line with `r ≥ 0`: a negative `r` flips the normal by π.
+/// A line `x·ca + y·sa = r` by its unit normal `(cos α, sin α)`.
+#[derive(Clone, Copy, Debug)]
+struct Normal {
+    ca: f32,
+    sa: f32,
+    r: f32,
+}
+
+impl Normal {
+    /// The same line with `r ≥ 0`: a negative `r` flips the normal by π.
+    #[inline]
+    fn facing_sensor(self) -> Normal {
+        if self.r < 0.0 {
+            Normal {
+                ca: -self.ca,
+                sa: -self.sa,
+                r: -self.r,
+            }
+        } else {
+            self
+        }
+    }
+}
+
+/// Largest Gauss–Newton angle step (rad) rotated by the Taylor series of
+/// [`rotate`]; its truncation error is below `0.25⁸/8! ≈ 4e-10`.
+const TAYLOR_STEP: f32 = 0.25;
+
+/// The unit normal `(ca, sa)` rotated by `delta` (rad): by the Taylor
+/// series of `cos δ` and `sin δ` to the δ⁶ and δ⁷ terms for
+/// `|δ| ≤` [`TAYLOR_STEP`], else by `cosf`/`sinf` of the new angle.
 #[inline]
-fn facing_sensor(alpha: f32, r: f32) -> (f32, f32) {
-    if r < 0.0 {
-        (wrap_angle(alpha + core::f32::consts::PI), -r)
+fn rotate(ca: f32, sa: f32, delta: f32) -> (f32, f32) {
+    if libm::fabsf(delta) <= TAYLOR_STEP {
+        let d2 = delta * delta;
+        let cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
+        let sd = delta * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
+        (ca * cd - sa * sd, sa * cd + ca * sd)
     } else {
-        (alpha, r)
+        let alpha = wrap_angle(libm::atan2f(sa, ca) + delta);
+        (libm::cosf(alpha), libm::sinf(alpha))
     }
 }
 

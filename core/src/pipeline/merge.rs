@@ -5,8 +5,10 @@
 
 use crate::features::{Line, Segment};
 use crate::frame::Beam;
+use crate::maths::wrap_angle;
 use crate::params::Params;
-use crate::pipeline::line_fit::{fit_line, parameter_distance, Bearings};
+use crate::pipeline::line_fit::{fit_piece, parameter_distance, Bearings, RawScan};
+use crate::pipeline::smoothing::usable;
 
 /// The beams fitted for segment `k`: the whole segment (§7), or, with
 /// `fit_shared_points == false`, without a first/last point it shares with
@@ -39,19 +41,39 @@ pub fn try_merge(
 ) -> Option<Line> {
     let gap_start = prev.last as usize + 1;
     let gap_end = next.first as usize; // exclusive
-    let valid_between = beams
-        .get(gap_start..gap_end.max(gap_start))
-        .map_or(0, |b| b.iter().filter(|b| b.is_valid()).count());
-    if valid_between > params.merge_gap_beams as usize {
+    let max_range = params.max_range;
+    let valid_between = (gap_start..gap_end.max(gap_start))
+        .filter(|&j| match (beams.get(j), raw.get(j)) {
+            (Some(&b), Some(&d)) => usable(b, d, max_range),
+            _ => false,
+        })
+        .count();
+    let gated = valid_between <= params.merge_gap_beams as usize
+        && parameter_distance(prev, next).is_some_and(|d| d < params.merge_gate);
+    if !(gated || (params.merge_collinear && collinear_and_touching(prev, next, params))) {
         return None;
     }
-    if !(parameter_distance(prev, next)? < params.merge_gate) {
-        return None;
-    }
-    let merged = fit_line(bearings, raw, beams, prev.first, next.last, params.sigma).ok()?;
+    let scan = RawScan {
+        bearings,
+        ranges: raw,
+        beams,
+        max_range,
+    };
+    let merged = fit_piece(&scan, prev.first, next.last, params.sigma).ok()?;
     if merged.chi2 <= params.max_chi2 {
         Some(merged)
     } else {
         None
     }
+}
+
+/// Whether `next` continues `prev` nearly collinearly: facing endpoints
+/// closer than `corner_gap` and normals less than `min_corner_angle_deg`
+/// apart (the pair would give an ill-conditioned corner).
+fn collinear_and_touching(prev: &Line, next: &Line, params: &Params) -> bool {
+    let gap_x = next.endpoints[0][0] - prev.endpoints[1][0];
+    let gap_y = next.endpoints[0][1] - prev.endpoints[1][1];
+    let close = libm::sqrtf(gap_x * gap_x + gap_y * gap_y) < params.corner_gap;
+    let apart = libm::fabsf(wrap_angle(next.alpha - prev.alpha));
+    close && apart < params.min_corner_angle_deg * (core::f32::consts::PI / 180.0)
 }

@@ -42,6 +42,26 @@ pub fn valid_windows(beams: &[Beam], window_ok: &mut [bool]) {
     }
 }
 
+/// Whether beam `beam` with range `d` (m) takes part in the pipeline: valid
+/// and below `max_range` (ALGORITHM.md v2 §1; a range at or beyond it is a
+/// fill value or an error code of another mode).
+#[inline]
+pub fn usable(beam: Beam, d: f32, max_range: f32) -> bool {
+    beam.is_valid() && d < max_range
+}
+
+/// [`valid_windows`] with the range limit: a window needs three
+/// [`usable`] beams.
+pub fn usable_windows(beams: &[Beam], ranges: &[f32], max_range: f32, window_ok: &mut [bool]) {
+    let ok = |j: usize| match (beams.get(j), ranges.get(j)) {
+        (Some(&b), Some(&d)) => usable(b, d, max_range),
+        _ => false,
+    };
+    for (i, w) in window_ok.iter_mut().enumerate() {
+        *w = ok(i) && ok(i + 1) && ok(i + 2);
+    }
+}
+
 /// Windows processed together: the filter runs branch-free over a block
 /// (so a host CPU can vectorise it, with the same per-window IEEE
 /// operations), then the block's points are blended. Stack use is a few

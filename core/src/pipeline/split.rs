@@ -9,6 +9,9 @@
 //! 1. fit the line to the valid raw points (§7); if `Σe²/σ²` is above the
 //!    99.9 % quantile of χ² with `m − 2` degrees of freedom, the segment is
 //!    not one straight line;
+//!    With `fit_shared_points == false` a beam the piece shares with a
+//!    neighbour (§6's corner point, or an earlier split point) is left out
+//!    of the test, as it is left out of the fit;
 //! 2. unless a circle explains it (an algebraic circle fit with
 //!    `Σ(‖p − c‖ − R)²/σ²` below the 99.9 % quantile of χ²ₘ₋₃: a curved
 //!    wall or a pillar is not cut into a polyline), split it at the valid
@@ -28,7 +31,7 @@ use heapless::Vec;
 
 use crate::features::{Segment, Stats, MAX_SEGMENTS};
 use crate::params::{Params, MAX_SPLIT_DEPTH};
-use crate::pipeline::line_fit::{fit_line, RawScan};
+use crate::pipeline::line_fit::{fit_piece, RawScan};
 
 /// Upper 0.1 % quantile of χ² with `nu` degrees of freedom (Wilson–Hilferty:
 /// 1.8 % above the exact value at ν = 3, 0.6 % at ν = 10, 0.04 % at ν = 100).
@@ -42,39 +45,27 @@ pub fn chi2_quantile_999(nu: f32) -> f32 {
 /// `true` if the valid points of `first..=last` are not one straight line:
 /// `Σe²/σ²` of their fit above [`chi2_quantile_999`] of `m − 2`, or no fit.
 ///
-/// A cheap bound decides most failing pieces without the fit (whose
+/// Two cheap bounds decide nearly every piece without the fit (whose
 /// Gauss–Newton steps need `sinf`/`cosf`, done in software f64 on the
-/// M4F): a range residual is never smaller than the perpendicular one, so
-/// `Σe²` of the fit is at least the least sum of squared perpendicular
-/// distances, the smaller eigenvalue of the points' scatter matrix. If that
-/// alone is above the quantile, so is the fit's.
+/// M4F). With `S` the points' central scatter matrix and `n` the unit
+/// normal of its smaller eigenvalue `λ` (the total-least-squares line):
+///
+/// - lower: a range residual is never smaller than the perpendicular one,
+///   so `Σe²` of the fit is at least `λ`; if `λ/σ²` is above the quantile,
+///   so is the fit's;
+/// - upper: the fit minimises `Σe²` over all lines, so it is at most the
+///   range residuals of the TLS line, `Σ (n·(p_j − p̄) / |n·u_j|)²` (`u_j`
+///   the beam's direction); if that is at or below the quantile, so is the
+///   fit's.
+///
+/// Only a piece between the bounds (or seen nearly edge-on) is fitted.
 fn not_straight(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> bool {
-    let points = || scan.valid_points(piece);
-    let (m, cx, cy) = centroid(points());
-    if m >= 3 {
-        let mf = m as f32;
-        let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
-        for (x, y) in points() {
-            let (u, v) = (x - cx, y - cy);
-            sxx += u * u;
-            syy += v * v;
-            sxy += u * v;
-        }
-        let half_diff = (sxx - syy) / 2.0;
-        let least = (sxx + syy) / 2.0 - libm::sqrtf(half_diff * half_diff + sxy * sxy);
-        let dof = mf - 2.0;
-        if least / (sigma * sigma) > chi2_quantile_999(dof) {
-            return true;
-        }
+    match straightness_bounds(scan, piece, sigma) {
+        Bounds::Above => return true,
+        Bounds::Below => return false,
+        Bounds::Between => {}
     }
-    match fit_line(
-        scan.bearings,
-        scan.ranges,
-        scan.beams,
-        piece.first,
-        piece.last,
-        sigma,
-    ) {
+    match fit_piece(scan, piece.first, piece.last, sigma) {
         Ok(line) => {
             let dof = f32::from(line.points.saturating_sub(2)).max(1.0);
             line.chi2 * dof > chi2_quantile_999(dof)
@@ -82,6 +73,71 @@ fn not_straight(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> bool {
         Err(_) => true,
     }
 }
+
+/// What the bounds of [`not_straight`] decide.
+enum Bounds {
+    /// Even the least perpendicular sum is above the quantile.
+    Above,
+    /// The TLS line's range residuals are within the quantile.
+    Below,
+    /// Undecided: fit.
+    Between,
+}
+
+/// The bounds of [`not_straight`] for `piece` (see there).
+fn straightness_bounds(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> Bounds {
+    let points = || scan.valid_points(piece);
+    let (m, cx, cy) = centroid(points());
+    if m < 3 {
+        return Bounds::Between;
+    }
+    let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
+    for (x, y) in points() {
+        let (u, v) = (x - cx, y - cy);
+        sxx += u * u;
+        syy += v * v;
+        sxy += u * v;
+    }
+    let half_diff = (sxx - syy) / 2.0;
+    let root = libm::sqrtf(half_diff * half_diff + sxy * sxy);
+    let least = (sxx + syy) / 2.0 - root;
+    let limit = chi2_quantile_999(m as f32 - 2.0) * (sigma * sigma);
+    if least > limit {
+        return Bounds::Above;
+    }
+    // Normal of the smaller eigenvalue: (S − λ·I)·n = 0, from the row of
+    // larger norm (both rows are parallel for a symmetric 2×2).
+    let (r1, r2) = ((sxx - least, sxy), (sxy, syy - least));
+    let (nx, ny) = if r1.0 * r1.0 + r1.1 * r1.1 >= r2.0 * r2.0 + r2.1 * r2.1 {
+        (-r1.1, r1.0)
+    } else {
+        (-r2.1, r2.0)
+    };
+    let norm = libm::sqrtf(nx * nx + ny * ny);
+    if !(norm > 0.0) {
+        return Bounds::Between;
+    }
+    let (nx, ny) = (nx / norm, ny / norm);
+    let mut upper = 0.0f32;
+    for (d, c, s) in scan.valid_beams(piece) {
+        // |cos| of the incidence: the beam's direction against the normal.
+        let incidence = libm::fabsf(c * nx + s * ny);
+        if !(incidence > MIN_UPPER_INCIDENCE) {
+            return Bounds::Between;
+        }
+        let e = ((d * c - cx) * nx + (d * s - cy) * ny) / incidence;
+        upper += e * e;
+    }
+    if upper <= limit {
+        Bounds::Below
+    } else {
+        Bounds::Between
+    }
+}
+
+/// Smallest `|cos|` of incidence for which [`straightness_bounds`] uses
+/// the upper bound (nearer edge-on, the fit decides).
+const MIN_UPPER_INCIDENCE: f32 = 0.05;
 
 impl<'a> RawScan<'a> {
     /// The point of beam `j` (m), if it is valid and inside the slices.
@@ -92,14 +148,33 @@ impl<'a> RawScan<'a> {
             self.bearings.cos.get(j),
             self.bearings.sin.get(j),
         ) {
-            (Some(b), Some(&d), Some(&c), Some(&s)) if b.is_valid() => Some((d * c, d * s)),
+            (Some(b), Some(&d), Some(&c), Some(&s)) if b.is_valid() && d < self.max_range => {
+                Some((d * c, d * s))
+            }
             _ => None,
         }
     }
 
     /// The valid points of `piece` (m), in beam order.
     fn valid_points(&self, piece: Segment) -> impl Iterator<Item = (f32, f32)> + '_ {
-        (usize::from(piece.first)..=usize::from(piece.last)).filter_map(move |j| self.point(j))
+        self.valid_beams(piece).map(|(d, c, s)| (d * c, d * s))
+    }
+
+    /// `(d_j, cos phi_j, sin phi_j)` of the valid beams of `piece` below
+    /// `max_range`, in beam order (one pass over four slices, no index
+    /// checks per beam).
+    fn valid_beams(&self, piece: Segment) -> impl Iterator<Item = (f32, f32, f32)> + '_ {
+        let lo = usize::from(piece.first);
+        let hi = usize::from(piece.last) + 1;
+        let part = |s: &'a [f32]| s.get(lo..hi).unwrap_or_default();
+        let beams = self.beams.get(lo..hi).unwrap_or_default();
+        let max_range = self.max_range;
+        part(self.ranges)
+            .iter()
+            .zip(beams)
+            .zip(part(self.bearings.cos).iter().zip(part(self.bearings.sin)))
+            .filter(move |((&d, b), _)| b.is_valid() && d < max_range)
+            .map(|((&d, _), (&c, &s))| (d, c, s))
     }
 }
 
@@ -225,20 +300,28 @@ pub fn split_before_reject(
     stats: &mut Stats,
 ) {
     let depth = params.split_depth.min(MAX_SPLIT_DEPTH);
+    let trim = !params.fit_shared_points;
     let mut out: Vec<Segment, MAX_SEGMENTS> = Vec::new();
     // Depth-first, left half on top: at most one entry per level plus one.
-    let mut todo: Vec<(Segment, u8), { MAX_SPLIT_DEPTH as usize + 2 }> = Vec::new();
-    for &segment in segments.iter() {
+    // Each entry: the piece, its level, whether its first / last beam is
+    // shared with a neighbour (left out of its test, as out of its fit).
+    let mut todo: Vec<(Segment, u8, [bool; 2]), { MAX_SPLIT_DEPTH as usize + 2 }> = Vec::new();
+    for (k, &segment) in segments.iter().enumerate() {
+        let shared = [
+            k > 0 && segments.get(k - 1).is_some_and(|p| p.last == segment.first),
+            segments.get(k + 1).is_some_and(|n| n.first == segment.last),
+        ];
         todo.clear();
-        let _ = todo.push((segment, 0));
-        while let Some((piece, level)) = todo.pop() {
-            if !not_straight(scan, piece, params.sigma) {
+        let _ = todo.push((segment, 0, shared));
+        while let Some((piece, level, shared)) = todo.pop() {
+            let tested = if trim { trimmed(piece, shared) } else { piece };
+            if !not_straight(scan, tested, params.sigma) {
                 if out.push(piece).is_err() {
                     stats.segment_overflow = stats.segment_overflow.saturating_add(1);
                 }
                 continue;
             }
-            let split_at = if level < depth && !circle_explains(scan, piece, params.sigma) {
+            let split_at = if level < depth && !circle_explains(scan, tested, params.sigma) {
                 farthest_from_chord(scan, piece)
             } else {
                 None
@@ -256,10 +339,10 @@ pub fn split_before_reject(
                 first: m,
                 last: piece.last,
             };
-            for half in [right, left] {
+            for (half, shared) in [(right, [true, shared[1]]), (left, [shared[0], true])] {
                 if half.points() < usize::from(params.min_points) {
                     stats.split_short = stats.split_short.saturating_add(1);
-                } else if todo.push((half, level + 1)).is_err() {
+                } else if todo.push((half, level + 1, shared)).is_err() {
                     // Not reached: the stack holds depth + 2 entries.
                     stats.split_rejected = stats.split_rejected.saturating_add(1);
                 }
@@ -267,6 +350,15 @@ pub fn split_before_reject(
         }
     }
     *segments = out;
+}
+
+/// `piece` without the first / last beam where `shared` says a neighbour
+/// shares it (the span [`crate::pipeline::merge::fit_span`] fits).
+fn trimmed(piece: Segment, shared: [bool; 2]) -> Segment {
+    Segment {
+        first: piece.first.saturating_add(u16::from(shared[0])),
+        last: piece.last.saturating_sub(u16::from(shared[1])),
+    }
 }
 
 #[cfg(test)]
@@ -306,7 +398,7 @@ mod tests {
         let frame = corner_frame();
         let spec = Params {
             sigma: SIGMA,
-            ..Params::default()
+            ..Params::V1
         };
         let mut ex = Extractor::new();
         let f = ex.run(&frame, &spec.validate().unwrap()).clone();

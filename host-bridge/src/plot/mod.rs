@@ -66,6 +66,7 @@ pub use style::{
     SCAN_SIZE, SMOOTHED, TAU, WELL_CONDITIONED,
 };
 
+use crate::defaults;
 use crate::extract::InputFrame;
 use crate::synthetic;
 
@@ -195,6 +196,19 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     let (source, input) = match &args.log {
         Some(path) => log_frame(path, args, k)?,
         None => scene_frame(args, k)?,
+    };
+    // Defaults per data for a CARMEN log (σ, max_range; flags override).
+    let params = match &args.log {
+        Some(path) => match defaults::for_log(path, args.unit, &args.params)? {
+            Some((params, warning)) => {
+                warning
+                    .into_iter()
+                    .for_each(|w| eprintln!("host-bridge plot: {w}"));
+                params
+            }
+            None => params,
+        },
+        None => params,
     };
     ensure_font()?;
     let fp = FramePlot::compute(source, &input, &params, &passes)?;

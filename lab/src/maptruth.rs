@@ -1,0 +1,586 @@
+//! Ground truth on real scans, from the map (issue 14, item 5).
+//!
+//! The shared CARMEN logs carry SLAM-corrected laser poses. From them:
+//!
+//! 1. **Accumulate** every valid beam below [`TruthConfig::max_range`] of
+//!    every frame in the world frame, into cells of [`TruthConfig::cell`]
+//!    (5 cm). A cell is *occupied* if hits of at least
+//!    [`TruthConfig::min_frames`] different frames fall into it (people and
+//!    other passing things are seen in few frames); its point is the mean of
+//!    its hits.
+//! 2. **Extract the map's walls** by a Hough transform of the occupied
+//!    cells (0.5° × 0.1 m bins, one vote per cell), strongest peak first:
+//!    the cells within [`TruthConfig::inlier`] of the peak's line are cut at
+//!    gaps over [`TruthConfig::max_gap`] into runs; a run at least
+//!    [`TruthConfig::min_wall`] long with at least
+//!    [`TruthConfig::min_density`] of its cells occupied is a wall, its line
+//!    a consensus fit of its cells ([`consensus_tls`]). The peak's cells leave the
+//!    transform; repeat until no peak has [`TruthConfig::min_votes`] cells.
+//! 3. **Ray-cast** the walls into each frame: a beam is *on wall w* if its
+//!    ray meets `w` (its extent widened by [`TruthConfig::beam_tol`]) and the
+//!    measured hit is within [`TruthConfig::beam_tol`] of `w`'s line (so a
+//!    person in front of a wall, or a hit past the map, is on no wall); of
+//!    several such walls, the one whose ray distance is closest to the
+//!    measured range.
+//!    Runs of beams on one wall, bridging at most
+//!    [`TruthConfig::gap_beams`] beams on no wall (ALGORITHM.md §7.6's
+//!    merge gap), are the frame's *true pieces*; the pieces with at least
+//!    [`TruthConfig::min_beams`] (10) beams on the wall and at least
+//!    [`TruthConfig::min_piece`] (0.3 m) long are *counted*. A
+//!    piece's true line is the map wall's line in the sensor frame.
+//!
+//! What this truth cannot show: walls the SLAM map itself misplaces (pose
+//! error moves a piece's line by ~1–3 cm and ~0.3°, the figure of the
+//! oracle in [`crate::realtruth`]), walls shorter than 0.5 m, and curved
+//! walls (cut into straight runs or dropped). Glass and clutter seen in
+//! fewer than three frames are on no wall.
+
+use std::collections::{BinaryHeap, HashMap};
+
+use host_bridge::carmen::Scan;
+
+/// Parameters of the map and of the per-frame truth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TruthConfig {
+    /// Cell size of the accumulated map (m).
+    pub cell: f64,
+    /// A cell is occupied if hit in at least this many frames.
+    pub min_frames: u32,
+    /// Beams at or beyond this range are not used (m); also excludes fill
+    /// values such as the Acapulco log's ~50 m.
+    pub max_range: f64,
+    /// Hough angle bins over [0, π).
+    pub angle_bins: usize,
+    /// Hough distance bin (m).
+    pub rho_bin: f64,
+    /// Cells within this distance of a peak's line are its inliers (m).
+    pub inlier: f64,
+    /// Largest gap between consecutive cells of one wall (m).
+    pub max_gap: f64,
+    /// Shortest wall (m).
+    pub min_wall: f64,
+    /// Smallest fraction of a wall's length covered by occupied cells.
+    pub min_density: f64,
+    /// Fewest cells of a Hough peak.
+    pub min_votes: u32,
+    /// Largest distance of an on-wall hit from its wall's line (m).
+    pub beam_tol: f64,
+    /// Fewest on-wall beams of a counted piece.
+    pub min_beams: usize,
+    /// Shortest counted piece (m): fewer metres over ≥ 10 beams is a wall
+    /// seen end-on or clutter near the sensor.
+    pub min_piece: f64,
+    /// Beams on no wall a piece may bridge.
+    pub gap_beams: usize,
+}
+
+impl Default for TruthConfig {
+    fn default() -> Self {
+        TruthConfig {
+            cell: 0.05,
+            min_frames: 3,
+            max_range: 40.0,
+            angle_bins: 360,
+            rho_bin: 0.1,
+            inlier: 0.075,
+            max_gap: 0.3,
+            min_wall: 0.5,
+            min_density: 0.4,
+            min_votes: 10,
+            beam_tol: 0.1,
+            min_beams: 10,
+            min_piece: 0.3,
+            gap_beams: 3,
+        }
+    }
+}
+
+/// A wall of the map (world frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapWall {
+    /// End points (m).
+    pub a: [f64; 2],
+    /// End points (m).
+    pub b: [f64; 2],
+    /// Normal direction of the line `x cos α + y sin α = ρ` (rad).
+    pub alpha: f64,
+    /// Signed distance of the line from the world origin (m).
+    pub rho: f64,
+    /// Occupied cells on it.
+    pub cells: usize,
+    /// Index of its line: collinear walls (one Hough peak) share it.
+    pub line: usize,
+}
+
+impl MapWall {
+    /// Length (m).
+    pub fn length(&self) -> f64 {
+        (self.b[0] - self.a[0]).hypot(self.b[1] - self.a[1])
+    }
+}
+
+/// An occupied cell: mean hit and frames that hit it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapCell {
+    /// Mean hit (m).
+    pub p: [f64; 2],
+    /// Frames with a hit in the cell.
+    pub frames: u32,
+}
+
+/// The map of one log.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Map {
+    /// Occupied cells.
+    pub cells: Vec<MapCell>,
+    /// Walls, strongest first.
+    pub walls: Vec<MapWall>,
+}
+
+/// World point of beam `j` of `scan` (laser pose, bearing from the frame).
+pub fn world_hit(scan: &Scan, j: usize) -> [f64; 2] {
+    let [x, y, th] = scan.meta.pose;
+    let d = f64::from(scan.frame.ranges()[j]);
+    let phi = th + f64::from(scan.frame.geometry().bearing(j));
+    [x + d * phi.cos(), y + d * phi.sin()]
+}
+
+fn usable(scan: &Scan, j: usize, cfg: &TruthConfig) -> bool {
+    let d = f64::from(scan.frame.ranges()[j]);
+    scan.frame.beams()[j].is_valid() && d > 0.0 && d < cfg.max_range
+}
+
+/// Sum of hits, hits, frames, last frame of a cell being accumulated.
+type CellSum = ([f64; 2], u32, u32, usize);
+
+/// Step 1: the occupied cells of `scans`.
+pub fn occupied_cells(scans: &[Scan], cfg: &TruthConfig) -> Vec<MapCell> {
+    let mut acc: HashMap<(i64, i64), CellSum> = HashMap::new();
+    for (k, scan) in scans.iter().enumerate() {
+        for j in 0..scan.frame.len() {
+            if !usable(scan, j, cfg) {
+                continue;
+            }
+            let p = world_hit(scan, j);
+            let key = (
+                (p[0] / cfg.cell).floor() as i64,
+                (p[1] / cfg.cell).floor() as i64,
+            );
+            let e = acc.entry(key).or_insert(([0.0; 2], 0, 0, usize::MAX));
+            e.0[0] += p[0];
+            e.0[1] += p[1];
+            e.1 += 1;
+            if e.3 != k {
+                e.2 += 1;
+                e.3 = k;
+            }
+        }
+    }
+    let mut keys: Vec<_> = acc
+        .into_iter()
+        .filter(|(_, v)| v.2 >= cfg.min_frames)
+        .collect();
+    // Deterministic order (HashMap iteration is not).
+    keys.sort_by_key(|(k, _)| *k);
+    keys.into_iter()
+        .map(|(_, (s, hits, frames, _))| MapCell {
+            p: [s[0] / f64::from(hits), s[1] / f64::from(hits)],
+            frames,
+        })
+        .collect()
+}
+
+/// Total-least-squares line `(α, ρ)` through `pts`.
+pub fn tls(pts: &[[f64; 2]]) -> (f64, f64) {
+    let n = pts.len().max(1) as f64;
+    let (mx, my) = pts
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p[0] / n, b + p[1] / n));
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for p in pts {
+        let (dx, dy) = (p[0] - mx, p[1] - my);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    // Normal = eigenvector of the smaller eigenvalue of the scatter matrix.
+    let alpha = 0.5 * (-2.0 * sxy).atan2(syy - sxx);
+    let rho = mx * alpha.cos() + my * alpha.sin();
+    (alpha, rho)
+}
+
+/// A consensus fit of the points `pts` (sorted along their line): of the
+/// lines through a point of the first third and one of the last third
+/// (at most 15 × 15 pairs), the one with the most points within `tol`;
+/// then [`tls`] of its points within `tol`, twice. Cells of a neighbouring
+/// wall at a corner and stray hits do not tilt it.
+pub fn consensus_tls(pts: &[[f64; 2]], tol: f64) -> (f64, f64) {
+    let n = pts.len();
+    if n < 6 {
+        return tls(pts);
+    }
+    let third = n / 3;
+    let step = third.div_ceil(15).max(1);
+    let count = |a: f64, rho: f64| {
+        pts.iter()
+            .filter(|p| (p[0] * a.cos() + p[1] * a.sin() - rho).abs() <= tol)
+            .count()
+    };
+    let mut best = (0, tls(pts));
+    for i in (0..third).step_by(step) {
+        for j in (n - third..n).step_by(step) {
+            let (p, q) = (pts[i], pts[j]);
+            let a = (q[1] - p[1]).atan2(q[0] - p[0]) + std::f64::consts::FRAC_PI_2;
+            let rho = p[0] * a.cos() + p[1] * a.sin();
+            let c = count(a, rho);
+            if c > best.0 {
+                best = (c, (a, rho));
+            }
+        }
+    }
+    let (mut a, mut rho) = best.1;
+    for _ in 0..2 {
+        let keep: Vec<[f64; 2]> = pts
+            .iter()
+            .copied()
+            .filter(|p| (p[0] * a.cos() + p[1] * a.sin() - rho).abs() <= tol)
+            .collect();
+        if keep.len() < 2 {
+            break;
+        }
+        (a, rho) = tls(&keep);
+    }
+    (a, rho)
+}
+
+struct Hough {
+    bins: usize,
+    rho_bin: f64,
+    rho_min: f64,
+    n_rho: usize,
+    cos_sin: Vec<(f64, f64)>,
+    acc: Vec<u32>,
+}
+
+impl Hough {
+    fn new(cells: &[MapCell], cfg: &TruthConfig) -> Self {
+        let reach = cells
+            .iter()
+            .map(|c| c.p[0].hypot(c.p[1]))
+            .fold(0.0, f64::max)
+            + 1.0;
+        let n_rho = (2.0 * reach / cfg.rho_bin).ceil() as usize + 1;
+        let cos_sin = (0..cfg.angle_bins)
+            .map(|k| {
+                let t = k as f64 * std::f64::consts::PI / cfg.angle_bins as f64;
+                (t.cos(), t.sin())
+            })
+            .collect();
+        let mut h = Hough {
+            bins: cfg.angle_bins,
+            rho_bin: cfg.rho_bin,
+            rho_min: -reach,
+            n_rho,
+            cos_sin,
+            acc: vec![0; cfg.angle_bins * n_rho],
+        };
+        for c in cells {
+            h.vote(c.p, true);
+        }
+        h
+    }
+
+    fn vote(&mut self, p: [f64; 2], add: bool) {
+        for k in 0..self.bins {
+            let (c, s) = self.cos_sin[k];
+            let i = ((p[0] * c + p[1] * s - self.rho_min) / self.rho_bin).round() as usize;
+            let cell = &mut self.acc[k * self.n_rho + i.min(self.n_rho - 1)];
+            *cell = if add {
+                *cell + 1
+            } else {
+                cell.saturating_sub(1)
+            };
+        }
+    }
+
+    fn line(&self, idx: usize) -> (f64, f64) {
+        let k = idx / self.n_rho;
+        let i = idx % self.n_rho;
+        (
+            k as f64 * std::f64::consts::PI / self.bins as f64,
+            self.rho_min + i as f64 * self.rho_bin,
+        )
+    }
+}
+
+/// The cells of `idx` (alive, within `tol` of `(α, ρ)`).
+fn inliers(cells: &[MapCell], alive: &[bool], alpha: f64, rho: f64, tol: f64) -> Vec<usize> {
+    let (c, s) = (alpha.cos(), alpha.sin());
+    (0..cells.len())
+        .filter(|&i| alive[i] && (cells[i].p[0] * c + cells[i].p[1] * s - rho).abs() <= tol)
+        .collect()
+}
+
+/// The walls among the inlier cells `idx` of the line `(α, ρ)`: runs cut at
+/// gaps, all on one consensus line of their cells (collinear walls are one
+/// line, as in the synthetic truth); `line` is that line's index.
+fn runs_to_walls(
+    cells: &[MapCell],
+    idx: &[usize],
+    alpha: f64,
+    line: usize,
+    cfg: &TruthConfig,
+) -> Vec<MapWall> {
+    let (c, s) = (alpha.cos(), alpha.sin());
+    let along = |p: [f64; 2]| -p[0] * s + p[1] * c;
+    let mut order: Vec<(f64, usize)> = idx.iter().map(|&i| (along(cells[i].p), i)).collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut runs: Vec<&[(f64, usize)]> = Vec::new();
+    let mut start = 0;
+    for k in 1..=order.len() {
+        if k < order.len() && order[k].0 - order[k - 1].0 <= cfg.max_gap {
+            continue;
+        }
+        let run = &order[start..k];
+        start = k;
+        let extent = run[run.len() - 1].0 - run[0].0 + cfg.cell;
+        if extent >= cfg.min_wall && (run.len() as f64) * cfg.cell >= cfg.min_density * extent {
+            runs.push(run);
+        }
+    }
+    let pts: Vec<[f64; 2]> = runs
+        .iter()
+        .flat_map(|r| r.iter().map(|&(_, i)| cells[i].p))
+        .collect();
+    if pts.is_empty() {
+        return Vec::new();
+    }
+    let (a, rho) = consensus_tls(&pts, 0.5 * cfg.cell);
+    let (ca, sa) = (a.cos(), a.sin());
+    let t = |p: &[f64; 2]| -p[0] * sa + p[1] * ca;
+    let at = |t: f64| [rho * ca - t * sa, rho * sa + t * ca];
+    runs.iter()
+        .map(|run| {
+            let (t0, t1) = run.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &(_, i)| {
+                (lo.min(t(&cells[i].p)), hi.max(t(&cells[i].p)))
+            });
+            MapWall {
+                a: at(t0 - 0.5 * cfg.cell),
+                b: at(t1 + 0.5 * cfg.cell),
+                alpha: a,
+                rho,
+                cells: run.len(),
+                line,
+            }
+        })
+        .collect()
+}
+
+/// Step 2: the walls of the occupied `cells` (see the module docs).
+pub fn extract_walls(cells: &[MapCell], cfg: &TruthConfig) -> Vec<MapWall> {
+    if cells.is_empty() {
+        return Vec::new();
+    }
+    let mut h = Hough::new(cells, cfg);
+    let mut alive = vec![true; cells.len()];
+    let mut heap: BinaryHeap<(u32, std::cmp::Reverse<usize>)> = h
+        .acc
+        .iter()
+        .enumerate()
+        .filter(|(_, &v)| v >= cfg.min_votes)
+        .map(|(i, &v)| (v, std::cmp::Reverse(i)))
+        .collect();
+    let mut walls = Vec::new();
+    while let Some((v, std::cmp::Reverse(idx))) = heap.pop() {
+        let now = h.acc[idx];
+        if now != v {
+            if now >= cfg.min_votes {
+                heap.push((now, std::cmp::Reverse(idx)));
+            }
+            continue;
+        }
+        let (a0, r0) = h.line(idx);
+        let first = inliers(cells, &alive, a0, r0, cfg.inlier);
+        let pts: Vec<[f64; 2]> = first.iter().map(|&i| cells[i].p).collect();
+        let (a, rho) = if pts.len() >= 2 { tls(&pts) } else { (a0, r0) };
+        let mut idx_in = inliers(cells, &alive, a, rho, cfg.inlier);
+        if idx_in.len() < first.len() {
+            idx_in = first;
+        }
+        if (idx_in.len() as u32) < cfg.min_votes {
+            // The peak's cells are spread over neighbouring bins: retire it.
+            h.acc[idx] = 0;
+            continue;
+        }
+        let line = walls.last().map_or(0, |w: &MapWall| w.line + 1);
+        walls.extend(runs_to_walls(cells, &idx_in, a, line, cfg));
+        for &i in &idx_in {
+            alive[i] = false;
+            h.vote(cells[i].p, false);
+        }
+        if h.acc[idx] == now {
+            h.acc[idx] = 0;
+        }
+        heap.push((h.acc[idx], std::cmp::Reverse(idx)));
+    }
+    walls
+}
+
+/// Steps 1 and 2 for a log.
+pub fn build_map(scans: &[Scan], cfg: &TruthConfig) -> Map {
+    let cells = occupied_cells(scans, cfg);
+    let walls = extract_walls(&cells, cfg);
+    Map { cells, walls }
+}
+
+/// A true piece of one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Piece {
+    /// Index of the map wall of its first beam (collinear walls of one
+    /// line continue a piece).
+    pub wall: usize,
+    /// Index of the map line (the key of repeatability and fragmentation).
+    pub line: usize,
+    /// Normal direction in the sensor frame (rad), as `lms_core::Line`.
+    pub alpha: f64,
+    /// Distance from the sensor (m), ≥ 0.
+    pub r: f64,
+    /// First beam.
+    pub first: usize,
+    /// Last beam (inclusive).
+    pub last: usize,
+    /// Beams on the wall.
+    pub beams: usize,
+    /// Distance between the first and last on-wall hits along the wall (m).
+    pub length: f64,
+    /// At least `min_beams` beams on the wall and `min_piece` long.
+    pub counted: bool,
+}
+
+/// The truth of one frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameTruth {
+    /// Per beam: the map line (of the wall) it is on.
+    pub on_wall: Vec<Option<usize>>,
+    /// True pieces in beam order.
+    pub pieces: Vec<Piece>,
+}
+
+/// The wall `w`'s line in the sensor frame at `pose`: `(α, r)`, r ≥ 0.
+pub fn line_in_sensor(w: &MapWall, pose: [f64; 3]) -> (f64, f64) {
+    let [x, y, th] = pose;
+    let mut alpha = w.alpha - th;
+    let mut r = w.rho - (x * w.alpha.cos() + y * w.alpha.sin());
+    if r < 0.0 {
+        r = -r;
+        alpha += std::f64::consts::PI;
+    }
+    (lms_scene::wrap_angle(alpha), r)
+}
+
+/// Ray `o + t·u` against the segment `w`, extended by `ext` at both ends:
+/// the ray parameter `t > 0` if it meets it.
+fn ray_hit(o: [f64; 2], u: [f64; 2], w: &MapWall, ext: f64) -> Option<f64> {
+    let e = [w.b[0] - w.a[0], w.b[1] - w.a[1]];
+    let len = e[0].hypot(e[1]);
+    let den = u[0] * e[1] - u[1] * e[0];
+    if den.abs() < 1e-12 || len <= 0.0 {
+        return None;
+    }
+    let d = [w.a[0] - o[0], w.a[1] - o[1]];
+    let t = (d[0] * e[1] - d[1] * e[0]) / den;
+    let s = (d[0] * u[1] - d[1] * u[0]) / den;
+    let margin = ext / len;
+    (t > 0.0 && s >= -margin && s <= 1.0 + margin).then_some(t)
+}
+
+/// Step 3 for one beam: the wall it is on.
+fn beam_wall(
+    scan: &Scan,
+    j: usize,
+    walls: &[MapWall],
+    near: &[usize],
+    cfg: &TruthConfig,
+) -> Option<usize> {
+    if !usable(scan, j, cfg) {
+        return None;
+    }
+    let [x, y, th] = scan.meta.pose;
+    let phi = th + f64::from(scan.frame.geometry().bearing(j));
+    let u = [phi.cos(), phi.sin()];
+    let p = world_hit(scan, j);
+    let mut best: Option<(f64, usize)> = None;
+    for &w in near {
+        let wall = &walls[w];
+        if ray_hit([x, y], u, wall, 0.5 * cfg.cell).is_none() {
+            continue;
+        }
+        let perp = (p[0] * wall.alpha.cos() + p[1] * wall.alpha.sin() - wall.rho).abs();
+        if perp <= cfg.beam_tol && best.is_none_or(|(bd, _)| perp < bd) {
+            best = Some((perp, w));
+        }
+    }
+    best.map(|(_, w)| w)
+}
+
+/// Walls with a point within `reach` of `o`.
+fn walls_near(walls: &[MapWall], o: [f64; 2], reach: f64) -> Vec<usize> {
+    (0..walls.len())
+        .filter(|&w| {
+            let (a, b) = (walls[w].a, walls[w].b);
+            let e = [b[0] - a[0], b[1] - a[1]];
+            let l2 = (e[0] * e[0] + e[1] * e[1]).max(1e-12);
+            let s = (((o[0] - a[0]) * e[0] + (o[1] - a[1]) * e[1]) / l2).clamp(0.0, 1.0);
+            let q = [a[0] + s * e[0] - o[0], a[1] + s * e[1] - o[1]];
+            q[0].hypot(q[1]) <= reach
+        })
+        .collect()
+}
+
+/// Step 3: the true pieces of `scan` against `map`.
+pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
+    let [x, y, _] = scan.meta.pose;
+    let near = walls_near(&map.walls, [x, y], cfg.max_range);
+    let walls: Vec<Option<usize>> = (0..scan.frame.len())
+        .map(|j| beam_wall(scan, j, &map.walls, &near, cfg))
+        .collect();
+    let on_wall: Vec<Option<usize>> = walls.iter().map(|w| w.map(|w| map.walls[w].line)).collect();
+    let mut pieces = Vec::new();
+    let mut j = 0;
+    while j < on_wall.len() {
+        let Some(w) = walls[j] else {
+            j += 1;
+            continue;
+        };
+        let (first, mut last, mut beams) = (j, j, 1);
+        let mut k = j + 1;
+        while k < on_wall.len() && k <= last + 1 + cfg.gap_beams {
+            match on_wall[k] {
+                Some(v) if v == map.walls[w].line => {
+                    last = k;
+                    beams += 1;
+                }
+                Some(_) => break,
+                None => {}
+            }
+            k += 1;
+        }
+        let wall = &map.walls[w];
+        let (alpha, r) = line_in_sensor(wall, scan.meta.pose);
+        let t = |p: [f64; 2]| -p[0] * wall.alpha.sin() + p[1] * wall.alpha.cos();
+        let length = (t(world_hit(scan, last)) - t(world_hit(scan, first))).abs();
+        pieces.push(Piece {
+            wall: w,
+            line: wall.line,
+            alpha,
+            r,
+            first,
+            last,
+            beams,
+            length,
+            counted: beams >= cfg.min_beams && length >= cfg.min_piece,
+        });
+        j = last + 1;
+    }
+    FrameTruth { on_wall, pieces }
+}

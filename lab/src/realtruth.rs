@@ -1,0 +1,746 @@
+//! Real scans against the map-derived truth of [`crate::maptruth`]
+//! (issue 14, item 5): per log and method, TruePos, FalsePos, lines on no
+//! map wall, coverage, the errors Δα and Δr, repeatability and
+//! fragmentation.
+//!
+//! # Matching
+//! A line and a true piece are a candidate pair if at least half of the
+//! line's beam range `first..=last` lies in the piece's, `|Δα| < 3°` and
+//! `|Δr| < 0.1 m` ([`GATE_ALPHA_DEG`], [`GATE_R`]); pairs are taken
+//! one-to-one, greedily by `(Δα/3°)² + (Δr/0.1 m)²`.
+//!
+//! # Figures
+//! * **TruePos** = matched counted pieces / counted pieces (≥ 10 beams on
+//!   the wall); also over the counted pieces of 1 m or more.
+//! * **FalsePos** = lines matched to no piece (counted or not) / lines.
+//! * **On no wall**: lines with fewer than half of the valid beams of
+//!   their range on a map wall, as a share of the lines (clutter, glass,
+//!   walls under 0.5 m: things the map does not hold); *FalsePos on walls*
+//!   is FalsePos among the other lines.
+//! * **Coverage** = on-wall beams of counted pieces inside their matched
+//!   line's range / on-wall beams of counted pieces.
+//! * **σΔα, σΔr**: sample standard deviations over matched counted pieces
+//!   (the truth's own error is the oracle's figure).
+//! * **Repeatability**: of the walls matched in a frame and counted in the
+//!   next evaluated frame, the share matched there too.
+//! * **Fragmented**: counted pieces with two or more candidate lines (a
+//!   wall reported as several lines), as a share of counted pieces; and the
+//!   walls (with at least [`MIN_SIGHTINGS`] counted sightings) fragmented in
+//!   more than 5 % of their sightings.
+//!
+//! # Methods
+//! `no flags` is what `host-bridge extract LOG` does without options
+//! ([`no_flag_params`]: ALGORITHM.md v2's defaults — `split_depth = 8`,
+//! `fit_shared_points = false` — with σ and `max_range` from the data);
+//! `v1` is [`Params::V1`], the defaults before v2; `σ by unit` is 10 mm for
+//! cm logs and 5 mm for mm logs ([`crate::real::sigma_for`]); the oracle is a
+//! total-least-squares fit to each counted piece's own on-wall hits — what
+//! an extractor that knew the walls would report, so its TruePos is the
+//! ceiling of this truth and its σ the truth's own error.
+
+use std::collections::{HashMap, HashSet};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use host_bridge::carmen::{self, Scan, Unit, UnitMode};
+use host_bridge::options::UnitArg;
+use lms_core::{Extractor, Line, Params};
+
+use crate::baselines::{self, run_core, Extraction, Tables};
+use crate::maptruth::{build_map, frame_truth, FrameTruth, TruthConfig};
+use crate::metrics::{mean, std_dev};
+
+/// Matching gate on |Δα| (degrees).
+pub const GATE_ALPHA_DEG: f64 = 3.0;
+/// Matching gate on |Δr| (m).
+pub const GATE_R: f64 = 0.1;
+/// Smallest fraction of a line's beam range inside the piece's.
+pub const GATE_OVERLAP: f64 = 0.5;
+/// Counted sightings a wall needs to enter the per-wall fragmentation figure.
+pub const MIN_SIGHTINGS: usize = 5;
+/// Share of a wall's sightings it may be fragmented in (the issue's goal).
+pub const FRAGMENT_GOAL: f64 = 0.05;
+
+/// The parameters `host-bridge extract LOG` uses without options: the
+/// defaults for the log's data ([`host_bridge::defaults::for_log`]).
+pub fn no_flag_params(path: &Path) -> Result<Params> {
+    let args = host_bridge::options::ParamArgs::default();
+    match host_bridge::defaults::for_log(path, UnitArg::Auto, &args)? {
+        Some((params, _)) => Ok(params),
+        None => anyhow::bail!("{}: not a CARMEN log", path.display()),
+    }
+}
+
+/// Which parameters a method starts from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Base {
+    /// As without flags ([`no_flag_params`]: ALGORITHM.md v2, per data).
+    NoFlags,
+    /// ALGORITHM.md v1's defaults ([`Params::V1`]: σ = 5 mm, no split
+    /// before reject, shared corner points, no range limit) — what `extract`
+    /// without flags did before v2.
+    V1,
+}
+
+/// How a method picks σ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SigmaChoice {
+    /// The base's σ.
+    Base,
+    /// [`crate::real::sigma_for`] of the log's unit (10 mm cm, 5 mm mm).
+    ByUnit,
+    /// A fixed σ (m).
+    Fixed(f64),
+}
+
+/// What a method runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RealKind {
+    /// The core.
+    Core,
+    /// Split-and-merge with threshold `k·σ`.
+    SplitMerge(f32),
+    /// The least-squares fit to each true piece's own beams.
+    Oracle,
+}
+
+/// One method of the real-scan evaluation.
+#[derive(Clone, Copy, Debug)]
+pub struct RealMethod {
+    /// Name in the tables.
+    pub name: &'static str,
+    /// What it runs.
+    pub kind: RealKind,
+    /// The parameters it starts from.
+    pub base: Base,
+    /// σ.
+    pub sigma: SigmaChoice,
+}
+
+impl RealMethod {
+    /// The parameters on a log in `unit` whose no-flag parameters are `no_flags`.
+    pub fn params(&self, unit: Unit, no_flags: &Params) -> Params {
+        let base = match self.base {
+            Base::NoFlags => *no_flags,
+            Base::V1 => Params::V1,
+        };
+        let sigma = match self.sigma {
+            SigmaChoice::Base => base.sigma,
+            SigmaChoice::ByUnit => crate::real::sigma_for(unit) as f32,
+            SigmaChoice::Fixed(s) => s as f32,
+        };
+        Params { sigma, ..base }
+    }
+}
+
+/// Name of the no-flags method.
+pub const NO_FLAGS: &str = "defaults, no flags (v2, per data)";
+/// Name of v1's no-flags method.
+pub const V1_NO_FLAGS: &str = "v1 defaults, no flags (σ 5 mm)";
+/// Name of the oracle.
+pub const ORACLE: &str = "oracle (LS fit to the true beams)";
+
+/// The methods of the real-scan tables.
+pub fn methods() -> Vec<RealMethod> {
+    let m = |name, kind, base, sigma| RealMethod {
+        name,
+        kind,
+        base,
+        sigma,
+    };
+    use Base::{NoFlags, V1};
+    use RealKind::*;
+    use SigmaChoice::{ByUnit, Fixed};
+    let own = SigmaChoice::Base;
+    vec![
+        m(NO_FLAGS, Core, NoFlags, own),
+        m(V1_NO_FLAGS, Core, V1, own),
+        m("v1, σ by unit (10 mm cm, 5 mm mm)", Core, V1, ByUnit),
+        m("v2, σ by unit", Core, NoFlags, ByUnit),
+        m("v2, σ = 20 mm", Core, NoFlags, Fixed(0.02)),
+        m("v2, σ = 30 mm", Core, NoFlags, Fixed(0.03)),
+        m(
+            "split-and-merge (4σ), σ by unit",
+            SplitMerge(4.0),
+            NoFlags,
+            ByUnit,
+        ),
+        m(ORACLE, Oracle, NoFlags, own),
+    ]
+}
+
+/// Accumulated figures of one method on one log.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RealTally {
+    /// Frames.
+    pub frames: usize,
+    /// Counted pieces.
+    pub pieces: usize,
+    /// Counted pieces matched.
+    pub matched: usize,
+    /// Counted pieces of 1 m or more.
+    pub pieces_1m: usize,
+    /// Of those, matched.
+    pub matched_1m: usize,
+    /// Lines.
+    pub lines: usize,
+    /// Lines matched to a piece.
+    pub lines_matched: usize,
+    /// Lines on no map wall.
+    pub lines_no_wall: usize,
+    /// Unmatched lines with half their range on a piece (fragments, off lines).
+    pub lines_on_piece: usize,
+    /// Counted pieces with two or more candidate lines.
+    pub fragmented: usize,
+    /// On-wall beams of counted pieces.
+    pub wall_beams: usize,
+    /// Of those, inside the matched line.
+    pub covered_beams: usize,
+    /// Δα of matched counted pieces (rad).
+    pub d_alpha: Vec<f64>,
+    /// Δr of matched counted pieces (m).
+    pub d_r: Vec<f64>,
+    /// Walls matched in a frame and counted in the next.
+    pub repeat_chances: usize,
+    /// Of those, matched in the next too.
+    pub repeated: usize,
+    /// Per wall: (counted sightings, fragmented sightings).
+    pub per_wall: HashMap<usize, (usize, usize)>,
+    /// Time per frame (ms).
+    pub ms: Vec<f64>,
+}
+
+/// The figures of a [`RealTally`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RealSummary {
+    /// TruePos.
+    pub true_pos: f64,
+    /// TruePos on pieces ≥ 1 m.
+    pub true_pos_1m: f64,
+    /// FalsePos.
+    pub false_pos: f64,
+    /// Lines on no map wall / lines.
+    pub no_wall: f64,
+    /// FalsePos among the lines on a map wall (clutter the map lacks left out).
+    pub false_pos_on_walls: f64,
+    /// Coverage.
+    pub coverage: f64,
+    /// σΔα (degrees).
+    pub sd_alpha_deg: f64,
+    /// σΔr (mm).
+    pub sd_r_mm: f64,
+    /// Repeatability.
+    pub repeatability: f64,
+    /// Fragmented sightings / counted pieces.
+    pub fragmented: f64,
+    /// Walls fragmented in > 5 % of their sightings / walls with enough sightings.
+    pub walls_fragmented: (usize, usize),
+    /// Lines per frame.
+    pub lines_per_frame: f64,
+    /// Mean ms per frame.
+    pub ms: f64,
+}
+
+fn ratio(a: usize, b: usize) -> f64 {
+    if b == 0 {
+        f64::NAN
+    } else {
+        a as f64 / b as f64
+    }
+}
+
+impl RealTally {
+    /// Add `o`.
+    pub fn merge(&mut self, o: &RealTally) {
+        self.frames += o.frames;
+        self.pieces += o.pieces;
+        self.matched += o.matched;
+        self.pieces_1m += o.pieces_1m;
+        self.matched_1m += o.matched_1m;
+        self.lines += o.lines;
+        self.lines_matched += o.lines_matched;
+        self.lines_no_wall += o.lines_no_wall;
+        self.lines_on_piece += o.lines_on_piece;
+        self.fragmented += o.fragmented;
+        self.wall_beams += o.wall_beams;
+        self.covered_beams += o.covered_beams;
+        self.d_alpha.extend(&o.d_alpha);
+        self.d_r.extend(&o.d_r);
+        self.repeat_chances += o.repeat_chances;
+        self.repeated += o.repeated;
+        // Wall ids are per log: pooled logs keep distinct keys.
+        let base = self.per_wall.keys().max().map_or(0, |k| k + 1);
+        for (k, v) in &o.per_wall {
+            self.per_wall.insert(base + k, *v);
+        }
+        self.ms.extend(&o.ms);
+    }
+
+    /// The figures.
+    pub fn summary(&self) -> RealSummary {
+        let walls: Vec<&(usize, usize)> = self
+            .per_wall
+            .values()
+            .filter(|(n, _)| *n >= MIN_SIGHTINGS)
+            .collect();
+        let bad = walls
+            .iter()
+            .filter(|(n, f)| *f as f64 > FRAGMENT_GOAL * *n as f64)
+            .count();
+        RealSummary {
+            true_pos: ratio(self.matched, self.pieces),
+            true_pos_1m: ratio(self.matched_1m, self.pieces_1m),
+            false_pos: ratio(self.lines - self.lines_matched, self.lines),
+            no_wall: ratio(self.lines_no_wall, self.lines),
+            false_pos_on_walls: ratio(
+                self.lines - self.lines_matched - self.lines_no_wall,
+                self.lines - self.lines_no_wall,
+            ),
+            coverage: ratio(self.covered_beams, self.wall_beams),
+            sd_alpha_deg: std_dev(&self.d_alpha).to_degrees(),
+            sd_r_mm: std_dev(&self.d_r) * 1e3,
+            repeatability: ratio(self.repeated, self.repeat_chances),
+            fragmented: ratio(self.fragmented, self.pieces),
+            walls_fragmented: (bad, walls.len()),
+            lines_per_frame: ratio(self.lines, self.frames),
+            ms: mean(&self.ms),
+        }
+    }
+}
+
+/// A line as the scoring sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScoredLine {
+    /// Normal direction (rad).
+    pub alpha: f64,
+    /// Distance (m).
+    pub r: f64,
+    /// First beam.
+    pub first: usize,
+    /// Last beam (inclusive).
+    pub last: usize,
+}
+
+impl From<&Line> for ScoredLine {
+    fn from(l: &Line) -> Self {
+        ScoredLine {
+            alpha: f64::from(l.alpha),
+            r: f64::from(l.r),
+            first: usize::from(l.first),
+            last: usize::from(l.last),
+        }
+    }
+}
+
+/// Fraction of `first..=last` inside `pf..=pl`.
+fn overlap(first: usize, last: usize, pf: usize, pl: usize) -> f64 {
+    let lo = first.max(pf);
+    let hi = last.min(pl);
+    if hi < lo {
+        0.0
+    } else {
+        (hi - lo + 1) as f64 / (last - first + 1) as f64
+    }
+}
+
+/// `(Δα, Δr)` of a line against a piece, if they are a candidate pair.
+fn candidate(l: &ScoredLine, p: &crate::maptruth::Piece) -> Option<(f64, f64)> {
+    if overlap(l.first, l.last, p.first, p.last) < GATE_OVERLAP {
+        return None;
+    }
+    let da = lms_scene::wrap_angle(l.alpha - p.alpha);
+    let dr = l.r - p.r;
+    (da.abs() < GATE_ALPHA_DEG.to_radians() && dr.abs() < GATE_R).then_some((da, dr))
+}
+
+/// The walls of matched counted pieces of a frame.
+pub type MatchedWalls = HashSet<usize>;
+
+/// Score `lines` of a frame against `truth`, adding to `t`; returns the
+/// walls of matched counted pieces and, per line, whether it is matched.
+pub fn score_frame(
+    truth: &FrameTruth,
+    lines: &[ScoredLine],
+    valid: &[bool],
+    t: &mut RealTally,
+) -> (MatchedWalls, Vec<bool>) {
+    let mut pairs: Vec<(f64, usize, usize, f64, f64)> = Vec::new();
+    let mut candidates = vec![0usize; truth.pieces.len()];
+    for (i, l) in lines.iter().enumerate() {
+        for (k, p) in truth.pieces.iter().enumerate() {
+            if let Some((da, dr)) = candidate(l, p) {
+                candidates[k] += 1;
+                let cost = (da / GATE_ALPHA_DEG.to_radians()).powi(2) + (dr / GATE_R).powi(2);
+                pairs.push((cost, i, k, da, dr));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut line_of = vec![None; truth.pieces.len()];
+    let mut used = vec![false; lines.len()];
+    for &(_, i, k, da, dr) in &pairs {
+        if used[i] || line_of[k].is_some() {
+            continue;
+        }
+        used[i] = true;
+        line_of[k] = Some((i, da, dr));
+    }
+    t.frames += 1;
+    t.lines += lines.len();
+    t.lines_matched += used.iter().filter(|&&u| u).count();
+    for (i, l) in lines.iter().enumerate() {
+        let in_range = (l.first..=l.last.min(valid.len().saturating_sub(1)))
+            .filter(|&j| valid[j])
+            .collect::<Vec<_>>();
+        let on = in_range
+            .iter()
+            .filter(|&&j| truth.on_wall[j].is_some())
+            .count();
+        if 2 * on < in_range.len().max(1) {
+            t.lines_no_wall += 1;
+        } else if !used[i]
+            && truth
+                .pieces
+                .iter()
+                .any(|p| overlap(l.first, l.last, p.first, p.last) >= GATE_OVERLAP)
+        {
+            t.lines_on_piece += 1;
+        }
+    }
+    let mut walls = MatchedWalls::new();
+    for (k, p) in truth.pieces.iter().enumerate() {
+        if !p.counted {
+            continue;
+        }
+        t.pieces += 1;
+        let long = p.length >= 1.0;
+        t.pieces_1m += usize::from(long);
+        let beams: Vec<usize> = (p.first..=p.last)
+            .filter(|&j| truth.on_wall[j] == Some(p.line))
+            .collect();
+        t.wall_beams += beams.len();
+        let fragmented = candidates[k] >= 2;
+        t.fragmented += usize::from(fragmented);
+        let e = t.per_wall.entry(p.line).or_default();
+        e.0 += 1;
+        e.1 += usize::from(fragmented);
+        if let Some((i, da, dr)) = line_of[k] {
+            t.matched += 1;
+            t.matched_1m += usize::from(long);
+            let l = &lines[i];
+            t.covered_beams += beams
+                .iter()
+                .filter(|&&j| (l.first..=l.last).contains(&j))
+                .count();
+            t.d_alpha.push(da);
+            t.d_r.push(dr);
+            walls.insert(p.line);
+        }
+    }
+    (walls, used)
+}
+
+/// The oracle's lines: a TLS fit to each counted piece's on-wall hits in
+/// the sensor frame.
+pub fn oracle_lines(scan: &Scan, truth: &FrameTruth) -> Vec<ScoredLine> {
+    let g = scan.frame.geometry();
+    let r = scan.frame.ranges();
+    truth
+        .pieces
+        .iter()
+        .filter(|p| p.counted)
+        .map(|p| {
+            let pts: Vec<[f64; 2]> = (p.first..=p.last)
+                .filter(|&j| truth.on_wall[j] == Some(p.line))
+                .map(|j| {
+                    let (d, phi) = (f64::from(r[j]), f64::from(g.bearing(j)));
+                    [d * phi.cos(), d * phi.sin()]
+                })
+                .collect();
+            let (mut a, mut rho) = crate::maptruth::tls(&pts);
+            if rho < 0.0 {
+                rho = -rho;
+                a += std::f64::consts::PI;
+            }
+            ScoredLine {
+                alpha: lms_scene::wrap_angle(a),
+                r: rho,
+                first: p.first,
+                last: p.last,
+            }
+        })
+        .collect()
+}
+
+/// One method's lines on one frame.
+#[allow(clippy::too_many_arguments)]
+pub fn extract(
+    m: &RealMethod,
+    unit: Unit,
+    no_flags: &Params,
+    ex: &mut Extractor,
+    scan: &Scan,
+    tables: &Tables,
+    truth: &FrameTruth,
+) -> Vec<ScoredLine> {
+    let p = m.params(unit, no_flags);
+    let x: Extraction = match m.kind {
+        RealKind::Core => run_core(ex, &scan.frame, &p),
+        RealKind::SplitMerge(k) => baselines::split_and_merge(&scan.frame, tables, &p, k),
+        RealKind::Oracle => return oracle_lines(scan, truth),
+    };
+    x.lines.iter().map(ScoredLine::from).collect()
+}
+
+/// One log's result.
+#[derive(Clone, Debug)]
+pub struct LogTruth {
+    /// File name.
+    pub name: String,
+    /// Unit.
+    pub unit: Unit,
+    /// Frames evaluated.
+    pub frames: usize,
+    /// Map walls.
+    pub walls: usize,
+    /// Map lines (collinear walls are one).
+    pub lines: usize,
+    /// Counted pieces per frame.
+    pub pieces_per_frame: f64,
+    /// Per method (order of `methods`).
+    pub tallies: Vec<RealTally>,
+    /// Figure file, if drawn.
+    pub figure: Option<String>,
+}
+
+/// Evaluate one log: map, truth per frame, every method.
+pub fn run_log(
+    path: &Path,
+    methods: &[RealMethod],
+    every: usize,
+    cfg: &TruthConfig,
+    figures: Option<&Path>,
+) -> Result<LogTruth> {
+    let log = carmen::read_log(path, UnitMode::Auto)?;
+    let name = path
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let map = build_map(&log.scans, cfg);
+    let no_flags = no_flag_params(path)?;
+    let mut ex = Extractor::new();
+    let mut tallies = vec![RealTally::default(); methods.len()];
+    let mut prev: Vec<Option<(MatchedWalls, HashSet<usize>)>> = vec![None; methods.len()];
+    let mut counted_per_frame = Vec::new();
+    let scans: Vec<&Scan> = log.scans.iter().step_by(every.max(1)).collect();
+    for scan in &scans {
+        let truth = frame_truth(scan, &map, cfg);
+        let counted: HashSet<usize> = truth
+            .pieces
+            .iter()
+            .filter(|p| p.counted)
+            .map(|p| p.line)
+            .collect();
+        counted_per_frame.push(counted.len());
+        let tables = Tables::for_frame(&scan.frame);
+        let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
+        for (k, m) in methods.iter().enumerate() {
+            let started = Instant::now();
+            let lines = extract(m, log.unit, &no_flags, &mut ex, scan, &tables, &truth);
+            tallies[k].ms.push(started.elapsed().as_secs_f64() * 1e3);
+            let (matched, _) = score_frame(&truth, &lines, &valid, &mut tallies[k]);
+            if let Some((pm, _)) = &prev[k] {
+                for w in pm {
+                    if counted.contains(w) {
+                        tallies[k].repeat_chances += 1;
+                        tallies[k].repeated += usize::from(matched.contains(w));
+                    }
+                }
+            }
+            prev[k] = Some((matched, counted.clone()));
+        }
+    }
+    let figure = match figures {
+        Some(dir) => Some(crate::realfigures::draw(
+            dir,
+            &name,
+            (&log, &no_flags),
+            &scans,
+            &map,
+            methods,
+            cfg,
+            &counted_per_frame,
+        )?),
+        None => None,
+    };
+    Ok(LogTruth {
+        name,
+        unit: log.unit,
+        frames: scans.len(),
+        walls: map.walls.len(),
+        lines: map.walls.last().map_or(0, |w| w.line + 1),
+        pieces_per_frame: tallies
+            .first()
+            .map_or(f64::NAN, |t| ratio(t.pieces, t.frames)),
+        tallies,
+        figure,
+    })
+}
+
+/// Every log of `logs`.
+pub fn run_logs(
+    logs: &[PathBuf],
+    every: usize,
+    figures: Option<&Path>,
+    bar: &indicatif::ProgressBar,
+) -> Result<Vec<LogTruth>> {
+    let methods = methods();
+    let cfg = TruthConfig::default();
+    let mut out = Vec::new();
+    for path in logs {
+        bar.set_message(format!("map truth, {}", path.display()));
+        out.push(run_log(path, &methods, every, &cfg, figures)?);
+        bar.inc(1);
+    }
+    Ok(out)
+}
+
+fn f(x: f64, d: usize) -> String {
+    if x.is_finite() {
+        format!("{x:.d$}")
+    } else {
+        "—".into()
+    }
+}
+
+/// The Markdown section of the report (heading level `##`).
+pub fn markdown(logs: &[LogTruth], every: usize) -> String {
+    let mut md = String::new();
+    let names: Vec<&str> = methods().iter().map(|m| m.name).collect();
+    let _ = writeln!(
+        md,
+        "## 5. Real scans against map-derived truth\n\n{} of each log; true lines from the \
+         log's SLAM map (`lab/src/maptruth.rs`: walls of the accumulated map, ray-cast into \
+         each frame; pieces with ≥ 10 beams on a wall are counted). Matching one-to-one, \
+         |Δα| < 3°, |Δr| < 0.1 m, ≥ 50 % of the line's beams on the piece \
+         (`lab/src/realtruth.rs`). *No flags* is `host-bridge extract LOG` without options. \
+         The oracle fits each true piece's own beams: its TruePos is the ceiling of this \
+         truth, its σ the truth's own error.\n",
+        if every == 1 {
+            "Every frame".to_string()
+        } else {
+            format!("Every {every}-th frame")
+        }
+    );
+    let _ = writeln!(
+        md,
+        "| log | frames | map walls | counted pieces / frame |\n|:---|---:|---:|---:|"
+    );
+    for l in logs {
+        let _ = writeln!(
+            md,
+            "| {} ({}) | {} | {} | {} |",
+            l.name,
+            l.unit,
+            l.frames,
+            l.walls,
+            f(l.pieces_per_frame, 1)
+        );
+    }
+    let _ = writeln!(md, "\n### All logs pooled\n");
+    table_header(&mut md, "method");
+    for (k, n) in names.iter().enumerate() {
+        let mut t = RealTally::default();
+        for l in logs {
+            t.merge(&l.tallies[k]);
+        }
+        table_row(&mut md, n, &t.summary());
+    }
+    let _ = writeln!(md, "\n### Per log\n");
+    table_header(&mut md, "log · method");
+    for l in logs {
+        for (k, n) in names.iter().enumerate() {
+            table_row(
+                &mut md,
+                &format!("{} · {n}", l.name),
+                &l.tallies[k].summary(),
+            );
+        }
+    }
+    let figs: Vec<&LogTruth> = logs.iter().filter(|l| l.figure.is_some()).collect();
+    if !figs.is_empty() {
+        let _ = writeln!(
+            md,
+            "\n**Truth and extraction** (one frame per log, the first whose number of counted \
+             pieces is the log's median; left: the map's walls and the pose; then the frame \
+             with its true pieces in green, matched lines blue, false lines red).\n"
+        );
+        for l in figs {
+            if let Some(file) = &l.figure {
+                let _ = writeln!(md, "![{} truth]({file})\n", l.name);
+            }
+        }
+    }
+    md
+}
+
+fn table_header(md: &mut String, first: &str) {
+    let _ = writeln!(
+        md,
+        "| {first} | TruePos | TruePos ≥ 1 m | FalsePos | on no wall | FalsePos on walls | \
+         coverage | σΔα (°) | σΔr (mm) | repeatability | fragmented | walls > 5 % fragmented | \
+         lines / frame | ms / frame |\n\
+         |:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+}
+
+fn table_row(md: &mut String, name: &str, s: &RealSummary) {
+    let _ = writeln!(
+        md,
+        "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} of {} | {} | {} |",
+        f(s.true_pos, 3),
+        f(s.true_pos_1m, 3),
+        f(s.false_pos, 3),
+        f(s.no_wall, 3),
+        f(s.false_pos_on_walls, 3),
+        f(s.coverage, 3),
+        f(s.sd_alpha_deg, 2),
+        f(s.sd_r_mm, 1),
+        f(s.repeatability, 3),
+        f(s.fragmented, 3),
+        s.walls_fragmented.0,
+        s.walls_fragmented.1,
+        f(s.lines_per_frame, 2),
+        f(s.ms, 3),
+    );
+}
+
+/// `lms-lab truth`: sections 5–7 of the report alone, into `DIR/real-truth.md`.
+pub fn run_standalone(args: &crate::TruthArgs) -> Result<PathBuf> {
+    anyhow::ensure!(args.every > 0, "--every must be at least 1");
+    let logs = crate::real::find_logs(&args.data)?;
+    let output = args.output.as_path();
+    std::fs::create_dir_all(output)
+        .with_context(|| format!("cannot create {}", output.display()))?;
+    let figures = (!args.no_plots && crate::report::fonts_available()).then_some(output);
+    let bar = crate::progress(logs.len() as u64);
+    let truth = run_logs(&logs, args.every, figures, &bar)?;
+    let fits = crate::sensorfit::run(&logs, crate::SENSOR_FIT_SCANS)?;
+    let realistic = if args.synthetic_scans > 0 {
+        crate::realistic::run(args.synthetic_scans, 1, &bar)?
+    } else {
+        Vec::new()
+    };
+    bar.finish_and_clear();
+    let issue14 = crate::Issue14 {
+        truth,
+        fits,
+        realistic,
+        realistic_scans: args.synthetic_scans,
+    };
+    let path = output.join("real-truth.md");
+    std::fs::write(&path, issue14.markdown(args.every))
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(path)
+}
