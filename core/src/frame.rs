@@ -28,8 +28,9 @@ pub enum Invalid {
     /// Error code 8183: above the maximum range.
     AboveMax,
     /// Any other value at or above the first error code; the offset below the
-    /// mode's all-ones value (0 = not valid).
-    OtherCode(u16),
+    /// mode's all-ones value (0 = not valid; a decoded word gives 0..=8). One
+    /// byte, so that a [`Beam`] is two (a frame's statuses: 802 B, not 1604).
+    OtherCode(u8),
     /// The reading was 0 (no distance).
     Zero,
     /// The reading was not a finite, positive number (host-side input only).
@@ -38,7 +39,9 @@ pub enum Invalid {
 
 impl Invalid {
     /// Classify an error code given as its offset below the all-ones value
-    /// of the range field (8191 − value for the 13-bit mode).
+    /// of the range field (8191 − value for the 13-bit mode). Error codes
+    /// are offsets 0..=8; an offset above 255 (no error code) is kept as
+    /// `OtherCode(255)`.
     pub const fn from_code_offset(offset: u16) -> Self {
         match offset {
             0 => Invalid::NoEcho,
@@ -47,7 +50,8 @@ impl Invalid {
             4 => Invalid::LowSignal,
             5 => Invalid::ChannelError,
             8 => Invalid::AboveMax,
-            other => Invalid::OtherCode(other),
+            other if other > u8::MAX as u16 => Invalid::OtherCode(u8::MAX),
+            other => Invalid::OtherCode(other as u8),
         }
     }
 }

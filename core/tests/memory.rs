@@ -8,7 +8,7 @@ use lms_core::device::client::Client;
 use lms_core::device::coprocessor::{CoProcessor, LatestScan, SensorLink};
 use lms_core::device::emulator::Emulator;
 use lms_core::telegram::Framer;
-use lms_core::{Extractor, Features, Frame};
+use lms_core::{Beam, Extractor, Features, Frame};
 use std::mem::size_of;
 
 #[test]
@@ -30,6 +30,16 @@ fn coprocessor_parts_sizes() {
     // One copy of a scan in the sensor link: the client reads replies and
     // scans in place in its framer (it held a second 818-byte copy).
     assert!(size_of::<Client>() < size_of::<Framer>() + 256);
+    // A beam's status is two bytes (`Invalid::OtherCode(u8)`), so a frame
+    // is its ranges (4 B a beam) and statuses (2 B a beam) and little more.
+    assert_eq!(size_of::<Beam>(), 2);
+    assert!(size_of::<Frame>() <= 6 * lms_core::MAX_BEAMS + 32);
+    // The host face stages no scan: its source writes a `30 01`'s values
+    // straight into the telegram (it held an 802-byte copy).
+    assert!(
+        size_of::<Emulator<LatestScan>>()
+            < size_of::<LatestScan>() + size_of::<Framer>() + 819 + 1_400
+    );
     // The whole co-processor (x86-64 layout; on the MCU a little smaller):
     // 22 704 B before the copy went, 21 896 B after; 21 944 B with the
     // drop-in host face (three more D5 counters, twice; the host line's
@@ -37,6 +47,7 @@ fn coprocessor_parts_sizes() {
     // the boot's four D5 fields (reset flags, fault cause, PC, LR; twice);
     // 21 992 B with ALGORITHM.md v2's parameters (max_range,
     // merge_collinear, max_alpha_sd_deg: 12 B) and two more counters in
-    // Stats (4 B).
-    assert!(size_of::<CoProcessor>() <= 21_992);
+    // Stats (4 B); 20 392 B with two-byte beam statuses and no staging copy
+    // in the host face.
+    assert!(size_of::<CoProcessor>() <= 20_392);
 }

@@ -114,7 +114,7 @@ impl RangeBits {
             Invalid::LowSignal => 4,
             Invalid::ChannelError => 5,
             Invalid::AboveMax => 8,
-            Invalid::OtherCode(o) if o <= 8 => o,
+            Invalid::OtherCode(o) if o <= 8 => o as u16,
             Invalid::OtherCode(_) => 0,
         };
         self.mask() - offset
@@ -362,6 +362,24 @@ impl MeasuredValues {
             scan_flags: 0,
             status,
         }
+    }
+
+    /// A scan of `count` raw value words (range + flags) that `fill` writes
+    /// in place, so that a simulator needs no staging copy of them.
+    pub fn from_fill(
+        count: usize,
+        units: Unit,
+        status: u8,
+        fill: impl FnOnce(&mut [u16]),
+    ) -> Result<Self, MeasuredError> {
+        let mut v = MeasuredValues::empty(units, status);
+        fill(
+            v.values
+                .get_mut(..count)
+                .ok_or(MeasuredError::TooManyValues { count })?,
+        );
+        v.count = count;
+        Ok(v)
     }
 
     /// A scan from raw value words (range + flags), e.g. for a simulator.

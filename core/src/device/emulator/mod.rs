@@ -202,7 +202,6 @@ pub struct Emulator<S> {
     tx_done: Done,
     /// When the line finished the last frame (µs).
     line_free_us: u64,
-    scan: [u16; MAX_VALUES],
     events: Deque<Event, EVENT_CAPACITY>,
     stats: EmulatorStats,
 }
@@ -243,7 +242,6 @@ impl<S: ScanSource> Emulator<S> {
             tx_start_us: 0,
             tx_done: Done::Nothing,
             line_free_us: 0,
-            scan: [0; MAX_VALUES],
             events: Deque::new(),
             stats: EmulatorStats::ZERO,
         }

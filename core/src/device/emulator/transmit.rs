@@ -279,19 +279,19 @@ impl<S: ScanSource> Emulator<S> {
         let units = self.units();
         let beams = variant.beams().min(MAX_VALUES);
         let mut means = value_modes::MeanAccumulator::new();
+        let mut scan = [0u16; MAX_VALUES];
         let not_valid = RangeBits::Bits13.encode_invalid(Invalid::NoEcho);
         for _ in 0..mode.samples() {
-            let out = self.scan.get_mut(..beams).unwrap_or_default();
+            let out = scan.get_mut(..beams).unwrap_or_default();
             let written = self.source.next_scan(variant, units, out).min(out.len());
             out.get_mut(written..).unwrap_or_default().fill(not_valid);
             means.add(out);
         }
         if mode.samples() > 1 {
-            means.take(self.scan.get_mut(..beams).unwrap_or_default());
+            means.take(scan.get_mut(..beams).unwrap_or_default());
         }
         let (start, count) = mode.span(variant);
-        let values = self
-            .scan
+        let values = scan
             .get(start..start.saturating_add(count))
             .unwrap_or_default();
         let (address, status) = (self.settings.address, self.settings.status);
@@ -377,12 +377,15 @@ impl<S: ScanSource> Emulator<S> {
         let variant = self.variant;
         let units = self.units();
         let beams = variant.beams().min(MAX_VALUES);
-        let out = self.scan.get_mut(..beams).unwrap_or_default();
-        let written = self.source.next_scan(variant, units, out).min(out.len());
         let not_valid = RangeBits::Bits13.encode_invalid(Invalid::NoEcho);
-        out.get_mut(written..).unwrap_or_default().fill(not_valid);
+        let source = &mut self.source;
+        // The source writes straight into the telegram's values (no
+        // staging copy in the emulator).
+        let values = MeasuredValues::from_fill(beams, units, self.settings.status, |out| {
+            let written = source.next_scan(variant, units, out).min(out.len());
+            out.get_mut(written..).unwrap_or_default().fill(not_valid);
+        });
         let address = self.settings.address;
-        let values = MeasuredValues::from_raw(out, units, self.settings.status);
         let n = match values {
             Ok(v) if ack => self.emit_after_ack(|buf| v.emit(address, buf)),
             Ok(v) => v.emit(address, &mut self.tx),
