@@ -83,8 +83,16 @@ fn verify_qemu_reports_a_firmware_that_does_not_boot() {
         println!("skipped: qemu-system-arm is not on PATH");
         return;
     }
-    // Not an ELF: QEMU loads it as a raw image and locks up at once.
-    let bogus = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
+    // Not an ELF: refused before QEMU starts.
+    let not_elf = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
+    let (ok, _, err) = verify(&["--qemu", not_elf.to_str().unwrap(), "--count", "3"]);
+    assert!(!ok);
+    assert!(err.contains("is not an ELF file"), "{err}");
+    // An ARM ELF header over garbage: it passes the check, QEMU cannot run it.
+    let bogus = std::env::temp_dir().join(format!("verify-qemu-bogus-{}.elf", std::process::id()));
+    let mut bytes = b"\x7fELF\x01\x01\x01\0\0\0\0\0\0\0\0\0\x02\0\x28\0".to_vec();
+    bytes.extend(std::iter::repeat_n(0xA5u8, 4096));
+    std::fs::write(&bogus, &bytes).unwrap();
     let (ok, _, err) = verify(&[
         "--qemu",
         bogus.to_str().unwrap(),
@@ -104,6 +112,7 @@ fn verify_qemu_reports_a_firmware_that_does_not_boot() {
         let dir = std::env::temp_dir().join(format!("host-bridge-verify-{digits}"));
         let _ = std::fs::remove_dir_all(dir);
     }
+    let _ = std::fs::remove_file(&bogus);
 }
 
 /// verify's default `--max-in-flight` under QEMU rests on the size of the
