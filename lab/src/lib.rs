@@ -603,8 +603,9 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let t2 = Instant::now();
     let (real, left_out) = real::run(args, &logs, &bar)?;
     // The map truth and the sensor fit read only the logs that could be read.
-    let logs: Vec<_> = logs
-        .into_iter()
+    let readable: Vec<_> = logs
+        .iter()
+        .cloned()
         .filter(|p| {
             !left_out
                 .iter()
@@ -613,8 +614,8 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         .collect();
     let truth_figures =
         (!args.no_plots && report::fonts_available()).then_some(args.output.as_path());
-    let truth = realtruth::run_logs(&logs, args.real_every, truth_figures, &bar)?;
-    let fits = sensorfit::run(&logs, SENSOR_FIT_SCANS.min(args.scans))?;
+    let truth = realtruth::run_logs(&readable, args.real_every, truth_figures, &bar)?;
+    let fits = sensorfit::run(&readable, SENSOR_FIT_SCANS.min(args.scans))?;
     let realistic = realistic::run(args.scans, args.seed, &bar)?;
     let t3 = Instant::now();
     bar.set_message("writing the report");
