@@ -8,7 +8,7 @@
 //! sensor.
 
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
-use lms_core::device::emulator::{Emulator, FnSource, Settings};
+use lms_core::device::emulator::{Emulator, FnSource, OperatingMode, Settings, ValueMode};
 use lms_core::telegram::features::{
     Assembled, Counters, FeatureAssembler, CMD_COUNTERS, CMD_FEATURES, REQ_COUNTERS, REQ_FEATURES,
 };
@@ -56,6 +56,8 @@ struct Bench {
     sensor: Port,
     host: Port,
     now: u64,
+    /// Every byte the sensor sent.
+    sensor_wire: Vec<u8>,
 }
 
 impl Bench {
@@ -73,6 +75,7 @@ impl Bench {
             sensor: Port::default(),
             host: Port::default(),
             now: 0,
+            sensor_wire: Vec::new(),
         }
     }
 
@@ -91,6 +94,7 @@ impl Bench {
                     break;
                 }
                 self.sensor.rx.extend(&buf[..n]);
+                self.sensor_wire.extend(&buf[..n]);
             }
             while self.lms.next_event().is_some() {}
             self.cop
@@ -435,4 +439,141 @@ fn a_variant_chosen_during_the_bring_up_is_applied_after_it() {
         assert_eq!(bench.lms.variant(), Variant::Fov100Res100, "at {at_ms} ms");
         assert_eq!(bench.lms.baud(), Baud::B500000, "at {at_ms} ms");
     }
+}
+
+/// The telegrams on `wire` (STX … CRC), in order.
+fn telegrams(wire: &[u8]) -> Vec<Vec<u8>> {
+    let mut framer = Framer::new(Direction::SensorToHost, Handshake::Expected);
+    let mut out = Vec::new();
+    let mut input = wire;
+    loop {
+        let fed = framer.feed(input);
+        input = fed.remaining;
+        match fed.event {
+            Some(Event::Telegram(t)) => out.push(t.as_bytes().to_vec()),
+            Some(_) => {}
+            None if input.is_empty() => break,
+            None => {}
+        }
+    }
+    assert_eq!(framer.stats().crc_errors, 0);
+    out
+}
+
+/// `true` if `telegram` went out of the sensor byte for byte.
+fn from_sensor(bench: &Bench, telegram: &[u8]) -> bool {
+    bench
+        .sensor_wire
+        .windows(telegram.len())
+        .any(|w| w == telegram)
+}
+
+#[test]
+fn value_modes_are_applied_on_the_sensor_and_its_telegrams_passed_through() {
+    let mut bench = Bench::new();
+    bench.run(2_000_000);
+    bench.host_500k();
+    bench.send_host(Request::Continuous);
+    bench.run(200_000);
+    // Mean of 4 scans: the sensor's A0 00, then its B6 telegrams as sent.
+    let reply = bench.ask(0x20, &[0x26, 4], 1_000_000);
+    let t = telegrams(&reply);
+    assert_eq!(&t[0][4..6], &[0xA0, 0x00], "{:02X?}", t[0]);
+    assert!(from_sensor(&bench, &t[0]), "the sensor's own A0");
+    let mode = ValueMode::Mean { samples: 4 };
+    assert_eq!(bench.lms.operating_mode(), OperatingMode::Values(mode));
+    let b6: Vec<_> = t[1..].iter().filter(|t| t[4] == 0xB6).collect();
+    // 180°/0.5°: 26.7 ms a scan, 107 ms a mean: ~9 in 1 s (B0s of the
+    // switch-over aside: no B0 passed after the A0).
+    assert!(b6.len() >= 7, "{}", b6.len());
+    assert!(t[1..]
+        .iter()
+        .skip_while(|t| t[4] == 0xB0)
+        .all(|t| t[4] == 0xB6));
+    assert!(
+        b6.iter().all(|t| from_sensor(&bench, t)),
+        "passed unchanged"
+    );
+    // Subrange 10…20 (B7, 11 values); a bad one (first > last): A0 02.
+    let reply = bench.ask(0x20, &[0x27, 10, 0, 20, 0], 300_000);
+    let t = telegrams(&reply);
+    assert_eq!(&t[0][4..6], &[0xA0, 0x00]);
+    let b7: Vec<_> = t.iter().filter(|t| t[4] == 0xB7).collect();
+    assert!(b7.len() >= 5 && b7.iter().all(|t| from_sensor(&bench, t)));
+    let reply = bench.ask(0x20, &[0x27, 20, 0, 10, 0], 100_000);
+    let t = telegrams(&reply);
+    assert_eq!(&t[0][4..6], &[0xA0, 0x02], "the sensor's refusal");
+    // Mean subrange: BF.
+    let reply = bench.ask(0x20, &[0x28, 2, 1, 0, 181, 0], 500_000);
+    let t = telegrams(&reply);
+    assert_eq!(&t[0][4..6], &[0xA0, 0x00]);
+    let bf: Vec<_> = t.iter().filter(|t| t[4] == 0xBF).collect();
+    assert!(bf.len() >= 5 && bf.iter().all(|t| from_sensor(&bench, t)));
+    // Back to 20 24: the sensor streams B0s again, and so does the client.
+    let reply = bench.ask(0x20, &[0x24], 500_000);
+    assert_eq!(bench.lms.operating_mode(), OperatingMode::Continuous);
+    let t = telegrams(&reply);
+    let codes: Vec<u8> = t.iter().map(|t| t[4]).collect();
+    assert_eq!(codes[0], 0xA0);
+    let tail: Vec<u8> = codes.iter().copied().skip_while(|&c| c != 0xB0).collect();
+    assert!(
+        tail.len() >= 10 && tail.iter().all(|&c| c == 0xB0),
+        "{codes:02X?}"
+    );
+    let c = bench.cop.counters();
+    assert_eq!(c.host_scans_dropped, 0, "{c:?}");
+}
+
+#[test]
+fn features_pause_in_a_value_mode_and_come_back_with_b0s() {
+    let mut bench = Bench::new();
+    bench.run(2_000_000);
+    bench.host_500k();
+    let reply = bench.request(
+        Request::Unknown {
+            command: REQ_FEATURES,
+            data: &[1],
+        },
+        10_000,
+    );
+    assert_eq!(reply[4], CMD_FEATURES);
+    let reply = bench.ask(0x20, &[0x26, 2], 600_000);
+    let codes: Vec<u8> = telegrams(&reply).iter().map(|t| t[4]).collect();
+    assert_eq!(codes[0], 0xA0);
+    let after: Vec<u8> = codes[1..]
+        .iter()
+        .copied()
+        .skip_while(|&c| c != 0xB6)
+        .collect();
+    assert!(
+        after.len() >= 5 && after.iter().all(|&c| c == 0xB6),
+        "{codes:02X?}"
+    );
+    let reply = bench.ask(0x20, &[0x24], 600_000);
+    let codes: Vec<u8> = telegrams(&reply).iter().map(|t| t[4]).collect();
+    assert!(
+        codes.contains(&0xB0) && codes.contains(&0xD0),
+        "{codes:02X?}"
+    );
+    assert!(!codes.contains(&0xB6), "{codes:02X?}");
+}
+
+#[test]
+fn sensor_type_is_the_sensors_answer() {
+    let mut bench = Bench::new();
+    bench.run(2_000_000);
+    let before = bench.lms.stats().requests;
+    let reply = bench.request(Request::SensorType, 50_000);
+    assert_eq!(
+        bench.lms.stats().requests,
+        before + 1,
+        "asked of the sensor"
+    );
+    let t = telegrams(&reply);
+    assert_eq!(t[0][4], 0xBA);
+    assert!(
+        from_sensor(&bench, &t[0]),
+        "the sensor's bytes: {:02X?}",
+        t[0]
+    );
 }

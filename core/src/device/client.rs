@@ -34,7 +34,8 @@
 //!    deadline `poll` first gives it up and returns `None` — feed `&[]`
 //!    again, then poll again.
 //! 4. After `20 24` has been answered, [`Client::await_stream`]: every good
-//!    `B0` is [`Outcome::Scan`]; one whose data is not a scan is counted
+//!    `B0` is [`Outcome::Scan`] (and every `B6`/`B7`/`BF` of a value mode,
+//!    [`VALUE_STREAM_CODES`]); one whose data is not a scan is counted
 //!    ([`ClientStats::bad_scans`]); the wait (if any) runs from the last
 //!    scan.
 //!
@@ -57,6 +58,11 @@ use crate::telegram::{
     Baud, Direction, EmitError, Event, Framer, FramerStats, Handshake, MeasuredView, Request,
     Telegram, MAX_TELEGRAM_LEN,
 };
+
+/// The value modes' stream telegrams (`B6` means, `B7` subrange, `BF`
+/// mean subrange): [`Outcome::Scan`]s of the stream too, not checked as
+/// `B0`s.
+pub const VALUE_STREAM_CODES: [u8; 3] = [0xB6, 0xB7, 0xBF];
 
 /// Bytes held for the request: the longest request (`77` with its
 /// 34-byte configuration) is 41 bytes.
@@ -489,6 +495,12 @@ impl Exchange {
                     self.stats.bad_scans = self.stats.bad_scans.wrapping_add(1);
                     return None;
                 }
+                self.keep(t);
+                self.stream_since_us = now_us;
+                Some(Outcome::Scan)
+            }
+            // A value mode's stream (`20 26`/`27`/`28`): passed on as is.
+            Phase::Stream if VALUE_STREAM_CODES.contains(&command) => {
                 self.keep(t);
                 self.stream_since_us = now_us;
                 Some(Outcome::Scan)

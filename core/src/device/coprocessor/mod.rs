@@ -31,7 +31,9 @@ pub mod sensor_link;
 
 use embedded_io::{Read, ReadReady, Write};
 
-use crate::device::emulator::{Emulator, Event as HostEvent, Handled, ScanSource, Settings};
+use crate::device::emulator::{
+    Emulator, Event as HostEvent, Handled, ScanSource, Settings, ValueMode,
+};
 use crate::features::Features;
 use crate::params::ValidParams;
 use crate::pipeline::extractor::Extractor;
@@ -50,6 +52,24 @@ pub use sensor_link::{LinkEvent, SensorLink, SensorSetup, Step};
 /// Bytes read from a port per call.
 const CHUNK: usize = 256;
 
+/// Bytes kept of a relayed request's reply (`BA` of `3A`: 28; `A0`: 10).
+pub const RELAY_REPLY_CAPACITY: usize = 48;
+
+/// Where the client's relayed request is ([`LatestScan::relay`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Relay {
+    /// None (first: all zero).
+    Idle,
+    /// Taken from the client, not yet handed to the sensor link.
+    Asked,
+    /// Forwarded; the sensor's reply awaited.
+    Sent,
+    /// The sensor's reply is in `relay_reply`.
+    Ready,
+    /// No reply came: the client gets none either.
+    Failed,
+}
+
 /// The sensor's latest scan, served to the host for `30 01` and `31`, and
 /// the counters for `55`.
 pub struct LatestScan {
@@ -59,6 +79,14 @@ pub struct LatestScan {
     counters: Counters,
     /// The client has switched the feature telegrams on (`56 01`).
     features_on: bool,
+    /// A request the sensor answers (`3A`, `20 26`/`27`/`28`): its
+    /// command, data and state, and the sensor's reply.
+    relay: Relay,
+    relay_command: u8,
+    relay_data: [u8; sensor_link::FORWARD_DATA_CAPACITY],
+    relay_data_len: u8,
+    relay_reply: [u8; RELAY_REPLY_CAPACITY],
+    relay_len: u8,
 }
 
 impl LatestScan {
@@ -71,6 +99,12 @@ impl LatestScan {
             variant: Variant::Fov180Res100,
             counters: Counters::ZERO,
             features_on: false,
+            relay: Relay::Idle,
+            relay_command: 0,
+            relay_data: [0; sensor_link::FORWARD_DATA_CAPACITY],
+            relay_data_len: 0,
+            relay_reply: [0; RELAY_REPLY_CAPACITY],
+            relay_len: 0,
         }
     }
 }
@@ -108,6 +142,44 @@ impl ScanSource for LatestScan {
                 Some((CMD_FEATURES, 1))
             }
             _ => None,
+        }
+    }
+
+    /// The sensor answers `3A` (its type string) and the value modes
+    /// `20 26`/`27`/`28` (it checks their parameters and streams
+    /// `B6`/`B7`/`BF`), one at a time.
+    fn relay(&mut self, command: u8, data: &[u8]) -> bool {
+        let wanted = match command {
+            0x3A => data.is_empty(),
+            _ => ValueMode::parse(command, data).is_some(),
+        };
+        let Some(slot) = self.relay_data.get_mut(..data.len()) else {
+            return false;
+        };
+        if !wanted || self.relay != Relay::Idle {
+            return false;
+        }
+        slot.copy_from_slice(data);
+        self.relay_command = command;
+        self.relay_data_len = data.len() as u8;
+        self.relay = Relay::Asked;
+        true
+    }
+
+    fn relayed_reply(&mut self, out: &mut [u8]) -> Option<usize> {
+        match self.relay {
+            Relay::Ready => {
+                self.relay = Relay::Idle;
+                let reply = self.relay_reply.get(..usize::from(self.relay_len))?;
+                let slot = out.get_mut(..reply.len())?;
+                slot.copy_from_slice(reply);
+                Some(reply.len())
+            }
+            Relay::Failed => {
+                self.relay = Relay::Idle;
+                Some(0)
+            }
+            Relay::Idle | Relay::Asked | Relay::Sent => None,
         }
     }
 }
@@ -166,6 +238,12 @@ pub struct CoProcessor {
     configured: bool,
     /// The face has taken the sensor's configuration since the last bring-up.
     face_synced: bool,
+    /// The sensor streams a value mode the client asked for (`B6`/`B7`/`BF`
+    /// passed on, no features), averaging this many scans (1: none).
+    values_samples: u8,
+    values_stream: bool,
+    /// The sensor is to go back to `B0`s (`20 24`, forwarded by itself).
+    restore_stream: bool,
 }
 
 impl CoProcessor {
@@ -198,6 +276,9 @@ impl CoProcessor {
             frame: Frame::zeroed(),
             configured: false,
             face_synced: false,
+            values_samples: 0,
+            values_stream: false,
+            restore_stream: false,
         }
     }
 
@@ -322,6 +403,7 @@ impl CoProcessor {
                         outcome.scans += 1;
                     }
                     Some(LinkEvent::SwitchBaud(b)) => outcome.sensor_baud = Some(b),
+                    Some(LinkEvent::Forwarded { answered }) => self.forwarded(answered),
                     Some(LinkEvent::Refused(_)) | None => {}
                 }
                 if event.is_none() && input.is_empty() {
@@ -330,18 +412,14 @@ impl CoProcessor {
             }
         }
 
-        // The sensor streams: the face reports its configuration (F4).
-        if self.link.step() == sensor_link::Step::Streaming && !self.face_synced {
-            if let Some(c) = self.link.config() {
-                self.host.set_config(c);
-            }
-            self.face_synced = true;
-        }
-
+        self.sync_face();
         // 3. Time-outs: the baud search's next rate, a silent stream.
-        if let Some(LinkEvent::SwitchBaud(b)) = self.link.poll(now_us) {
-            outcome.sensor_baud = Some(b);
+        match self.link.poll(now_us) {
+            Some(LinkEvent::SwitchBaud(b)) => outcome.sensor_baud = Some(b),
+            Some(LinkEvent::Forwarded { answered }) => self.forwarded(answered),
+            _ => {}
         }
+        self.hand_to_sensor();
         // 4. The next bring-up request, if one is due (none in a poll that
         // switches the sensor UART: the board switches after it returns).
         let due = match outcome.sensor_baud {
@@ -389,12 +467,100 @@ impl CoProcessor {
                 HostEvent::Request(
                     Handled::SetVariant { accepted: true, .. }
                     | Handled::WriteConfig { accepted: true },
-                ) => self.follow_client(),
-                HostEvent::Request(Handled::Reset) => self.host.source_mut().features_on = false,
+                ) => {
+                    self.leave_values();
+                    self.follow_client();
+                }
+                HostEvent::Request(Handled::Reset) => {
+                    self.leave_values();
+                    self.host.source_mut().features_on = false;
+                }
+                HostEvent::Request(
+                    Handled::Continuous | Handled::OnRequest | Handled::InstallationMode { .. },
+                ) => self.leave_values(),
                 _ => {}
             }
         }
         Ok(())
+    }
+
+    /// The sensor streams: the face reports its configuration (F4).
+    fn sync_face(&mut self) {
+        if self.link.step() == sensor_link::Step::Streaming && !self.face_synced {
+            if let Some(c) = self.link.config() {
+                self.host.set_config(c);
+            }
+            self.face_synced = true;
+        }
+    }
+
+    /// Requests for the sensor: back to `B0`s after a value mode, then the
+    /// client's relayed request; a relayed request the link dropped (a
+    /// restart) fails.
+    fn hand_to_sensor(&mut self) {
+        if self.restore_stream && self.link.forward(0x20, &[0x24]) {
+            self.restore_stream = false;
+        }
+        let latest = &mut self.host.source_mut();
+        match latest.relay {
+            Relay::Asked => {
+                let data = latest.relay_data;
+                let data = data.get(..usize::from(latest.relay_data_len));
+                if self
+                    .link
+                    .forward(latest.relay_command, data.unwrap_or_default())
+                {
+                    latest.relay = Relay::Sent;
+                }
+            }
+            Relay::Sent if !self.link.forwarding() => latest.relay = Relay::Failed,
+            _ => {}
+        }
+    }
+
+    /// A forwarded request is done: the client's (its reply relayed; an
+    /// accepted value mode starts its stream) or ours (`20 24`, retried
+    /// until answered).
+    fn forwarded(&mut self, answered: bool) {
+        let latest = self.host.source_mut();
+        if latest.relay != Relay::Sent {
+            self.restore_stream |= !answered;
+            if answered {
+                self.link.set_stream_samples(1);
+            }
+            return;
+        }
+        let reply = self.link.scan_bytes();
+        let Some(slot) = latest
+            .relay_reply
+            .get_mut(..reply.len())
+            .filter(|_| answered)
+        else {
+            latest.relay = Relay::Failed;
+            return;
+        };
+        slot.copy_from_slice(reply);
+        latest.relay_len = reply.len() as u8;
+        latest.relay = Relay::Ready;
+        let data = latest.relay_data;
+        let mode = ValueMode::parse(
+            latest.relay_command,
+            &data[..usize::from(latest.relay_data_len)],
+        );
+        let ok = matches!(reply.get(5), Some(0x00)) && reply.get(4) == Some(&0xA0);
+        if let (Some(mode), true) = (mode, ok) {
+            self.values_stream = true;
+            self.values_samples = mode.samples().max(1);
+            self.link.set_stream_samples(self.values_samples);
+        }
+    }
+
+    /// The client left the value mode (any mode change, a reset, a new
+    /// variant or configuration): the sensor goes back to `B0`s.
+    fn leave_values(&mut self) {
+        if core::mem::take(&mut self.values_stream) {
+            self.restore_stream = true;
+        }
     }
 
     /// The client changed the face's variant or units: bring the sensor up
@@ -421,6 +587,9 @@ impl CoProcessor {
     ) -> Result<(), PollError<E, H::Error>> {
         self.counters.scans_in = self.counters.scans_in.wrapping_add(1);
         self.scan_counter = self.counters.scans_in;
+        if self.link.scan_bytes().get(4) != Some(&crate::telegram::measured::MEASURED_COMMAND) {
+            return self.pass_values(host, now_us);
+        }
         // The sensor's measuring mode decides the range bits (13/14/15).
         let bits = self.link.config().map_or(RangeBits::Bits13, |c| {
             RangeBits::from_measuring_mode(c.measuring_mode())
@@ -453,9 +622,36 @@ impl CoProcessor {
         self.beams = self.frame.len() as u16;
         self.extractor.run(&self.frame, &self.params);
         self.have_features = true;
-        if self.host.streaming() {
+        if self.host.streaming() && !self.values_stream {
             self.pass_scan(host, now_us)?;
         }
+        Ok(())
+    }
+
+    /// A value mode's telegram (`B6`/`B7`/`BF`) from the sensor: to the
+    /// client that asked for it, as is and whole if the host line is free
+    /// within its period (else dropped and counted); no features (the
+    /// pipeline takes single whole scans, `B0`).
+    fn pass_values<H: Write, E>(
+        &mut self,
+        host: &mut H,
+        now_us: u64,
+    ) -> Result<(), PollError<E, H::Error>> {
+        self.have_features = false;
+        if !self.values_stream {
+            self.counters.scans_other_setting = self.counters.scans_other_setting.wrapping_add(1);
+            return Ok(());
+        }
+        let period = crate::device::emulator::scan_period_us(self.host.variant())
+            .saturating_mul(u64::from(self.values_samples.max(1)));
+        if !self.host_line.free_within(now_us, period) {
+            self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
+            return Ok(());
+        }
+        let bytes = self.link.scan_bytes();
+        host.write_all(bytes).map_err(PollError::Host)?;
+        self.counters.scans_out = self.counters.scans_out.wrapping_add(1);
+        self.host_line.occupy(now_us, bytes.len(), self.host.baud());
         Ok(())
     }
 

@@ -177,6 +177,28 @@ pub enum LinkEvent {
     SwitchBaud(Baud),
     /// The sensor refused a step (e.g. the variant); the link retries it.
     Refused(Step),
+    /// A [`forward`](SensorLink::forward)ed request is done: answered (its
+    /// reply's bytes in [`SensorLink::scan_bytes`] until the next feed) or
+    /// not (`92`, or no reply within [`REPLY_TIMEOUT_US`] twice).
+    Forwarded {
+        /// The sensor's reply came.
+        answered: bool,
+    },
+}
+
+/// Data bytes of the longest request [`SensorLink::forward`] takes
+/// (`20 28 n a a b b`: 6).
+pub const FORWARD_DATA_CAPACITY: usize = 8;
+
+/// Where a forwarded request is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Forward {
+    /// None (first: a zeroed link has none).
+    Idle,
+    /// Waiting to be sent (the link is not streaming yet).
+    Due,
+    /// Sent; its reply awaited.
+    Sent,
 }
 
 /// The sensor side of the co-processor.
@@ -213,6 +235,13 @@ pub struct SensorLink {
     /// streams. Not an `Option`, so that a zeroed link stays all zero.
     pending: SensorSetup,
     has_pending: bool,
+    /// A request forwarded for the co-processor's client (`20 26`…, `3A`).
+    forward: Forward,
+    forward_command: u8,
+    forward_data: [u8; FORWARD_DATA_CAPACITY],
+    forward_len: u8,
+    /// Scans averaged per stream telegram (a mean value mode; 0 or 1: one).
+    samples: u8,
 }
 
 impl SensorLink {
@@ -255,6 +284,11 @@ impl SensorLink {
                 baud: Baud::B9600,
             },
             has_pending: false,
+            forward: Forward::Idle,
+            forward_command: 0,
+            forward_data: [0; FORWARD_DATA_CAPACITY],
+            forward_len: 0,
+            samples: 0,
         }
     }
 
@@ -382,6 +416,51 @@ impl SensorLink {
         }
     }
 
+    /// Send `command data` to the sensor once it streams (between its
+    /// scans) and report its reply ([`LinkEvent::Forwarded`]); the stream
+    /// goes on after it. `false` (nothing done) if a forward is under way
+    /// or `data` is longer than [`FORWARD_DATA_CAPACITY`].
+    pub fn forward(&mut self, command: u8, data: &[u8]) -> bool {
+        let Some(slot) = self.forward_data.get_mut(..data.len()) else {
+            return false;
+        };
+        if self.forward != Forward::Idle {
+            return false;
+        }
+        slot.copy_from_slice(data);
+        self.forward_command = command;
+        self.forward_len = data.len() as u8;
+        self.forward = Forward::Due;
+        true
+    }
+
+    /// `true` while a [`forward`](SensorLink::forward)ed request waits or
+    /// is out.
+    pub fn forwarding(&self) -> bool {
+        self.forward != Forward::Idle
+    }
+
+    /// The stream's telegrams average `samples` scans (a mean value mode;
+    /// 1: single scans): the stream's time-outs grow with it.
+    pub fn set_stream_samples(&mut self, samples: u8) {
+        self.samples = samples;
+    }
+
+    /// The longest gap between good stream telegrams with noise (µs):
+    /// [`stream_wait_us`], plus two periods per extra scan averaged.
+    fn stream_wait(&self) -> u64 {
+        let extra = u64::from(self.samples.saturating_sub(1));
+        let period = scan_period_us(self.setup.variant);
+        stream_wait_us(&self.setup).saturating_add(2 * extra * period)
+    }
+
+    /// Back to the stream after a forwarded request at `now_us`.
+    fn resume_stream(&mut self, now_us: u64) {
+        self.forward = Forward::Idle;
+        let wait = self.stream_wait().max(STREAM_SILENCE_US);
+        self.client.await_stream(now_us, Some(wait));
+    }
+
     /// Start the bring-up again (e.g. after the sensor reset): the baud
     /// search from 9600 Bd, the UART back to 9600 Bd (reported by the next
     /// [`poll`](SensorLink::poll)).
@@ -394,6 +473,10 @@ impl SensorLink {
         self.nak = false;
         self.config = None;
         self.probe_index = 0;
+        self.samples = 0;
+        if self.forward == Forward::Sent {
+            self.forward = Forward::Idle;
+        }
         self.restarts = self.restarts.wrapping_add(1);
         self.switch_to(Baud::B9600);
     }
@@ -414,6 +497,12 @@ impl SensorLink {
     pub fn poll(&mut self, now_us: u64) -> Option<LinkEvent> {
         if !self.switch_due {
             match self.step {
+                Step::Streaming if self.forward == Forward::Sent && self.client.expired(now_us) => {
+                    self.resume_stream(now_us);
+                    return Some(LinkEvent::Forwarded { answered: false });
+                }
+                // The stream's time-outs wait for the forward's reply.
+                Step::Streaming if self.forward == Forward::Sent => {}
                 Step::Streaming if self.stream_timed_out(now_us) => {
                     self.scan_timeouts = self.scan_timeouts.wrapping_add(1);
                     let lost = self.whole_scans().unsigned_abs();
@@ -437,7 +526,7 @@ impl SensorLink {
     /// [`STREAM_SILENCE_US`] (the client's stream deadline).
     fn stream_timed_out(&self, now_us: u64) -> bool {
         let noise = self.client.framer_stats().bytes_skipped != self.skipped_at_scan;
-        let late = now_us >= self.scan_us.saturating_add(stream_wait_us(&self.setup));
+        let late = now_us >= self.scan_us.saturating_add(self.stream_wait());
         (noise && late) || self.client.expired(now_us)
     }
 
@@ -469,6 +558,9 @@ impl SensorLink {
     /// refused with `NAK`), written into `buf`; returns its length. Call it
     /// every poll, after [`poll`](SensorLink::poll).
     pub fn due_request(&mut self, now_us: u64, buf: &mut [u8]) -> Option<usize> {
+        if self.step == Step::Streaming && self.forward == Forward::Due && !self.switch_due {
+            return self.send_forward(now_us, buf);
+        }
         if self.step == Step::Streaming || self.switch_due {
             return None;
         }
@@ -489,6 +581,27 @@ impl SensorLink {
         self.requested = true;
         self.nak = false;
         self.client.mark_sent(now_us);
+        Some(n)
+    }
+
+    /// The forwarded request into `buf`, sent at `now_us`.
+    fn send_forward(&mut self, now_us: u64, buf: &mut [u8]) -> Option<usize> {
+        let data = self.forward_data.get(..usize::from(self.forward_len))?;
+        let request = Request::Unknown {
+            command: self.forward_command,
+            data,
+        };
+        let limits = Limits {
+            ack_us: REPLY_TIMEOUT_US,
+            reply_us: None,
+            retries: 1,
+        };
+        self.client.prepare(&request, limits).ok()?;
+        let bytes = self.client.request_bytes();
+        let n = bytes.len();
+        crate::telegram::copy_into(buf.get_mut(..n)?, bytes);
+        self.client.mark_sent(now_us);
+        self.forward = Forward::Sent;
         Some(n)
     }
 
@@ -542,6 +655,14 @@ impl SensorLink {
                 self.account_scan(self.client.telegram_bytes().len());
                 self.mark_scan(now_us);
                 Some(LinkEvent::Scan)
+            }
+            Some(Outcome::Reply) if self.forward == Forward::Sent => {
+                self.resume_stream(now_us);
+                Some(LinkEvent::Forwarded { answered: true })
+            }
+            Some(Outcome::UnknownCommand) if self.forward == Forward::Sent => {
+                self.resume_stream(now_us);
+                Some(LinkEvent::Forwarded { answered: false })
             }
             Some(Outcome::Reply) => self.on_reply(now_us),
             // Our request was damaged: resend at once.

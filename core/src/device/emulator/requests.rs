@@ -84,14 +84,25 @@ impl<S: ScanSource> Emulator<S> {
                 }
                 _ => None,
             };
+            // A request the sensor behind the face answers (co-processor).
+            let relay = match fed.event {
+                Some(FramerEvent::Telegram(t))
+                    if self.settings.external_scans && t.address() == self.settings.address =>
+                {
+                    self.source.relay(t.command(), t.data())
+                }
+                _ => false,
+            };
             let done = fed.event.is_none();
             for _ in 0..naks {
                 self.stats.naks = self.stats.naks.wrapping_add(1);
                 self.queue(now_us, Outgoing::Nak);
                 self.event(Event::BadChecksum);
             }
-            if let Some(incoming) = incoming {
-                self.handle(now_us, incoming, data_len, extra, value_mode);
+            match incoming {
+                Some(incoming) if relay => self.relay(now_us, incoming.request.command()),
+                Some(incoming) => self.handle(now_us, incoming, data_len, extra, value_mode),
+                None => {}
             }
             if self.resetting {
                 // The sensor ignores what follows a reset in the same burst,
@@ -105,6 +116,18 @@ impl<S: ScanSource> Emulator<S> {
                 break;
             }
         }
+    }
+
+    /// A relayed request: `ACK` now, the sensor's reply when it comes.
+    fn relay(&mut self, now_us: u64, command: u8) {
+        if self.pending.len() + 2 > PENDING_CAPACITY {
+            self.stats.dropped_requests = self.stats.dropped_requests.wrapping_add(1);
+            return;
+        }
+        self.stats.requests = self.stats.requests.wrapping_add(1);
+        self.queue(now_us, Outgoing::Ack);
+        self.queue(now_us, Outgoing::Relay);
+        self.event(Event::Request(Handled::Extra { command }));
     }
 
     /// Answer one request.

@@ -29,6 +29,24 @@ pub trait ScanSource {
         let _ = (command, data, reply);
         None
     }
+
+    /// A request (`command`, `data`) the sensor behind this source is to
+    /// answer (the co-processor's face relays it): `true` takes it; the
+    /// emulator sends `ACK` at once and then the telegram
+    /// [`relayed_reply`](ScanSource::relayed_reply) gives. `false` (the
+    /// default) answers it here.
+    fn relay(&mut self, command: u8, data: &[u8]) -> bool {
+        let _ = (command, data);
+        false
+    }
+
+    /// The relayed request's reply, whole (`STX` … `CRC`), written into
+    /// `out`: `Some(n)` bytes (`Some(0)`: none will come, send nothing),
+    /// `None`: not yet (the replies behind it wait, as at a real LMS).
+    fn relayed_reply(&mut self, out: &mut [u8]) -> Option<usize> {
+        let _ = out;
+        Some(0)
+    }
 }
 
 /// Largest reply data a [`ScanSource::extra_command`] may write.

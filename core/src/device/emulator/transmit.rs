@@ -41,6 +41,10 @@ pub(super) enum Done {
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Outgoing {
     Nak,
+    /// `ACK` alone (a relayed request's, [`ScanSource::relay`]).
+    Ack,
+    /// The relayed request's reply ([`ScanSource::relayed_reply`]).
+    Relay,
     PowerOn,
     /// `ACK` + the reply, then `then`.
     Reply {
@@ -230,7 +234,19 @@ impl<S: ScanSource> Emulator<S> {
         if self.tx_len != 0 {
             return;
         }
-        if let Some(p) = self.pending.pop_front() {
+        if let Some(p) = self.pending.front().copied() {
+            if matches!(p.what, Outgoing::Relay) {
+                // The sensor's reply, when it has come (all waits for it).
+                let Some(n) = self.source.relayed_reply(&mut self.tx) else {
+                    return;
+                };
+                self.pending.pop_front();
+                if n > 0 {
+                    self.set_frame(p.ready_us, Some(n.min(TX_CAPACITY)), Done::Nothing);
+                }
+                return;
+            }
+            self.pending.pop_front();
             self.start_frame(p.ready_us, p.what);
             return;
         }
@@ -310,6 +326,14 @@ impl<S: ScanSource> Emulator<S> {
                 }
                 self.set_frame(ready_us, Some(1), Done::Nothing);
             }
+            Outgoing::Ack => {
+                if let Some(b) = self.tx.first_mut() {
+                    *b = ACK;
+                }
+                self.set_frame(ready_us, Some(1), Done::Nothing);
+            }
+            // Taken in `advance`.
+            Outgoing::Relay => {}
             Outgoing::PowerOn => {
                 let n = Reply::PowerOn(POWER_ON_DATA).emit(address, status, &mut self.tx);
                 self.set_frame(ready_us, n.ok(), Done::PowerOn);
