@@ -577,3 +577,38 @@ fn sensor_type_is_the_sensors_answer() {
         t[0]
     );
 }
+
+#[test]
+fn every_byte_of_a_clients_configuration_is_written_to_the_sensor() {
+    let mut bench = Bench::new();
+    bench.run(2_000_000);
+    bench.host_500k();
+    let reply = bench.request(
+        Request::InstallationMode {
+            password: DEFAULT_PASSWORD,
+        },
+        10_000,
+    );
+    assert_eq!(&reply[4..6], &[0xA0, 0x00]);
+    let reply = bench.request(Request::ReadConfig, 10_000);
+    let t = Telegram::new_checked(&reply[..], Direction::SensorToHost).unwrap();
+    let Ok(Reply::Config(mut c)) = Reply::parse(&t) else {
+        panic!("{reply:02X?}")
+    };
+    // Units unchanged (mm): only other bytes differ.
+    assert_eq!(c.units(), Some(Unit::Millimetre));
+    c.set_blanking(0x0123);
+    c.set_availability(0x02);
+    c.set_measuring_mode(0x04);
+    assert_ne!(*bench.lms.config(), c);
+    let reply = bench.request(Request::WriteConfig(c), 10_000);
+    assert_eq!(&reply[4..6], &[0xF7, 0x01]);
+    bench.send_host(Request::Continuous);
+    bench.run(2_000_000);
+    assert_eq!(*bench.lms.config(), c, "the sensor has the client's bytes");
+    assert_eq!(bench.cop.link().step(), Step::Streaming);
+    let reply = bench.request(Request::ReadConfig, 20_000);
+    let reply_tail = telegrams(&reply);
+    let t = Telegram::new_checked(&reply_tail[0][..], Direction::SensorToHost).unwrap();
+    assert_eq!(Reply::parse(&t).ok(), Some(Reply::Config(c)), "F4 tells it");
+}

@@ -464,12 +464,14 @@ impl CoProcessor {
                     let n = self.send_features(host)?;
                     self.host_line.occupy(now_us, n, self.host.baud());
                 }
-                HostEvent::Request(
-                    Handled::SetVariant { accepted: true, .. }
-                    | Handled::WriteConfig { accepted: true },
-                ) => {
+                HostEvent::Request(Handled::SetVariant { accepted: true, .. }) => {
                     self.leave_values();
-                    self.follow_client();
+                    self.follow_client(false);
+                }
+                HostEvent::Request(Handled::WriteConfig { accepted: true }) => {
+                    self.leave_values();
+                    let differs = self.link.write_config(*self.host.config());
+                    self.follow_client(differs);
                 }
                 HostEvent::Request(Handled::Reset) => {
                     self.leave_values();
@@ -563,16 +565,17 @@ impl CoProcessor {
         }
     }
 
-    /// The client changed the face's variant or units: bring the sensor up
-    /// with them (its scans of the old setting are not passed on meanwhile).
-    fn follow_client(&mut self) {
+    /// The client changed the face's variant, units or configuration:
+    /// bring the sensor up with them (its scans of the old setting are not passed on meanwhile).
+    /// `config_differs`: the client's `77` changed more than the units.
+    fn follow_client(&mut self, config_differs: bool) {
         let current = self.link.setup();
         let wanted = SensorSetup {
             variant: self.host.variant(),
             units: self.host.units(),
             ..current
         };
-        if wanted != current {
+        if wanted != current || config_differs {
             self.link.reconfigure(wanted);
             self.face_synced = false;
         }

@@ -242,6 +242,11 @@ pub struct SensorLink {
     forward_len: u8,
     /// Scans averaged per stream telegram (a mean value mode; 0 or 1: one).
     samples: u8,
+    /// The configuration to write in the bring-up's `77` (a client's, all
+    /// of it: [`SensorLink::write_config`]); else the one read, with the
+    /// units.
+    client_config: Config,
+    has_client_config: bool,
 }
 
 impl SensorLink {
@@ -289,6 +294,8 @@ impl SensorLink {
             forward_data: [0; FORWARD_DATA_CAPACITY],
             forward_len: 0,
             samples: 0,
+            client_config: Config::ZERO,
+            has_client_config: false,
         }
     }
 
@@ -311,7 +318,11 @@ impl SensorLink {
             Unit::Millimetre => 1,
             _ => 0,
         };
-        self.config.map(|c| c.with_units_code(code))
+        let written = |c: Config| match self.has_client_config {
+            true => self.client_config,
+            false => c,
+        };
+        self.config.map(|c| written(c).with_units_code(code))
     }
 
     /// The current bring-up step.
@@ -414,6 +425,26 @@ impl SensorLink {
             self.pending = setup;
             self.has_pending = true;
         }
+    }
+
+    /// A client's configuration (`77`, every byte): written to the sensor
+    /// from the next bring-up on (its units byte is the setup's); returns
+    /// `true` if it differs from the sensor's, i.e. a
+    /// [`reconfigure`](SensorLink::reconfigure) is needed.
+    pub fn write_config(&mut self, config: Config) -> bool {
+        let before = self.config();
+        self.client_config = config;
+        self.has_client_config = true;
+        before != Some(self.wanted_config(config))
+    }
+
+    /// `config` with the setup's units.
+    fn wanted_config(&self, config: Config) -> Config {
+        let units = match self.setup().units {
+            Unit::Millimetre => 1,
+            _ => 0,
+        };
+        config.with_units_code(units)
     }
 
     /// Send `command data` to the sensor once it streams (between its
@@ -628,12 +659,13 @@ impl SensorLink {
             },
             Step::ReadConfig => Request::ReadConfig,
             Step::WriteConfig => {
-                let mut config = self.config?;
-                config.set_units_code(match self.setup.units {
-                    Unit::Millimetre => 1,
-                    _ => 0,
-                });
-                Request::WriteConfig(config)
+                let read = self.config?;
+                let base = if self.has_client_config {
+                    self.client_config
+                } else {
+                    read
+                };
+                Request::WriteConfig(self.wanted_config(base))
             }
             Step::SetBaud => Request::SetBaud(self.setup.baud),
             Step::StartStream => Request::Continuous,
