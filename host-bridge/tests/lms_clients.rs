@@ -21,7 +21,11 @@
 //! [`scans_per_setting`] scans — 100 in all — whose value count, unit bits
 //! and values must equal one of the scans `simulate` sends for that variant
 //! and unit ([`SceneSource::scans_for`], the same seeded scene), then stops
-//! the stream (`20 25`).
+//! the stream (`20 25`). At the last setting, the value modes (mean
+//! values `20 26`, subrange `20 27`, mean subrange `20 28`, and a bad
+//! subrange refused `A0 02`), applied on the sensor through the
+//! co-processor: [`VALUE_TELEGRAMS`] `B6`/`B7`/`BF` each, their values
+//! checked against `simulate`'s scans; then `B0`s (and features) again.
 
 use std::fs::File;
 use std::io::Read as _;
@@ -264,6 +268,7 @@ struct Tally {
     feature_groups: usize,
     skipped_telegrams: usize,
     resends: usize,
+    value_telegrams: usize,
 }
 
 struct Client {
@@ -334,12 +339,23 @@ impl Client {
 
     /// The next scan (`B0` payload) while streaming.
     fn scan(&mut self) -> Result<Vec<u8>, String> {
+        self.streamed(0xB0)
+    }
+
+    /// The next stream telegram with code `want` (`B0`, or a value mode's
+    /// `B6`/`B7`/`BF`: then not even the features client takes another).
+    fn streamed(&mut self, want: u8) -> Result<Vec<u8>, String> {
         let deadline = Instant::now() + Duration::from_secs(10);
+        let strict = match self.behaviour {
+            Behaviour::AnyReply | Behaviour::StreamB0 => true,
+            Behaviour::Features => want != 0xB0,
+            Behaviour::SyncCrc | Behaviour::Ack60 => false,
+        };
         loop {
             let frame = read_frame(&mut self.port, deadline)?;
             match (self.behaviour, frame) {
-                (_, Some(f)) if f[0] == 0xB0 => return Ok(f),
-                (Behaviour::AnyReply | Behaviour::StreamB0, Some(f)) => {
+                (_, Some(f)) if f[0] == want => return Ok(f),
+                (_, Some(f)) if strict => {
                     return Err(format!("unexpected message {:02X} in the stream", f[0]))
                 }
                 (Behaviour::SyncCrc, None) => return Err("resync in the stream".into()),
@@ -530,6 +546,68 @@ fn read_scans(c: &mut Client, v: Variant, u: Unit, expected: &[Vec<u16>]) -> Res
     c.stop_stream()
 }
 
+/// Value telegrams read per value mode.
+const VALUE_TELEGRAMS: usize = 3;
+
+/// The value modes at the last setting (`v` in `u`), applied on the sensor
+/// and its telegrams passed through: `20 26 4` (`B6`: every value within
+/// the range of `simulate`'s scans at its beam), `20 27 10 60` (`B7`: one
+/// of `simulate`'s scans, values 10…60), `20 28 2 10 60` (`BF`), a bad
+/// subrange refused with the sensor's `A0 02`, each stopped with `20 25`.
+fn value_modes(c: &mut Client, v: Variant, u: Unit, expected: &[Vec<u16>]) -> Result<(), String> {
+    let (first, last) = (10usize, 60usize);
+    let sub = |a: usize, b: usize| [a as u8, (a >> 8) as u8, b as u8, (b >> 8) as u8];
+    let bad = c.request(&[[0x20, 0x27].as_slice(), &sub(60, 10)].concat(), 0xA0)?;
+    expect(bad[1] == 2, "20 27 60 10 refused with A0 02", &bad)?;
+    let modes: [(Vec<u8>, u8, usize, bool); 3] = [
+        (vec![0x20, 0x26, 4], 0xB6, 2, true),
+        (
+            [[0x20, 0x27].as_slice(), &sub(first, last)].concat(),
+            0xB7,
+            5,
+            false,
+        ),
+        (
+            [[0x20, 0x28, 2].as_slice(), &sub(first, last)].concat(),
+            0xBF,
+            6,
+            true,
+        ),
+    ];
+    for (request, code, at, mean) in modes {
+        let a0 = c.request(&request, 0xA0)?;
+        expect(a0[1] == 0, "value mode answered A0 00", &a0)?;
+        let (start, n) = if code == 0xB6 {
+            (0, v.beams())
+        } else {
+            (first - 1, last - first + 1)
+        };
+        for _ in 0..VALUE_TELEGRAMS {
+            let f = c.streamed(code)?;
+            let word = u16::from_le_bytes([f[at], f[at + 1]]);
+            let want_unit = u16::from(u == Unit::Millimetre);
+            let ok = usize::from(word & 0x3FF) == n && word >> 14 == want_unit;
+            expect(ok, "value telegram's count and units", &f[..at + 2])?;
+            let words: Vec<u16> = (0..n)
+                .map(|j| u16::from_le_bytes([f[at + 2 + 2 * j], f[at + 3 + 2 * j]]))
+                .collect();
+            let ok = if mean {
+                (0..n).all(|j| {
+                    let at_beam = expected.iter().map(|s| s[start + j]);
+                    let (lo, hi) = (at_beam.clone().min(), at_beam.max());
+                    lo <= Some(words[j]) && Some(words[j]) <= hi
+                })
+            } else {
+                expected.iter().any(|s| s[start..start + n] == words[..])
+            };
+            expect(ok, "values from simulate's scans", &f[..at + 8])?;
+            c.tally.value_telegrams += 1;
+        }
+        c.stop_stream()?;
+    }
+    Ok(())
+}
+
 /// One client's whole run on `link`.
 fn session(behaviour: Behaviour, baud: u32, link: &Path) -> Result<Tally, String> {
     let mut c = Client {
@@ -544,9 +622,14 @@ fn session(behaviour: Behaviour, baud: u32, link: &Path) -> Result<Tally, String
     c.port.pull(Duration::from_millis(50));
     c.port.flush_input();
     initialise(&mut c)?;
-    for ((v, u), expected) in expected_scans() {
-        set_up(&mut c, v, u).map_err(|e| format!("{v:?} {u}: {e}"))?;
-        read_scans(&mut c, v, u, &expected).map_err(|e| format!("{v:?} {u}: {e}"))?;
+    let all = expected_scans();
+    for ((v, u), expected) in &all {
+        set_up(&mut c, *v, *u).map_err(|e| format!("{v:?} {u}: {e}"))?;
+        read_scans(&mut c, *v, *u, expected).map_err(|e| format!("{v:?} {u}: {e}"))?;
+    }
+    if let Some(((v, u), expected)) = all.last() {
+        value_modes(&mut c, *v, *u, expected).map_err(|e| format!("value modes: {e}"))?;
+        read_scans(&mut c, *v, *u, expected).map_err(|e| format!("B0 after: {e}"))?;
     }
     finish(&mut c)?;
     Ok(c.tally)
@@ -658,15 +741,17 @@ fn lms_clients_through_the_coprocessor_against_simulate() {
         match result {
             Ok(t) => {
                 println!(
-                    "{name:18} {:3} scans, {:3} feature groups, {} telegrams skipped, {} resends, {:.1} s",
+                    "{name:18} {:3} scans, {:3} feature groups, {} value telegrams, {} telegrams skipped, {} resends, {:.1} s",
                     t.scans,
                     t.feature_groups,
+                    t.value_telegrams,
                     t.skipped_telegrams,
                     t.resends,
                     took.as_secs_f64()
                 );
                 let features = name.starts_with("features");
-                if t.scans < 100 || (features && t.feature_groups != t.scans) {
+                let values = t.value_telegrams == 3 * VALUE_TELEGRAMS;
+                if t.scans < 100 || !values || (features && t.feature_groups != t.scans) {
                     failures.push(format!("{name}: {t:?}"));
                 }
             }
@@ -783,7 +868,8 @@ fn lms_clients_through_the_firmware_under_qemu() {
                     t0.elapsed().as_secs_f64()
                 );
                 let features = behaviour == Behaviour::Features;
-                if t.scans < 100 || (features && t.feature_groups != t.scans) {
+                let values = t.value_telegrams == 3 * VALUE_TELEGRAMS;
+                if t.scans < 100 || !values || (features && t.feature_groups != t.scans) {
                     failures.push(format!("{} {baud}: {t:?}", behaviour.name()));
                 }
             }
