@@ -16,7 +16,12 @@
 //!   (`B1`, `F4`, `BB`); a client's accepted `3B` or `77` that changes the
 //!   variant or the units brings the sensor up again with them
 //!   ([`SensorLink::reconfigure`]); until its scans come, scans of the old
-//!   setting are not passed on ([`Counters::scans_other_setting`]).
+//!   setting are not passed on ([`Counters::scans_other_setting`]); a
+//!   `77` is written to the sensor whole. `3A` and the value modes
+//!   (`20 26`/`27`/`28`) are relayed ([`ScanSource::relay`]): `ACK` at
+//!   once, the sensor's reply byte for byte, then its `B6`/`B7`/`BF`
+//!   passed through (no features: the pipeline takes whole single scans)
+//!   until another mode, `3B`, `77` or `10` brings the sensor back to `B0`s.
 //! - Host-line budget ([`host_line`]): the co-processor models the host
 //!   line's time at the client's rate; a scan (with its features, if on) is
 //!   sent whole only if the line is free within one scan period, else it is

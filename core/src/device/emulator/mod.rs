@@ -23,7 +23,7 @@
 //! | `3A` | `BA "LMS200;30106x;V02.10"` |
 //! | `3B` | `BB 01` and the new variant, if it is one of the five and the [`ScanSource`] supports it; else `BB 00` and the variant kept (so 0.25° only with 100°) |
 //! | `74` | `F4` + the 34-byte configuration |
-//! | `20 26 n`, `20 27 a b`, `20 28 n a b` | mean values, subrange, mean subrange ([`ValueMode`]): `A0 00`, then a stream of `B6` / `B7` / `BF` (one per `n` scans for the means); `A0 02` for bad parameters; `92` on the co-processor's face ([`Settings::external_scans`]) |
+//! | `20 26 n`, `20 27 a b`, `20 28 n a b` | mean values, subrange, mean subrange ([`ValueMode`]): `A0 00`, then a stream of `B6` / `B7` / `BF` (one per `n` scans for the means); `A0 02` for bad parameters; on the co-processor's face ([`Settings::external_scans`]) relayed to the sensor ([`ScanSource::relay`]) |
 //! | `77` | in installation mode: `F7 01` + the new configuration (units byte `[6]`: 0 cm, 1 mm; other codes are refused with `F7 00`); otherwise `F7 00` + the configuration kept |
 //! | `10` | `ACK`, `91`; input ignored and the stream stopped; [`Settings::restart_us`] after the `91`, back to 9600 Bd, mode `25`, the power-on variant, and the `90` telegram. The configuration survives, as the real sensor keeps it in EEPROM. |
 //!
