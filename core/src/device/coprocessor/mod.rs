@@ -92,6 +92,10 @@ pub struct LatestScan {
     relay_data_len: u8,
     relay_reply: [u8; RELAY_REPLY_CAPACITY],
     relay_len: u8,
+    /// The sensor link streams (its bring-up is done): `3A` is relayed
+    /// only then (before, the face answers it, as the sensor may take
+    /// seconds to come up).
+    sensor_up: bool,
 }
 
 impl LatestScan {
@@ -110,6 +114,7 @@ impl LatestScan {
             relay_data_len: 0,
             relay_reply: [0; RELAY_REPLY_CAPACITY],
             relay_len: 0,
+            sensor_up: false,
         }
     }
 }
@@ -155,7 +160,7 @@ impl ScanSource for LatestScan {
     /// `B6`/`B7`/`BF`), one at a time.
     fn relay(&mut self, command: u8, data: &[u8]) -> bool {
         let wanted = match command {
-            0x3A => data.is_empty(),
+            0x3A => data.is_empty() && self.sensor_up,
             _ => ValueMode::parse(command, data).is_some(),
         };
         let Some(slot) = self.relay_data.get_mut(..data.len()) else {
@@ -725,6 +730,7 @@ impl CoProcessor {
         self.counters.sensor_resyncs = s.resyncs;
         self.counters.sensor_bytes_skipped = s.bytes_skipped;
         self.host.source_mut().counters = self.counters;
+        self.host.source_mut().sensor_up = self.link.step() == sensor_link::Step::Streaming;
     }
 }
 
