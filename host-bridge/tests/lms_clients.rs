@@ -311,6 +311,10 @@ impl Client {
                     if tries == 10 {
                         return Err(format!("no ACK to {:02X} in 10 tries", payload[0]));
                     }
+                    // What came instead (e.g. a late reply to the last try)
+                    // is dropped before the request goes again.
+                    self.port.pull(Duration::ZERO);
+                    self.port.flush_input();
                     self.tally.resends += 1;
                 }
                 self.tolerant_reply(want, deadline)
