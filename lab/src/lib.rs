@@ -605,12 +605,12 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     // The map truth and the sensor fit read only the logs that could be read.
     let readable: Vec<_> = logs
         .iter()
-        .cloned()
         .filter(|p| {
             !left_out
                 .iter()
                 .any(|(name, _)| *name == p.display().to_string())
         })
+        .cloned()
         .collect();
     let truth_figures =
         (!args.no_plots && report::fonts_available()).then_some(args.output.as_path());
