@@ -3,24 +3,11 @@
 //! (`cd firmware && cargo build --release`); otherwise it prints why it
 //! skipped and passes. `LMS_FIRMWARE_ELF` may name another ELF.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 mod common;
 
-fn on_path(name: &str) -> bool {
-    std::env::var_os("PATH")
-        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(name).is_file()))
-}
-
-fn elf() -> PathBuf {
-    std::env::var_os("LMS_FIRMWARE_ELF").map_or_else(
-        || {
-            Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../firmware/target/thumbv7em-none-eabihf/release/lms-firmware")
-        },
-        PathBuf::from,
-    )
-}
+use common::{elf, on_path};
 
 /// Run `host-bridge verify ARGS`, printing its output (shown on failure).
 fn verify(args: &[&str]) -> (bool, String, String) {

@@ -11,24 +11,9 @@
 //! noise of a `90` at the wrong rate and the baud search are covered by
 //! `core/tests/recovery.rs` on a line that models both rates).
 
-use std::path::{Path, PathBuf};
-
 mod common;
 
-fn on_path(name: &str) -> bool {
-    std::env::var_os("PATH")
-        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(name).is_file()))
-}
-
-fn elf() -> PathBuf {
-    std::env::var_os("LMS_FIRMWARE_ELF").map_or_else(
-        || {
-            Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../firmware/target/thumbv7em-none-eabihf/release/lms-firmware")
-        },
-        PathBuf::from,
-    )
-}
+use common::{elf, on_path};
 
 /// Run verify with a power cycle after 8 scans of 20; check the summary.
 fn power_cycle(mode: &[&str]) {

@@ -64,3 +64,21 @@ pub fn scratch(suite: &str, name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// Is `name` an executable file on PATH?
+pub fn on_path(name: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(name).is_file()))
+}
+
+/// The firmware ELF the QEMU tests run: `LMS_FIRMWARE_ELF`, or the release
+/// build of `firmware/`.
+pub fn elf() -> PathBuf {
+    std::env::var_os("LMS_FIRMWARE_ELF").map_or_else(
+        || {
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../firmware/target/thumbv7em-none-eabihf/release/lms-firmware")
+        },
+        PathBuf::from,
+    )
+}
