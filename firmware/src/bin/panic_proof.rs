@@ -116,7 +116,10 @@ fn any_params() -> Params {
         merge_gate: any_f32(),
         corner_gap: any_f32(),
         min_corner_angle_deg: any_f32(),
-        split_depth: black_box(0),
+        split_depth: black_box(8),
+        max_range: any_f32(),
+        merge_collinear: black_box(true),
+        max_alpha_sd_deg: any_f32(),
     }
 }
 

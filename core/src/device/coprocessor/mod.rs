@@ -555,10 +555,10 @@ impl CoProcessor {
         latest.relay_len = reply.len() as u8;
         latest.relay = Relay::Ready;
         let data = latest.relay_data;
-        let mode = ValueMode::parse(
-            latest.relay_command,
-            &data[..usize::from(latest.relay_data_len)],
-        );
+        let data = data
+            .get(..usize::from(latest.relay_data_len))
+            .unwrap_or_default();
+        let mode = ValueMode::parse(latest.relay_command, data);
         let ok = matches!(reply.get(5), Some(0x00)) && reply.get(4) == Some(&0xA0);
         if let (Some(mode), true) = (mode, ok) {
             self.values_stream = true;
