@@ -428,6 +428,8 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
     let mode = input.u8() % 3;
     let raw: [u32; 12] = core::array::from_fn(|_| input.u32());
     let flags = input.u8();
+    // ALGORITHM.md v2's range limit and the line gate (issue 14).
+    let limits: [u32; 2] = core::array::from_fn(|_| input.u32());
     let params = match mode {
         PARAMS_RAW => {
             let iterations = raw[2] as u16;
@@ -451,6 +453,9 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 corner_gap: f32::from_bits(raw[9]),
                 min_corner_angle_deg: f32::from_bits(raw[10]),
                 split_depth: raw[11] as u8,
+                max_range: f32::from_bits(limits[0]),
+                merge_collinear: flags & 8 != 0,
+                max_alpha_sd_deg: f32::from_bits(limits[1]),
             }
         }
         PARAMS_SANE => Params {
@@ -475,6 +480,17 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 0
             } else {
                 (raw[11] % (u32::from(lms_core::params::MAX_SPLIT_DEPTH) + 1)) as u8
+            },
+            max_range: if flags & 16 == 0 {
+                f32::INFINITY
+            } else {
+                0.1 + unit(limits[0]) * 100.0
+            },
+            merge_collinear: flags & 8 != 0,
+            max_alpha_sd_deg: if flags & 32 == 0 {
+                f32::INFINITY
+            } else {
+                0.01 + unit(limits[1]) * 90.0
             },
         },
         _ => Params {
