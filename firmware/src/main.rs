@@ -292,16 +292,24 @@ fn init_app() -> &'static mut app::App {
     app
 }
 
-#[panic_handler]
-fn panic(info: &PanicInfo) -> ! {
+/// Both panic handlers: interrupts off, the fault record (the caller's
+/// return address into the panic machinery as PC, see
+/// [`fault::link_register`]; `detail` the source line, if known).
+#[inline(always)]
+fn record_panic(detail: u32) {
     let lr = fault::link_register();
     cortex_m::interrupt::disable();
     fault::record(fault::FaultRecord {
         cause: fault::Cause::Panic,
         pc: lr,
         lr: 0,
-        detail: info.location().map_or(0, |l| l.line()),
+        detail,
     });
+}
+
+#[panic_handler]
+fn panic(info: &PanicInfo) -> ! {
+    record_panic(info.location().map_or(0, |l| l.line()));
     let message = info.message().as_str().unwrap_or("(formatted message)");
     match info.location() {
         Some(l) => defmt::error!(
@@ -317,13 +325,6 @@ fn panic(info: &PanicInfo) -> ! {
 
 #[defmt::panic_handler]
 fn defmt_panic() -> ! {
-    let lr = fault::link_register();
-    cortex_m::interrupt::disable();
-    fault::record(fault::FaultRecord {
-        cause: fault::Cause::Panic,
-        pc: lr,
-        lr: 0,
-        detail: 0,
-    });
+    record_panic(0);
     board::fatal(EXIT_PANIC)
 }
