@@ -739,25 +739,16 @@ def boot_and_bring_up(segments, syms, sites):
     return m, chip
 
 
-def room_scan(k):
-    """A 361-value B0 (180 deg / 0.5 deg, mm) of a room, as qemu-smoke.py sends."""
-    import math
-    import random
-    rng = random.Random(k)
-    words = []
-    for i in range(361):
-        phi = math.radians(i * 0.5 - 90.0)
-        c, s_ = math.cos(phi), math.sin(phi)
-        d = math.inf
-        if c > 1e-6:
-            d = min(d, 3.0 / c)
-        if abs(s_) > 1e-6:
-            d = min(d, 2.0 / abs(s_))
-        if -0.2 < phi < 0.1:
-            d = min(d, 1.5 / c)
-        words.append(min(8182, round((d + rng.uniform(-0.005, 0.005)) * 1000)))
-    data = (0x4000 | 361).to_bytes(2, "little") + b"".join(w.to_bytes(2, "little") for w in words)
-    return telegram(0x80, bytes([0xB0]) + data + bytes([0x10]))
+def room_scans(n):
+    """The first `n` 361-value B0 telegrams (180 deg / 0.5 deg, mm) of a
+    room: the very scans qemu-smoke.py sends (its `room_scan`, loaded from
+    that script)."""
+    import importlib.util
+    here = os.path.dirname(os.path.abspath(__file__))
+    spec = importlib.util.spec_from_file_location("qemu_smoke", os.path.join(here, "qemu-smoke.py"))
+    smoke = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(smoke)
+    return [smoke.room_scan(k) for k in range(n)]
 
 
 def stream(m, chip, lms, host, syms, n_scans=3):
@@ -773,7 +764,7 @@ def stream(m, chip, lms, host, syms, n_scans=3):
     end_addr = syms.get("scan_end", 0) & ~1
     m.uc.hook_add(UC_HOOK_CODE, lambda *_: ends.append(chip.cycles), begin=end_addr, end=end_addr)
     m.uc.ctl_flush_tb()
-    scans = [room_scan(k) for k in range(n_scans)]
+    scans = room_scans(n_scans)
     period = int(0.0267 * 168e6)
     t0 = chip.cycles + 2_000_000
     sent = [0]
