@@ -6,17 +6,48 @@
 //! second of the power-on (on the sensor's clock).
 //!
 //! Natively (`--host`, pseudo-terminals: the line rates are real termios
-//! settings) and under QEMU (the real firmware; QEMU ignores line rates, so
-//! the `90` reaches the co-processor intact and restarts it at once — the
-//! noise of a `90` at the wrong rate and the baud search are covered by
-//! `core/tests/recovery.rs` on a line that models both rates).
+//! settings) and under QEMU (the real firmware). QEMU ignores line rates;
+//! verify models them from the rate the firmware programmed (USART2's
+//! `BRR`, read through QEMU's monitor), so the `90` at 9600 Bd reaches a
+//! firmware listening at 500 kBd as noise, as on a wire.
+//!
+//! `--reset-mcu-after N` (QEMU only) resets the MCU in the middle of the
+//! run while the LMS keeps streaming at 500 kBd: the firmware boots at
+//! 9600, hears noise, must find the LMS by its baud search and stream
+//! again; the client then sets the host line up again. The first scan must
+//! come back within one second of the reset (the client's set-up included).
 
 mod common;
 
 use common::{elf, on_path};
 
+/// The milliseconds after `key` in the summary line that contains `line`.
+fn ms_after(text: &str, line: &str, key: &str) -> f64 {
+    let line = text
+        .lines()
+        .find(|l| l.contains(line))
+        .unwrap_or_else(|| panic!("no line with {line:?}: {text}"));
+    // "… first scan back after 221.4 ms (sensor clock)"
+    line.split(key)
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"))
+}
+
+/// Bytes the sensor line's rate model turned into noise on their way to
+/// the firmware (0 if it garbled nothing).
+fn garbled_to_firmware(text: &str) -> u64 {
+    text.lines()
+        .find(|l| l.contains("sensor line rate model:"))
+        .and_then(|l| l.split(" and ").nth(1))
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0)
+}
+
 /// Run verify with a power cycle after 8 scans of 20; check the summary.
-fn power_cycle(mode: &[&str]) {
+fn power_cycle(mode: &[&str]) -> String {
     let args = [
         &["verify"],
         mode,
@@ -34,21 +65,12 @@ fn power_cycle(mode: &[&str]) {
     let text = common::stdout(&out);
     assert!(out.status.success(), "{text}");
     assert!(text.contains("20/20 scans bit-identical; 0 lost"), "{text}");
-    let line = text
-        .lines()
-        .find(|l| l.contains("sensor power-cycled after"))
-        .unwrap_or_else(|| panic!("no power-cycle line: {text}"));
-    // "… first scan back after 221.4 ms (sensor clock)"
-    let ms: f64 = line
-        .split("first scan back after ")
-        .nth(1)
-        .and_then(|rest| rest.split(' ').next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("{line}"));
-    assert!(ms > 0.0 && ms < 1000.0, "{line}");
+    let ms = ms_after(&text, "sensor power-cycled after", "first scan back after ");
+    assert!(ms > 0.0 && ms < 1000.0, "{text}");
     // The co-processor counted nothing lost: the power cycle came with
     // nothing in flight.
     assert!(text.contains("scans_dropped=0"), "{text}");
+    text
 }
 
 #[test]
@@ -63,5 +85,36 @@ fn firmware_under_qemu_streams_again_after_a_sensor_power_cycle() {
         return;
     }
     let elf = elf();
-    power_cycle(&["--qemu", elf.to_str().unwrap()]);
+    let text = power_cycle(&["--qemu", elf.to_str().unwrap()]);
+    // The `90` at 9600 Bd reached the firmware, at 500 kBd, as noise.
+    assert!(garbled_to_firmware(&text) > 0, "{text}");
+}
+
+#[test]
+fn firmware_under_qemu_finds_the_sensor_again_after_an_mcu_reset() {
+    if !on_path("qemu-system-arm") || !elf().is_file() {
+        println!("skipped: qemu-system-arm or the firmware ELF is missing");
+        return;
+    }
+    let elf = elf();
+    let args = [
+        "verify",
+        "--qemu",
+        elf.to_str().unwrap(),
+        "--count",
+        "20",
+        "--reset-mcu-after",
+        "8",
+        "--timeout",
+        "60",
+    ];
+    let out = common::run_logged(&args);
+    let text = common::stdout(&out);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("20/20 scans bit-identical; 0 lost"), "{text}");
+    let ms = ms_after(&text, "MCU reset after 8 scans", "first scan back after ");
+    assert!(ms > 0.0 && ms < 1000.0, "{text}");
+    // The firmware booted at 9600 Bd into a stream at 500 kBd: it heard
+    // noise until its baud search found the sensor's rate.
+    assert!(garbled_to_firmware(&text) > 0, "{text}");
 }

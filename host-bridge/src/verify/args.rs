@@ -90,6 +90,13 @@ pub struct VerifyArgs {
     /// must stream again by itself within one second (recovery test)
     #[arg(long, value_name = "N")]
     pub power_cycle_sensor_after: Option<usize>,
+    /// Reset the co-processor's MCU once (QEMU's system reset; --qemu only),
+    /// after this many scans of the selection have come back (with nothing
+    /// in flight): it must find the LMS, still at its fast rate, and stream
+    /// again within one second; the client then sets its host line up again
+    /// (recovery test)
+    #[arg(long, value_name = "N", requires = "qemu")]
+    pub reset_mcu_after: Option<usize>,
     /// Pipeline parameters: the co-processor's in --host mode; in every mode
     /// those the D0 summary does not echo (min points, max chi2, merging)
     #[command(flatten)]

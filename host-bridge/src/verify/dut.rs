@@ -92,6 +92,24 @@ impl Dut {
         }
     }
 
+    /// Reset the co-processor's MCU (`--reset-mcu-after`): QEMU only.
+    pub(super) fn reset_mcu(&mut self) -> Result<()> {
+        match self {
+            Dut::Qemu(q) => q.reset(),
+            _ => bail!("--reset-mcu-after needs --qemu (only QEMU can reset the co-processor)"),
+        }
+    }
+
+    /// The sensor line's rate as the co-processor has set its UART, where
+    /// that can be seen (QEMU: USART2's `BRR`); `Ok(None)` elsewhere or
+    /// while unset.
+    pub(super) fn sensor_baud(&mut self) -> Result<Option<u32>> {
+        match self {
+            Dut::Qemu(q) => q.sensor_baud(),
+            _ => Ok(None),
+        }
+    }
+
     /// `error` happened on a line: if the co-processor has gone (QEMU
     /// exits a moment after it closes its sockets), say that instead.
     pub(super) fn explain(&mut self, error: anyhow::Error) -> anyhow::Error {

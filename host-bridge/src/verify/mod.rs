@@ -99,6 +99,14 @@
 //!   the group on every exit, errors and panics included. Its `defmt` log
 //!   is kept in a temporary directory and its tail decoded with
 //!   `defmt-print` (if installed) when the run fails.
+//!   QEMU ignores baud-rate registers: the sensor line's rates are modelled
+//!   (`line_rate`) from the rate the firmware programmed in USART2's `BRR`,
+//!   read through QEMU's QMP socket; bytes between ends whose rates differ
+//!   arrive as noise. `--reset-mcu-after N` resets the MCU through QMP
+//!   (`system_reset`) once N scans are back, while the LMS streams on at
+//!   500 kBd; verify then sets the host line up again as a client would,
+//!   the scans lost meanwhile are written off, and the first scan must be
+//!   back within one second of the reset.
 //! * `--ports HOST SENSOR`: two serial ports wired to a co-processor
 //!   (`serialport` crate, 8N1, 9600 Bd at the start as after power-on).
 //!
@@ -111,6 +119,7 @@
 //!   `host` (the [`CoProcessor`](lms_core::device::coprocessor::CoProcessor)
 //!   in a thread, [`run_coprocessor`]), `qemu` (the firmware under QEMU, on
 //!   TCP), or two serial ports. Every line is a [`crate::serial::Link`].
+//! * `line_rate` — the sensor line's rate model under QEMU.
 //! * `session` — both lines, the emulator, the client side and its
 //!   requests (`exchange`), the phases of the run (`phases`).
 //! * `checker` and `compare` — every scan that comes back, recomputed and
@@ -123,6 +132,7 @@ mod compare;
 mod dut;
 mod exchange;
 mod host;
+mod line_rate;
 mod phases;
 mod qemu;
 mod report;

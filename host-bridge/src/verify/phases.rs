@@ -12,6 +12,10 @@ use super::report::Outcome;
 use super::session::Session;
 use super::{CLOSING, QUIET, TICK};
 
+/// How long the host line must be quiet before a warm-up scan not back is
+/// taken as dropped (while holding the sensor for a disruption).
+const SETTLE: Duration = Duration::from_millis(500);
+
 /// The scans not back at the end.
 struct Missing {
     /// Of the selection, given up once the host line was quiet.
@@ -30,6 +34,7 @@ impl Session {
         // still be starting.
         let before = self.counters(deadline)?;
         self.log(format!("counters before: {before:?}"));
+        self.host_baud = host_baud;
         self.start_host_stream(host_baud, deadline)?;
         self.emu.source_mut().arm();
         let streaming = Instant::now();
@@ -82,6 +87,7 @@ impl Session {
         while self.play_sent < self.wanted && Instant::now() < deadline {
             self.pump(TICK)?;
             self.maybe_power_cycle(deadline)?;
+            self.maybe_reset_mcu(deadline)?;
         }
         self.finished = true;
         Ok(())
@@ -102,25 +108,95 @@ impl Session {
         if self.power_cycle_after.is_none_or(|n| back < n) {
             return Ok(());
         }
+        self.quiesce_all(deadline)?;
+        let on = self.clock.now_us();
+        self.log("sensor side: switched off and on");
+        self.emu.power_on(on);
+        self.sensor_streaming = false;
+        self.power_cycle = Some(super::session::Recovery {
+            after: self.checker.tally.play_back,
+            on_us: Some(on),
+            ..Default::default()
+        });
+        Ok(())
+    }
+
+    /// Hold the sensor until the selection's scans sent are back and its
+    /// line is idle, and every other scan is back or the host line has been
+    /// quiet for [`SETTLE`] (the co-processor's budget may have dropped a
+    /// warm-up scan), or `deadline`; then let its clock run again.
+    fn quiesce_all(&mut self, deadline: Instant) -> Result<()> {
         self.quiesce = true;
         while Instant::now() < deadline {
             let t = &self.checker.tally;
-            if t.play_back + t.other_back >= self.sent && self.emu.line_idle() {
+            let others_done =
+                t.play_back + t.other_back >= self.sent || self.last_host_rx.elapsed() >= SETTLE;
+            if t.play_back >= self.play_sent && self.emu.line_idle() && others_done {
                 break;
             }
             self.pump(TICK)?;
         }
         self.quiesce = false;
         self.clock.release();
-        let on = self.clock.now_us();
-        self.log("sensor side: switched off and on");
-        self.emu.power_on(on);
-        self.sensor_streaming = false;
-        self.power_cycle = Some(super::session::PowerCycle {
-            after: self.checker.tally.play_back,
-            on_us: Some(on),
+        Ok(())
+    }
+
+    /// `--reset-mcu-after N`: once N scans are back, with nothing in flight,
+    /// reset the MCU (QEMU's system reset) while the LMS keeps streaming at
+    /// its fast rate. Then do what a client does when its sensor went
+    /// silent: the host line back to 9600 Bd, the counters asked for until
+    /// the co-processor answers, its rate, features and stream set up again;
+    /// the selection resumes once a scan has come back through it. Scans
+    /// sent meanwhile that never come back are lost to the reset (written
+    /// off, not counted as lost).
+    fn maybe_reset_mcu(&mut self, deadline: Instant) -> Result<()> {
+        let back = self.checker.tally.play_back;
+        if let Some(r) = self.mcu_reset.as_mut() {
+            if r.back_us.is_none() && back > r.after {
+                r.back_us = Some(self.clock.now_us());
+            }
+            return Ok(());
+        }
+        if self.reset_mcu_after.is_none_or(|n| back < n) {
+            return Ok(());
+        }
+        self.quiesce_all(deadline)?;
+        self.emu.source_mut().disarm();
+        self.recovering = true;
+        let at = self.clock.now_us();
+        self.log("co-processor: MCU reset");
+        self.dut.reset_mcu()?;
+        self.mcu_reset = Some(super::session::Recovery {
+            after: back,
+            on_us: Some(at),
             ..Default::default()
         });
+        self.host.set_baud(Baud::B9600)?;
+        self.host_rate = Baud::B9600;
+        self.host.discard_input()?;
+        self.framer = lms_core::telegram::Framer::new(
+            lms_core::telegram::Direction::SensorToHost,
+            lms_core::telegram::Handshake::Expected,
+        );
+        self.pending_b0 = None;
+        let after = self.counters(deadline)?;
+        self.log(format!("counters after the reset: {after:?}"));
+        self.start_host_stream(self.host_baud, deadline)?;
+        let t = &self.checker.tally;
+        let back_before = t.other_back;
+        while self.checker.tally.other_back == back_before {
+            if Instant::now() >= deadline {
+                bail!("no scan came back within --timeout after the MCU reset");
+            }
+            self.pump(TICK)?;
+        }
+        let t = &self.checker.tally;
+        self.written_off = self.sent - self.play_sent - t.other_back;
+        if let Some(r) = self.mcu_reset.as_mut() {
+            r.first_back_us = Some(self.clock.now_us());
+        }
+        self.recovering = false;
+        self.emu.source_mut().arm();
         Ok(())
     }
 
@@ -143,7 +219,9 @@ impl Session {
         };
         let t = &self.checker.tally;
         let missing = self.play_sent.saturating_sub(t.play_back);
-        let other_lost = (self.sent.saturating_sub(self.play_sent)).saturating_sub(t.other_back);
+        let other_lost = (self.sent.saturating_sub(self.play_sent))
+            .saturating_sub(t.other_back)
+            .saturating_sub(self.written_off);
         let (lost, late) = if timed_out {
             (0, missing)
         } else {
@@ -190,16 +268,31 @@ impl Session {
             Ok(c) => (Some(c), None),
             Err(e) => (None, Some(e)),
         };
+        // Warm-up scans not back that the co-processor counted as dropped by
+        // its host-line budget: sent before the client's stream was on.
+        let budget_drops = counters.as_ref().map_or(0, |c| {
+            usize::try_from(c.host_scans_dropped).unwrap_or(usize::MAX)
+        });
+        let warmup_dropped = missing.other_lost.min(budget_drops);
         Outcome {
             wanted: self.wanted,
             lost: missing.lost,
             late: missing.late,
-            other_lost: missing.other_lost,
+            other_lost: missing.other_lost - warmup_dropped,
+            warmup_dropped,
             play_sent: self.play_sent,
             sensor_restarts: self.sensor_restarts,
             power_cycle: self
                 .power_cycle_after
                 .map(|_| self.power_cycle.unwrap_or_default()),
+            mcu_reset: self
+                .reset_mcu_after
+                .map(|_| self.mcu_reset.unwrap_or_default()),
+            written_off: self.written_off,
+            garbled: (
+                self.line_rate.garbled_to_sensor,
+                self.line_rate.garbled_to_firmware,
+            ),
             timeout: self.timeout,
             tally: c.tally,
             counters,

@@ -1,8 +1,9 @@
 //! `--qemu`: the firmware under `qemu-system-arm -M netduinoplus2`, its
 //! three UARTs on TCP sockets on 127.0.0.1 ([`TcpLink`]).
 
-use std::io::{self, Read, Write};
+use std::io::{self, BufRead, BufReader, Read, Write};
 use std::net::{Ipv4Addr, SocketAddr, TcpListener, TcpStream};
+use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -114,10 +115,87 @@ impl Link for TcpLink {
 pub(super) struct Qemu {
     pub(super) child: Child,
     elf: PathBuf,
-    /// Holds the raw defmt log and QEMU's stderr.
+    /// Holds the raw defmt log, QEMU's stderr and its QMP socket.
     dir: PathBuf,
     /// Keep `dir` when dropped (the run failed).
     pub(super) keep: bool,
+    /// The QEMU Machine Protocol connection, made on first use.
+    qmp: Option<Qmp>,
+}
+
+/// The sensor line's USART (USART2) baud-rate register.
+const USART2_BRR: u32 = 0x4000_4408;
+
+/// The bus clock the firmware assumes for USART2 under QEMU (APB1,
+/// `firmware/src/rcc.rs`: `Clocks::QEMU` keeps the nominal 42 MHz, so that
+/// its `BRR` values are the silicon ones).
+const QEMU_PCLK1_HZ: u32 = 42_000_000;
+
+/// A QEMU Machine Protocol (QMP) connection on a Unix socket: JSON
+/// commands, one reply line each (event lines in between are skipped).
+struct Qmp {
+    writer: UnixStream,
+    reader: BufReader<UnixStream>,
+}
+
+impl Qmp {
+    /// Connect to `path` (QEMU creates it at start), read the greeting and
+    /// leave negotiation mode.
+    fn connect(path: &Path, deadline: Instant) -> Result<Qmp> {
+        let stream = loop {
+            match UnixStream::connect(path) {
+                Ok(s) => break s,
+                Err(e) if Instant::now() >= deadline => {
+                    bail!(
+                        "cannot connect to QEMU's QMP socket {}: {e}",
+                        path.display()
+                    )
+                }
+                Err(_) => std::thread::sleep(Duration::from_millis(20)),
+            }
+        };
+        stream.set_read_timeout(Some(Duration::from_secs(5)))?;
+        let reader = BufReader::new(stream.try_clone()?);
+        let mut qmp = Qmp {
+            writer: stream,
+            reader,
+        };
+        qmp.line().context("QMP greeting")?;
+        qmp.execute(serde_json::json!({ "execute": "qmp_capabilities" }))?;
+        Ok(qmp)
+    }
+
+    fn line(&mut self) -> Result<serde_json::Value> {
+        let mut text = String::new();
+        let n = self.reader.read_line(&mut text)?;
+        ensure!(n > 0, "QEMU closed its QMP socket");
+        serde_json::from_str(&text).with_context(|| format!("QMP sent {text:?}"))
+    }
+
+    /// Run one command; its `return` value.
+    fn execute(&mut self, command: serde_json::Value) -> Result<serde_json::Value> {
+        let mut text = command.to_string();
+        text.push('\n');
+        self.writer.write_all(text.as_bytes())?;
+        loop {
+            let mut reply = self.line()?;
+            if let Some(r) = reply.get_mut("return") {
+                return Ok(r.take());
+            }
+            if let Some(e) = reply.get("error") {
+                bail!("QMP {command}: {e}");
+            }
+        }
+    }
+
+    /// A human-monitor command (e.g. `xp`); its text output.
+    fn monitor(&mut self, line: &str) -> Result<String> {
+        let r = self.execute(serde_json::json!({
+            "execute": "human-monitor-command",
+            "arguments": { "command-line": line }
+        }))?;
+        Ok(r.as_str().unwrap_or_default().to_string())
+    }
 }
 
 /// `name` as an executable found on `PATH`.
@@ -194,6 +272,11 @@ impl Qemu {
             "-monitor",
             "none",
         ])
+        .arg("-qmp")
+        .arg(format!(
+            "unix:{},server=on,wait=off",
+            dir.join("qmp.sock").display()
+        ))
         .args(["-semihosting-config", "enable=on,target=native"])
         .args(["-serial", &serial(ports[0])])
         .args(["-serial", &serial(ports[1])])
@@ -221,7 +304,41 @@ impl Qemu {
             elf: elf.to_path_buf(),
             dir,
             keep: false,
+            qmp: None,
         })
+    }
+
+    fn qmp(&mut self) -> Result<&mut Qmp> {
+        if self.qmp.is_none() {
+            let path = self.dir.join("qmp.sock");
+            self.qmp = Some(Qmp::connect(
+                &path,
+                Instant::now() + Duration::from_secs(5),
+            )?);
+        }
+        Ok(self.qmp.as_mut().expect("connected above"))
+    }
+
+    /// Reset the MCU (QMP `system_reset`: the core restarts from its reset
+    /// vector; the UARTs' TCP connections stay up, as wires would).
+    pub(super) fn reset(&mut self) -> Result<()> {
+        self.qmp()?
+            .execute(serde_json::json!({ "execute": "system_reset" }))
+            .context("QMP system_reset")?;
+        Ok(())
+    }
+
+    /// The sensor line's rate as the firmware has programmed it (from
+    /// USART2's `BRR`, read through the monitor), `None` while unset.
+    /// QEMU itself ignores the register; verify models the line with it.
+    pub(super) fn sensor_baud(&mut self) -> Result<Option<u32>> {
+        let text = self.qmp()?.monitor(&format!("xp /1wx {USART2_BRR:#x}"))?;
+        let brr = text
+            .rsplit(':')
+            .next()
+            .and_then(|v| u32::from_str_radix(v.trim().trim_start_matches("0x"), 16).ok())
+            .with_context(|| format!("unexpected xp output {text:?}"))?;
+        Ok((brr != 0).then(|| QEMU_PCLK1_HZ / brr))
     }
 
     /// An error if QEMU has exited (with the first lines of what it said;

@@ -6,7 +6,7 @@ use anyhow::{bail, Result};
 use lms_core::telegram::features::Counters;
 
 use super::checker::Tally;
-use super::session::PowerCycle;
+use super::session::Recovery;
 use super::QUIET;
 
 /// The run's outcome.
@@ -27,7 +27,18 @@ pub(super) struct Outcome {
     /// `--timeout`.
     pub(super) timeout: Duration,
     /// `--power-cycle-sensor-after`, if given: what happened.
-    pub(super) power_cycle: Option<PowerCycle>,
+    pub(super) power_cycle: Option<Recovery>,
+    /// `--reset-mcu-after`, if given: what happened.
+    pub(super) mcu_reset: Option<Recovery>,
+    /// Warm-up scans not back that the co-processor counted as dropped by
+    /// its host-line budget (not lost: sent before the client's stream was
+    /// on, while a reply at 9600 Bd held the line).
+    pub(super) warmup_dropped: usize,
+    /// Scans outside the selection lost to the MCU reset (not counted).
+    pub(super) written_off: usize,
+    /// Bytes the sensor line's rate model garbled (to the LMS, to the
+    /// firmware): the two ends' rates differed.
+    pub(super) garbled: (u64, u64),
     pub(super) tally: Tally,
     pub(super) counters: Option<Counters>,
     pub(super) counters_error: Option<String>,
@@ -61,29 +72,26 @@ impl Outcome {
             && self.counters.is_some()
             && self.dropped_miscounted().is_none()
             && self.power_cycle_problem().is_none()
+            && self.mcu_reset_problem().is_none()
     }
 
-    /// Longest time from the LMS's power-on to the first scan back (µs).
-    pub(super) const POWER_CYCLE_LIMIT_US: u64 = 1_000_000;
+    /// Longest time from a disruption (the LMS's power-on, the MCU reset)
+    /// to the first scan back (µs).
+    pub(super) const RECOVERY_LIMIT_US: u64 = 1_000_000;
 
     /// What went wrong with `--power-cycle-sensor-after`, if anything.
     fn power_cycle_problem(&self) -> Option<String> {
-        let pc = self.power_cycle?;
-        let Some(on) = pc.on_us else {
-            return Some(format!(
-                "the sensor was never power-cycled (fewer than {} scans back)",
-                pc.after
-            ));
-        };
-        match pc.back_us {
-            None => Some("no scan came back after the sensor's power cycle".into()),
-            Some(back) if back - on > Self::POWER_CYCLE_LIMIT_US => Some(format!(
-                "the first scan came back {} ms after the sensor's power cycle (limit {} ms)",
-                (back - on) / 1000,
-                Self::POWER_CYCLE_LIMIT_US / 1000
-            )),
-            Some(_) => None,
-        }
+        recovery_problem(self.power_cycle?, "the sensor's power cycle", |r| r.back_us)
+    }
+
+    /// What went wrong with `--reset-mcu-after`, if anything.
+    fn mcu_reset_problem(&self) -> Option<String> {
+        let r = self.mcu_reset?;
+        recovery_problem(r, "the MCU reset", |r| r.first_back_us).or_else(|| {
+            r.back_us
+                .is_none()
+                .then(|| "no scan of the selection came back after the MCU reset".into())
+        })
     }
 
     /// `Ok` if the run passed, else an error naming why it failed.
@@ -130,10 +138,33 @@ impl Outcome {
         if let Some(e) = &self.counters_error {
             why.push(format!("no counters at the end: {e}"));
         }
-        if let Some(p) = self.power_cycle_problem() {
-            why.push(p);
-        }
+        why.extend(self.power_cycle_problem());
+        why.extend(self.mcu_reset_problem());
         bail!("verify failed: {}", why.join(", "));
+    }
+}
+
+/// What went wrong with a disruption `r` (named `what`), if anything:
+/// it never happened, nothing came back (by `back`), or too late.
+fn recovery_problem(
+    r: Recovery,
+    what: &str,
+    back: impl Fn(&Recovery) -> Option<u64>,
+) -> Option<String> {
+    let Some(on) = r.on_us else {
+        return Some(format!(
+            "{what} never happened (fewer than {} scans back)",
+            r.after
+        ));
+    };
+    match back(&r) {
+        None => Some(format!("no scan came back after {what}")),
+        Some(t) if t - on > Outcome::RECOVERY_LIMIT_US => Some(format!(
+            "the first scan came back {} ms after {what} (limit {} ms)",
+            (t - on) / 1000,
+            Outcome::RECOVERY_LIMIT_US / 1000
+        )),
+        Some(_) => None,
     }
 }
 
@@ -184,17 +215,43 @@ pub(super) fn report(o: &Outcome) {
         (None, Some(e)) => println!("host-bridge verify: no counters at the end: {e}"),
         (None, None) => {}
     }
+    let ms = |t: Option<u64>, on: Option<u64>| match (t, on) {
+        (Some(t), Some(on)) => format!("{:.1} ms", (t - on) as f64 / 1000.0),
+        _ => "never".into(),
+    };
     if let Some(pc) = o.power_cycle {
-        let ms = |t: Option<u64>| match (t, pc.on_us) {
-            (Some(t), Some(on)) => format!("{:.1} ms", (t - on) as f64 / 1000.0),
-            _ => "never".into(),
-        };
         println!(
             "host-bridge verify: sensor power-cycled after {} scans: streaming again after {}, \
              first scan back after {} (sensor clock)",
             pc.after,
-            ms(pc.streaming_us),
-            ms(pc.back_us)
+            ms(pc.streaming_us, pc.on_us),
+            ms(pc.back_us, pc.on_us)
+        );
+    }
+    if let Some(r) = o.mcu_reset {
+        println!(
+            "host-bridge verify: MCU reset after {} scans: sensor streaming again after {}, \
+             first scan back after {}, the selection's after {} (sensor clock; the client's \
+             set-up included); {} warm-up scans lost to the reset",
+            r.after,
+            ms(r.streaming_us, r.on_us),
+            ms(r.first_back_us, r.on_us),
+            ms(r.back_us, r.on_us),
+            o.written_off
+        );
+    }
+    if o.warmup_dropped > 0 {
+        println!(
+            "host-bridge verify: {} warm-up scans dropped by the co-processor's host-line budget \
+             (counted in host_scans_dropped; sent before the client's stream was on)",
+            o.warmup_dropped
+        );
+    }
+    if o.garbled != (0, 0) {
+        println!(
+            "host-bridge verify: sensor line rate model: {} bytes to the sensor and {} to the \
+             firmware arrived as noise (the two ends' rates differed)",
+            o.garbled.0, o.garbled.1
         );
     }
     if let Some(r) = &o.firmware_report {

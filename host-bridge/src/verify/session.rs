@@ -18,6 +18,7 @@ use lms_core::Params;
 
 use super::checker::Checker;
 use super::dut::{Dut, Lines};
+use super::line_rate::LineRate;
 use super::source::{PlaySource, Tag};
 use super::VerifyArgs;
 use crate::serial::Link;
@@ -81,17 +82,22 @@ pub(super) fn qemu_max_in_flight() -> usize {
     (FIRMWARE_SENSOR_QUEUE / b0).max(1)
 }
 
-/// The LMS power cycle of `--power-cycle-sensor-after` (emulator clock, µs).
+/// A disruption and the recovery from it (emulator clock, µs): the LMS
+/// power cycle of `--power-cycle-sensor-after` or the MCU reset of
+/// `--reset-mcu-after`.
 #[derive(Clone, Copy, Debug, Default)]
-pub(super) struct PowerCycle {
-    /// Scans of the selection back when it was switched off and on.
+pub(super) struct Recovery {
+    /// Scans of the selection back when it happened.
     pub(super) after: usize,
-    /// When it was switched on again.
+    /// When it happened (the LMS switched on again; the MCU reset).
     pub(super) on_us: Option<u64>,
     /// When the co-processor had started its stream again.
     pub(super) streaming_us: Option<u64>,
     /// When the first scan of the selection came back after it.
     pub(super) back_us: Option<u64>,
+    /// MCU reset: when the first scan of any kind came back after it (the
+    /// selection resumes then).
+    pub(super) first_back_us: Option<u64>,
 }
 
 /// Both ends of the co-processor and everything verify keeps.
@@ -126,7 +132,19 @@ pub(super) struct Session {
     pub(super) timeout: Duration,
     /// `--power-cycle-sensor-after`: wanted, and what happened.
     pub(super) power_cycle_after: Option<usize>,
-    pub(super) power_cycle: Option<PowerCycle>,
+    pub(super) power_cycle: Option<Recovery>,
+    /// `--reset-mcu-after`: wanted, and what happened.
+    pub(super) reset_mcu_after: Option<usize>,
+    pub(super) mcu_reset: Option<Recovery>,
+    /// Scans outside the selection that the sensor side sent while the
+    /// co-processor was rebooting and that did not come back: lost to the
+    /// reset, by design, so not counted as lost.
+    pub(super) written_off: usize,
+    /// The co-processor is recovering from an MCU reset: the sensor runs
+    /// (the firmware must find it), with scans outside the selection.
+    pub(super) recovering: bool,
+    /// `--host-baud`, to set up again after an MCU reset.
+    pub(super) host_baud: Baud,
     /// Hold the sensor until nothing is in flight (before the power cycle).
     pub(super) quiesce: bool,
     pub(super) framer: Framer,
@@ -144,6 +162,9 @@ pub(super) struct Session {
     pub(super) host_rate: Baud,
     pub(super) host_line_free: Instant,
     pub(super) checker: Checker,
+    /// The sensor line's rate model (QEMU ignores line rates).
+    pub(super) line_rate: LineRate,
+    rate_scratch: Vec<u8>,
     pub(super) stop: Arc<AtomicBool>,
     pub(super) verbose: bool,
     pub(super) started: Instant,
@@ -190,6 +211,11 @@ impl Session {
             timeout: Duration::from_secs_f64(args.timeout),
             power_cycle_after: args.power_cycle_sensor_after,
             power_cycle: None,
+            reset_mcu_after: args.reset_mcu_after,
+            mcu_reset: None,
+            written_off: 0,
+            recovering: false,
+            host_baud: Baud::B9600,
             quiesce: false,
             framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
             assembler: FeatureAssembler::new(),
@@ -200,6 +226,8 @@ impl Session {
             host_rate: Baud::B9600,
             host_line_free: Instant::now(),
             checker: Checker::new(params, args.recompute_tau),
+            line_rate: LineRate::new(),
+            rate_scratch: Vec::new(),
             stop,
             verbose: args.verbose,
             started,
@@ -233,7 +261,15 @@ impl Session {
             if n == 0 {
                 break;
             }
-            self.emu.receive(self.clock.now_us(), &buf[..n]);
+            let mut heard = std::mem::take(&mut self.rate_scratch);
+            heard.clear();
+            let lms_rate = self.emu.baud().bits_per_second();
+            let carried =
+                self.line_rate
+                    .carry_to_sensor(&mut self.dut, lms_rate, &buf[..n], &mut heard);
+            self.emu.receive(self.clock.now_us(), &heard);
+            self.rate_scratch = heard;
+            carried?;
         }
         self.pump_emulator()?;
         let mut wait = wait;
@@ -267,13 +303,14 @@ impl Session {
     /// docs).
     fn update_hold(&mut self) {
         let armed = self.emu.source().armed();
-        // Every scan not back, the warm-up scan too: they may all sit in
-        // the firmware's sensor queue.
-        let tally = &self.checker.tally;
-        let in_flight = self.sent.saturating_sub(tally.play_back + tally.other_back);
+        // The selection's scans not back. Not the warm-up scans: sent
+        // before the client's stream was on, the co-processor's host-line
+        // budget may drop them (a reply at 9600 Bd takes more than a scan
+        // period), and waiting for one would hold the sensor for good.
+        let in_flight = self.play_sent.saturating_sub(self.checker.tally.play_back);
         let hold = self.finished
             || self.quiesce
-            || (self.sensor_streaming && !armed)
+            || (self.sensor_streaming && !armed && !self.recovering)
             || (armed && self.play_sent >= self.wanted)
             || (armed && self.max_in_flight > 0 && in_flight >= self.max_in_flight)
             || (armed && self.host_line_free > Instant::now() + HOST_LINE_SLACK);
@@ -290,11 +327,17 @@ impl Session {
         let now = self.clock.now_us();
         let mut out = [0u8; 4096];
         loop {
+            let lms_rate = self.emu.baud().bits_per_second();
             let n = self.emu.transmit(now, &mut out);
             if n > 0 {
+                let mut heard = std::mem::take(&mut self.rate_scratch);
+                heard.clear();
+                self.line_rate
+                    .carry_to_firmware(&mut self.dut, lms_rate, &out[..n], &mut heard)?;
                 self.sensor
-                    .send(&out[..n])
+                    .send(&heard)
                     .with_context(|| format!("sensor line {}", self.sensor.name()))?;
+                self.rate_scratch = heard;
             }
             while let Some(event) = self.emu.next_event() {
                 match event {
@@ -304,8 +347,12 @@ impl Session {
                     }
                     EmuEvent::StreamStarted => {
                         self.sensor_streaming = true;
-                        if let Some(pc) = self.power_cycle.as_mut() {
-                            pc.streaming_us.get_or_insert(self.clock.now_us());
+                        let now = self.clock.now_us();
+                        for r in [self.power_cycle.as_mut(), self.mcu_reset.as_mut()]
+                            .into_iter()
+                            .flatten()
+                        {
+                            r.streaming_us.get_or_insert(now);
                         }
                         // Held until the client's stream is on.
                         self.update_hold();

@@ -98,7 +98,13 @@ impl PlaySource {
         self.armed = true;
     }
 
-    /// `true` once [`PlaySource::arm`] was called.
+    /// Draw outside the selection again (warm-up scans) until the next
+    /// [`PlaySource::arm`]: while the co-processor reboots.
+    pub fn disarm(&mut self) {
+        self.armed = false;
+    }
+
+    /// `true` once [`PlaySource::arm`] was called (and not disarmed since).
     pub fn armed(&self) -> bool {
         self.armed
     }
