@@ -9,12 +9,8 @@ use lms_core::telegram::features::Counters;
 use lms_core::telegram::{Baud, Request};
 
 use super::report::Outcome;
-use super::session::Session;
+use super::session::{Session, SETTLE};
 use super::{CLOSING, QUIET, TICK};
-
-/// How long the host line must be quiet before a warm-up scan not back is
-/// taken as dropped (while holding the sensor for a disruption).
-const SETTLE: Duration = Duration::from_millis(500);
 
 /// The scans not back at the end.
 struct Missing {
@@ -192,6 +188,7 @@ impl Session {
         }
         let t = &self.checker.tally;
         self.written_off = self.sent - self.play_sent - t.other_back;
+        self.others_given_up = self.others_given_up.max(self.written_off);
         if let Some(r) = self.mcu_reset.as_mut() {
             r.first_back_us = Some(self.clock.now_us());
         }

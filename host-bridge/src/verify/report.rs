@@ -168,6 +168,50 @@ fn recovery_problem(
     }
 }
 
+/// The summary's lines on power cycles, MCU resets, scans written off and
+/// the sensor line's rate model.
+fn report_disruptions(o: &Outcome) {
+    let ms = |t: Option<u64>, on: Option<u64>| match (t, on) {
+        (Some(t), Some(on)) => format!("{:.1} ms", (t - on) as f64 / 1000.0),
+        _ => "never".into(),
+    };
+    if let Some(pc) = o.power_cycle {
+        println!(
+            "host-bridge verify: sensor power-cycled after {} scans: streaming again after {}, \
+             first scan back after {} (sensor clock)",
+            pc.after,
+            ms(pc.streaming_us, pc.on_us),
+            ms(pc.back_us, pc.on_us)
+        );
+    }
+    if let Some(r) = o.mcu_reset {
+        println!(
+            "host-bridge verify: MCU reset after {} scans: sensor streaming again after {}, \
+             first scan back after {}, the selection's after {} (sensor clock; the client's \
+             set-up included); {} warm-up scans lost to the reset",
+            r.after,
+            ms(r.streaming_us, r.on_us),
+            ms(r.first_back_us, r.on_us),
+            ms(r.back_us, r.on_us),
+            o.written_off
+        );
+    }
+    if o.warmup_dropped > 0 {
+        println!(
+            "host-bridge verify: {} warm-up scans dropped by the co-processor's host-line budget \
+             (counted in host_scans_dropped; sent before the client's stream was on)",
+            o.warmup_dropped
+        );
+    }
+    if o.garbled != (0, 0) {
+        println!(
+            "host-bridge verify: sensor line rate model: {} bytes to the sensor and {} to the \
+             firmware arrived as noise (the two ends' rates differed)",
+            o.garbled.0, o.garbled.1
+        );
+    }
+}
+
 /// The summary on stdout.
 pub(super) fn report(o: &Outcome) {
     let mut line = format!(
@@ -215,45 +259,7 @@ pub(super) fn report(o: &Outcome) {
         (None, Some(e)) => println!("host-bridge verify: no counters at the end: {e}"),
         (None, None) => {}
     }
-    let ms = |t: Option<u64>, on: Option<u64>| match (t, on) {
-        (Some(t), Some(on)) => format!("{:.1} ms", (t - on) as f64 / 1000.0),
-        _ => "never".into(),
-    };
-    if let Some(pc) = o.power_cycle {
-        println!(
-            "host-bridge verify: sensor power-cycled after {} scans: streaming again after {}, \
-             first scan back after {} (sensor clock)",
-            pc.after,
-            ms(pc.streaming_us, pc.on_us),
-            ms(pc.back_us, pc.on_us)
-        );
-    }
-    if let Some(r) = o.mcu_reset {
-        println!(
-            "host-bridge verify: MCU reset after {} scans: sensor streaming again after {}, \
-             first scan back after {}, the selection's after {} (sensor clock; the client's \
-             set-up included); {} warm-up scans lost to the reset",
-            r.after,
-            ms(r.streaming_us, r.on_us),
-            ms(r.first_back_us, r.on_us),
-            ms(r.back_us, r.on_us),
-            o.written_off
-        );
-    }
-    if o.warmup_dropped > 0 {
-        println!(
-            "host-bridge verify: {} warm-up scans dropped by the co-processor's host-line budget \
-             (counted in host_scans_dropped; sent before the client's stream was on)",
-            o.warmup_dropped
-        );
-    }
-    if o.garbled != (0, 0) {
-        println!(
-            "host-bridge verify: sensor line rate model: {} bytes to the sensor and {} to the \
-             firmware arrived as noise (the two ends' rates differed)",
-            o.garbled.0, o.garbled.1
-        );
-    }
+    report_disruptions(o);
     if let Some(r) = &o.firmware_report {
         println!("host-bridge verify: firmware report: {r}");
     }

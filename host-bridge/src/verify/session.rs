@@ -100,6 +100,10 @@ pub(super) struct Recovery {
     pub(super) first_back_us: Option<u64>,
 }
 
+/// How long the host line must be quiet before a warm-up scan not back is
+/// taken as dropped (it then no longer holds the sensor).
+pub(super) const SETTLE: Duration = Duration::from_millis(500);
+
 /// Both ends of the co-processor and everything verify keeps.
 /// The sensor runs while the host line's backlog is below this (half a
 /// 0.5° scan period).
@@ -140,6 +144,9 @@ pub(super) struct Session {
     /// co-processor was rebooting and that did not come back: lost to the
     /// reset, by design, so not counted as lost.
     pub(super) written_off: usize,
+    /// Warm-up scans not back that no longer hold the sensor (see
+    /// [`SETTLE`]); still counted at the end.
+    pub(super) others_given_up: usize,
     /// The co-processor is recovering from an MCU reset: the sensor runs
     /// (the firmware must find it), with scans outside the selection.
     pub(super) recovering: bool,
@@ -214,6 +221,7 @@ impl Session {
             reset_mcu_after: args.reset_mcu_after,
             mcu_reset: None,
             written_off: 0,
+            others_given_up: 0,
             recovering: false,
             host_baud: Baud::B9600,
             quiesce: false,
@@ -303,11 +311,24 @@ impl Session {
     /// docs).
     fn update_hold(&mut self) {
         let armed = self.emu.source().armed();
-        // The selection's scans not back. Not the warm-up scans: sent
-        // before the client's stream was on, the co-processor's host-line
-        // budget may drop them (a reply at 9600 Bd takes more than a scan
-        // period), and waiting for one would hold the sensor for good.
-        let in_flight = self.play_sent.saturating_sub(self.checker.tally.play_back);
+        // Every scan not back, the warm-up scans too: they may all sit in
+        // the firmware's sensor queue, and two scans back to back do not fit
+        // one scan period of the host line (181 beams at 500 kBd). But a
+        // warm-up scan is sent before the client's stream is on, and the
+        // co-processor's host-line budget may drop it (a reply at 9600 Bd
+        // takes more than a scan period): once the host line has been quiet
+        // for [`SETTLE`] with only warm-up scans out, they are given up on,
+        // so that they do not hold the sensor for good.
+        let tally = &self.checker.tally;
+        let play_out = self.play_sent.saturating_sub(tally.play_back);
+        let others_out = (self.sent - self.play_sent).saturating_sub(tally.other_back);
+        if play_out == 0
+            && others_out > self.others_given_up
+            && self.last_host_rx.elapsed() >= SETTLE
+        {
+            self.others_given_up = others_out;
+        }
+        let in_flight = play_out + others_out.saturating_sub(self.others_given_up);
         let hold = self.finished
             || self.quiesce
             || (self.sensor_streaming && !armed && !self.recovering)
