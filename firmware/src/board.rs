@@ -272,7 +272,8 @@ fn serve<const RX: usize, const TX: usize>(
         Some((rx, tx)) => (Some(rx), Some(tx)),
         None => (None, None),
     };
-    serial::on_interrupt(usart, rx, tx, &port.stats, irq);
+    // A heapless::spsc queue of RX slots holds RX − 1 bytes.
+    serial::on_interrupt(usart, rx, RX - 1, tx, &port.stats, irq);
 }
 
 #[interrupt]

@@ -137,15 +137,17 @@ fn write_brr(usart: &RegisterBlock, div: u32) {
 /// queue (switching `TXEIE` off when it is empty). `producer` is `None`
 /// only if the interrupt fires before the queue has been handed over; the
 /// byte is then counted as dropped (the data register must be read or the
-/// interrupt repeats).
+/// interrupt repeats). `rx_room` is the bytes the receive queue holds: when
+/// it is full, `RXNEIE` goes off (backpressure, see the module docs).
 pub fn on_interrupt(
     usart: &RegisterBlock,
     producer: Option<&mut Producer<'static, u8>>,
+    rx_room: usize,
     tx: Option<&mut Consumer<'static, u8>>,
     stats: &RxStats,
     irq: Interrupt,
 ) {
-    on_receive(usart, producer, stats);
+    on_receive(usart, producer, rx_room, stats);
     if usart.cr1().read().txeie().bit_is_clear() {
         return;
     }
@@ -177,20 +179,31 @@ const TX_BURST: usize = 16;
 fn on_receive(
     usart: &RegisterBlock,
     producer: Option<&mut Producer<'static, u8>>,
+    room: usize,
     stats: &RxStats,
 ) {
     let mut producer = producer;
+    // Held (the queue was full): the byte waits in DR until the loop has
+    // made room (`resume_rx`); a transmit interrupt must not take it.
+    if usart.cr1().read().rxneie().bit_is_clear() {
+        return;
+    }
     loop {
         // Reading SR then DR clears RXNE and the error flags (ORE, NF, FE, PE).
         let sr = usart.sr().read();
         if !(sr.rxne().bit_is_set() || sr.ore().bit_is_set()) {
             return;
         }
-        if sr.rxne().bit_is_set() && producer.as_deref().is_some_and(|p| !p.ready()) {
-            // Full: leave the byte in DR and hold the line until the loop
-            // has made room (`resume_rx`).
+        // The byte that fills the queue: `RXNEIE` off *before* DR is read,
+        // so that the next byte, held in DR, never raises the line (QEMU
+        // 7.2 lowers it only on a DR read: a raised line with the byte
+        // left in DR would re-enter this interrupt for ever).
+        let fills = sr.rxne().bit_is_set()
+            && producer
+                .as_deref()
+                .is_some_and(|p| p.len().saturating_add(1) >= room);
+        if fills {
             usart.cr1().modify(|_, w| w.rxneie().clear_bit());
-            return;
         }
         let byte = usart.dr().read().dr().bits() as u8;
         if sr.ore().bit_is_set() {
@@ -210,6 +223,10 @@ fn on_receive(
             Some(len) => {
                 stats.received.fetch_add(1, Ordering::Relaxed);
                 stats.peak_queued.fetch_max(len as u32, Ordering::Relaxed);
+                if fills {
+                    // Full now: the line is held (the next byte stays in DR).
+                    return;
+                }
             }
             None => {
                 stats.dropped_full.fetch_add(1, Ordering::Relaxed);
