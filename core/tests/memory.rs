@@ -6,10 +6,13 @@
 
 use lms_core::device::client::Client;
 use lms_core::device::coprocessor::{CoProcessor, LatestScan, SensorLink};
-use lms_core::device::emulator::Emulator;
+use lms_core::device::emulator::{Emulator, MIN_TX_CAPACITY, TX_CAPACITY};
 use lms_core::telegram::Framer;
 use lms_core::{Beam, Extractor, Features, Frame};
 use std::mem::size_of;
+
+/// The co-processor's LMS face.
+type Face = Emulator<LatestScan, MIN_TX_CAPACITY>;
 
 #[test]
 fn coprocessor_parts_sizes() {
@@ -20,7 +23,7 @@ fn coprocessor_parts_sizes() {
         ("      Framer", size_of::<Framer>()),
         ("  Extractor", size_of::<Extractor>()),
         ("    Features", size_of::<Features>()),
-        ("  Emulator<LatestScan>", size_of::<Emulator<LatestScan>>()),
+        ("  the LMS face", size_of::<Face>()),
         ("    LatestScan", size_of::<LatestScan>()),
         ("  Frame", size_of::<Frame>()),
     ];
@@ -35,11 +38,12 @@ fn coprocessor_parts_sizes() {
     assert_eq!(size_of::<Beam>(), 2);
     assert!(size_of::<Frame>() <= 6 * lms_core::MAX_BEAMS + 32);
     // The host face stages no scan: its source writes a `30 01`'s values
-    // straight into the telegram (it held an 802-byte copy).
-    assert!(
-        size_of::<Emulator<LatestScan>>()
-            < size_of::<LatestScan>() + size_of::<Framer>() + 819 + 1_400
-    );
+    // straight into the telegram (it held an 802-byte copy); and it keeps
+    // no transmit image of it: the `B0` is streamed from the latest scan
+    // through a 161-byte buffer (it held an 819-byte one).
+    assert_eq!((MIN_TX_CAPACITY, TX_CAPACITY), (161, 819));
+    assert!(size_of::<Emulator<LatestScan>>() >= size_of::<Face>() + 819 - 161);
+    assert!(size_of::<Face>() < size_of::<LatestScan>() + size_of::<Framer>() + 161 + 1_400);
     // The whole co-processor (x86-64 layout; on the MCU a little smaller):
     // 22 704 B before the copy went, 21 896 B after; 21 944 B with the
     // drop-in host face (three more D5 counters, twice; the host line's
@@ -51,5 +55,7 @@ fn coprocessor_parts_sizes() {
     // in the host face.
     // 20 504 B with requests relayed to the sensor (a 48-byte reply, the
     // forwarded request) and a client's whole 77 kept for the sensor.
-    assert!(size_of::<CoProcessor>() <= 20_504);
+    // 19 848 B with the face's `30 01` streamed from the latest scan (a
+    // 161-byte transmit buffer instead of 819 B).
+    assert!(size_of::<CoProcessor>() <= 19_848);
 }

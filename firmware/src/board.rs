@@ -41,24 +41,33 @@ pub const SENSOR_BAUD: u32 = 9_600;
 pub const CONTROL_BAUD: u32 = 115_200;
 
 /// Slots of the host receive queue (holds one less byte): requests are
-/// short (the longest, `77`, is 42 bytes) and a client waits for each reply.
-pub const HOST_RX_SLOTS: usize = 256;
+/// short (the longest, `77`, is 42 bytes) and a client waits for each
+/// reply; a longer burst is held back by the receive backpressure
+/// ([`crate::serial`]), not lost.
+pub const HOST_RX_SLOTS: usize = 64;
 /// Slots of the host transmit queue: a 361-beam `B0` and its features are
 /// about 1.15 KB; the write of a scan returns once all but this much is
-/// queued, so the rest leaves while the next scan is computed.
+/// queued, so the rest leaves while the next scan is computed. At 500 kBd
+/// on both lines the host line is busy 23 ms of each 26.7 ms period, so
+/// computation (≤ 18 ms) and transmission must overlap by ≥ 14 ms, ≥ 0.7 KB
+/// of queue.
 pub const HOST_TX_SLOTS: usize = 1024;
-/// Slots of the sensor receive queue (holds one less byte): five 732-byte
-/// scans (`verify --qemu`'s default of 5 in flight; five 401-beam `B0`s are
-/// 4 060 bytes), i.e. ~80 ms of a 500 kBd stream (50 kB/s), for a loop that
-/// is busy with one scan for ~16–20 ms.
-pub const SENSOR_RX_SLOTS: usize = 4096;
+/// Slots of the sensor receive queue (holds one less byte, 2047): the
+/// bytes a continuous 500 kBd stream (50 B/ms) brings while the loop does
+/// not read, at most a pipeline run at the 3.0 M-instruction budget
+/// (17.9 ms at 168 MHz, ≤ 893 B) plus a host write that finds the host
+/// transmit queue full (1.15 KB at 500 kBd, ≤ 23 ms, ≤ 1150 B): 2043 B.
+/// A full queue holds the line (backpressure, [`crate::serial`]): under
+/// QEMU nothing is lost; on a board the overrun is counted (`ORE`, the
+/// `D5` counters' lost sensor bytes).
+pub const SENSOR_RX_SLOTS: usize = 2048;
 /// Slots of the sensor transmit queue: one bring-up request (≤ 42 bytes).
 pub const SENSOR_TX_SLOTS: usize = 64;
 /// Slots of the console receive queue (one-byte commands).
 pub const CONTROL_RX_SLOTS: usize = 16;
 /// Slots of the console transmit queue (the report line is ~700 bytes; a
-/// report waits, asleep, for the rest).
-pub const CONTROL_TX_SLOTS: usize = 256;
+/// report waits, asleep, for the rest: ~60 ms at 115 200 Bd).
+pub const CONTROL_TX_SLOTS: usize = 64;
 
 /// The host port (USART1).
 pub type HostPort = Serial<pac::USART1>;
@@ -263,7 +272,8 @@ fn serve<const RX: usize, const TX: usize>(
         Some((rx, tx)) => (Some(rx), Some(tx)),
         None => (None, None),
     };
-    serial::on_interrupt(usart, rx, tx, &port.stats, irq);
+    // A heapless::spsc queue of RX slots holds RX − 1 bytes.
+    serial::on_interrupt(usart, rx, RX - 1, tx, &port.stats, irq);
 }
 
 #[interrupt]

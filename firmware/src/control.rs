@@ -197,15 +197,19 @@ impl Line<'_> {
 }
 
 /// `value` in decimal, in the tail of `buf` (20 digits hold any u64).
+/// Written without indexing: a bounds check here was the firmware's only
+/// `panic_bounds_check`, which links `core::fmt`'s integer formatting
+/// (~0.6 KiB of flash) for a message the panic handler never formats.
 fn decimal(mut value: u64, buf: &mut [u8; 20]) -> &[u8] {
-    let mut i = buf.len();
-    loop {
-        i -= 1;
-        buf[i] = b'0' + (value % 10) as u8;
+    let mut used = 0;
+    for slot in buf.iter_mut().rev() {
+        *slot = b'0' + (value % 10) as u8;
         value /= 10;
+        used += 1;
         if value == 0 {
             break;
         }
     }
-    &buf[i..]
+    let start = buf.len().saturating_sub(used);
+    buf.get(start..).unwrap_or_default()
 }

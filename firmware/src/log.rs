@@ -2,7 +2,7 @@
 //! The global `defmt` logger, with its sink chosen at run time: RTT on the
 //! board (the embedded Rust convention: `probe-rs run` reads the up channel
 //! while a debugger is attached; without one the frames are dropped when
-//! the 512-byte buffer is full, never blocking), semihosting `SYS_WRITE` to
+//! the 256-byte buffer is full, never blocking), semihosting `SYS_WRITE` to
 //! QEMU's stdout when [`crate::rcc`] has detected QEMU.
 //!
 //! Semihosting is never used on the board: a `BKPT 0xAB` without a
@@ -24,8 +24,10 @@ static SINK: AtomicU8 = AtomicU8::new(SINK_NONE);
 static RTT: Mutex<RefCell<Option<UpChannel>>> = Mutex::new(RefCell::new(None));
 static STDOUT: Mutex<RefCell<Option<Stdout>>> = Mutex::new(RefCell::new(None));
 
-/// Bytes of the RTT up buffer (channel 0, "defmt").
-pub const RTT_BUFFER: usize = 512;
+/// Bytes of the RTT up buffer (channel 0, "defmt"): a frame is at most
+/// ~40 bytes (rzcobs, the longest format with its arguments), the boot's
+/// six lines ~0.2 KB; `probe-rs` empties it every few milliseconds.
+pub const RTT_BUFFER: usize = 256;
 
 /// Log through RTT from now on (the board).
 pub fn init_rtt() {

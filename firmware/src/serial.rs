@@ -11,10 +11,16 @@
 //! bytes are queued, and the line sends them while the loop computes.
 //! Only a write that finds the transmit queue full waits, asleep in `WFI`
 //! until the interrupt has made room. Nothing here blocks in the
-//! interrupt and nothing is lost silently: a byte that finds the receive
-//! queue full is dropped and counted in [`RxStats::dropped_full`], a byte
-//! the hardware lost because the interrupt came too late is counted in
-//! [`RxStats::overrun`].
+//! interrupt and nothing is lost silently. Receive has backpressure: when
+//! the queue is full the interrupt leaves the byte in the data register and
+//! switches `RXNEIE` off; the loop's next read makes room and switches it
+//! back on ([`resume_rx`]). Under QEMU the character device then simply
+//! waits (it delivers a byte only while `RXNE` is clear), so nothing is
+//! lost; on a board the bytes that arrive meanwhile overrun the data
+//! register and are counted in [`RxStats::overrun`] (`ORE`: at least one
+//! byte lost), as is a byte the hardware lost because the interrupt came
+//! too late. [`RxStats::dropped_full`] counts the bytes read before the
+//! queue was handed over (none after start-up).
 //!
 //! In QEMU `TXE` is always set, so one interrupt sends the whole queue; the
 //! writer pends that interrupt itself ([`Serial`]'s `start_tx`), as QEMU
@@ -33,10 +39,12 @@ use stm32f4::stm32f405::Interrupt;
 pub struct RxStats {
     /// Bytes put into the queue.
     pub received: AtomicU32,
-    /// Bytes dropped because the queue was full.
+    /// Bytes dropped because there was no queue to put them in (before
+    /// start-up handed it over; a full queue holds the line instead).
     pub dropped_full: AtomicU32,
     /// Hardware overruns (`ORE`): at least one byte lost before the
-    /// interrupt read the previous one.
+    /// interrupt read the previous one, or while a full queue held the
+    /// line (backpressure).
     pub overrun: AtomicU32,
     /// Bytes received with a framing, noise or parity error (kept, counted).
     pub line_errors: AtomicU32,
@@ -129,15 +137,17 @@ fn write_brr(usart: &RegisterBlock, div: u32) {
 /// queue (switching `TXEIE` off when it is empty). `producer` is `None`
 /// only if the interrupt fires before the queue has been handed over; the
 /// byte is then counted as dropped (the data register must be read or the
-/// interrupt repeats).
+/// interrupt repeats). `rx_room` is the bytes the receive queue holds: when
+/// it is full, `RXNEIE` goes off (backpressure, see the module docs).
 pub fn on_interrupt(
     usart: &RegisterBlock,
     producer: Option<&mut Producer<'static, u8>>,
+    rx_room: usize,
     tx: Option<&mut Consumer<'static, u8>>,
     stats: &RxStats,
     irq: Interrupt,
 ) {
-    on_receive(usart, producer, stats);
+    on_receive(usart, producer, rx_room, stats);
     if usart.cr1().read().txeie().bit_is_clear() {
         return;
     }
@@ -169,14 +179,31 @@ const TX_BURST: usize = 16;
 fn on_receive(
     usart: &RegisterBlock,
     producer: Option<&mut Producer<'static, u8>>,
+    room: usize,
     stats: &RxStats,
 ) {
     let mut producer = producer;
+    // Held (the queue was full): the byte waits in DR until the loop has
+    // made room (`resume_rx`); a transmit interrupt must not take it.
+    if usart.cr1().read().rxneie().bit_is_clear() {
+        return;
+    }
     loop {
         // Reading SR then DR clears RXNE and the error flags (ORE, NF, FE, PE).
         let sr = usart.sr().read();
         if !(sr.rxne().bit_is_set() || sr.ore().bit_is_set()) {
             return;
+        }
+        // The byte that fills the queue: `RXNEIE` off *before* DR is read,
+        // so that the next byte, held in DR, never raises the line (QEMU
+        // 7.2 lowers it only on a DR read: a raised line with the byte
+        // left in DR would re-enter this interrupt for ever).
+        let fills = sr.rxne().bit_is_set()
+            && producer
+                .as_deref()
+                .is_some_and(|p| p.len().saturating_add(1) >= room);
+        if fills {
+            usart.cr1().modify(|_, w| w.rxneie().clear_bit());
         }
         let byte = usart.dr().read().dr().bits() as u8;
         if sr.ore().bit_is_set() {
@@ -196,12 +223,56 @@ fn on_receive(
             Some(len) => {
                 stats.received.fetch_add(1, Ordering::Relaxed);
                 stats.peak_queued.fetch_max(len as u32, Ordering::Relaxed);
+                if fills {
+                    // Full now: the line is held (the next byte stays in DR).
+                    return;
+                }
             }
             None => {
                 stats.dropped_full.fetch_add(1, Ordering::Relaxed);
             }
         }
     }
+}
+
+/// Switch the receive interrupt back on if a full queue had switched it off
+/// (the caller has just taken bytes out), and pend it for the byte that
+/// waits in the data register.
+fn resume_rx(usart: &RegisterBlock, irq: Interrupt) {
+    critical_section::with(|_| {
+        if usart.cr1().read().rxneie().bit_is_clear() {
+            usart.cr1().modify(|_, w| w.rxneie().set_bit());
+            cortex_m::peripheral::NVIC::pend(irq);
+        }
+    });
+}
+
+/// [`Serial`]'s `read`: waits (asleep) for a byte, takes what is queued up
+/// to `buf.len()`, then lets the line go on ([`resume_rx`]). One function
+/// for every port (not generic, not inlined): the firmware's one copy.
+#[inline(never)]
+fn read_into(
+    usart: &RegisterBlock,
+    rx: &mut Consumer<'static, u8>,
+    irq: Interrupt,
+    buf: &mut [u8],
+) -> usize {
+    if buf.is_empty() {
+        return 0;
+    }
+    while !rx.ready() {
+        cortex_m::asm::wfi();
+    }
+    let mut n = 0;
+    for slot in buf.iter_mut() {
+        match rx.dequeue() {
+            Some(b) => *slot = b,
+            None => break,
+        }
+        n += 1;
+    }
+    resume_rx(usart, irq);
+    n
 }
 
 /// One USART as a byte stream for the main loop: the consumer end of its
@@ -372,21 +443,7 @@ impl<U: Deref<Target = RegisterBlock>> Read for Serial<U> {
     /// there, then returns what is queued, up to `buf.len()`. The
     /// co-processor reads only after `read_ready`, so it never sleeps here.
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
-        if buf.is_empty() {
-            return Ok(0);
-        }
-        while !self.rx.ready() {
-            cortex_m::asm::wfi();
-        }
-        let mut n = 0;
-        for slot in buf.iter_mut() {
-            match self.rx.dequeue() {
-                Some(b) => *slot = b,
-                None => break,
-            }
-            n += 1;
-        }
-        Ok(n)
+        Ok(read_into(&self.usart, &mut self.rx, self.irq, buf))
     }
 }
 
@@ -432,5 +489,7 @@ impl<U: Deref<Target = RegisterBlock>> WriteReady for Serial<U> {
 
 /// The next received byte of a port, if one is there (the console).
 pub fn try_read<U: Deref<Target = RegisterBlock>>(port: &mut Serial<U>) -> Option<u8> {
-    port.rx.dequeue()
+    let byte = port.rx.dequeue()?;
+    resume_rx(&port.usart, port.irq);
+    Some(byte)
 }

@@ -340,6 +340,14 @@ impl<'a> MeasuredView<'a> {
     }
 }
 
+/// The count word `W` of `count` values in `units`, scan flags 0 (what
+/// [`MeasuredValues::count_word`] gives without flags).
+pub fn count_word(count: usize, units: Unit) -> u16 {
+    // count <= MAX_VALUES < 0x400.
+    let count = u16::try_from(count).unwrap_or(0) & COUNT_MASK;
+    count | (units.count_word_bits() & UNITS_MASK)
+}
+
 /// One scan's value words, owned: up to [`MAX_VALUES`] raw `u16` words,
 /// their units, the count word's scan flags and the status byte.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -479,9 +487,7 @@ impl MeasuredValues {
 
     /// The count word `W`: count | scan flags | units.
     pub fn count_word(&self) -> u16 {
-        // count <= MAX_VALUES < 0x400.
-        let count = u16::try_from(self.count).unwrap_or(0) & COUNT_MASK;
-        count | (self.scan_flags & SCAN_FLAGS_MASK) | (self.units.count_word_bits() & UNITS_MASK)
+        count_word(self.count, self.units) | (self.scan_flags & SCAN_FLAGS_MASK)
     }
 
     /// The scan variant of this many values, if any.

@@ -65,16 +65,18 @@ impl EmuClock {
 }
 
 /// Bytes the firmware's sensor receive queue holds: `SENSOR_RX_SLOTS` − 1
-/// in `firmware/src/board.rs` (a `heapless::spsc` queue of 4096 slots;
-/// checked against that file by `tests/verify_qemu.rs`).
-pub(super) const FIRMWARE_SENSOR_QUEUE: usize = 4095;
+/// in `firmware/src/board.rs` (a `heapless::spsc` queue of 2048 slots;
+/// checked against that file by `tests/verify_qemu.rs`). A full queue holds
+/// QEMU's UART (receive backpressure), so more in flight waits, not lost.
+pub(super) const FIRMWARE_SENSOR_QUEUE: usize = 2047;
 
 /// Scans out at once with `--qemu` (the default of `--max-in-flight`): as
 /// many whole 361-value `B0`s (732 bytes) as fit the firmware's sensor
-/// receive queue, 4095 / 732 = 5 (3660 bytes). QEMU drains a UART at about
+/// receive queue, 2047 / 732 = 2 (1464 bytes). QEMU drains a UART at about
 /// 10 KB/s, a third of the line rate, so the scans not back yet may all be
-/// waiting in that queue; 8 in flight (5856 bytes) overflowed it and lost
-/// 2–6 of 100 scans.
+/// waiting in that queue; 8 in flight (5856 bytes) overflowed the 4095-byte
+/// queue before it held the line (receive backpressure) and lost 2–6 of 100
+/// scans.
 pub(super) fn qemu_max_in_flight() -> usize {
     // The count word and 361 value words (the played variant, 180°/0.5°).
     let data = 2 + 2 * lms_core::Variant::Fov180Res50.beams();

@@ -37,7 +37,7 @@ pub mod sensor_link;
 use embedded_io::{Read, ReadReady, Write};
 
 use crate::device::emulator::{
-    Emulator, Event as HostEvent, Handled, ScanSource, Settings, ValueMode,
+    Emulator, Event as HostEvent, Handled, ScanSource, Settings, ValueMode, MIN_TX_CAPACITY,
 };
 use crate::features::Features;
 use crate::params::ValidParams;
@@ -130,6 +130,16 @@ impl ScanSource for LatestScan {
             n += 1;
         }
         n
+    }
+
+    /// The face streams its `30 01` `B0` from the latest scan, word by
+    /// word (no transmit copy of it).
+    fn word(&self, variant: Variant, _units: Unit, index: usize) -> Option<u16> {
+        let values = self.values.get(..self.count)?;
+        values
+            .get(index)
+            .copied()
+            .filter(|_| variant == self.variant)
     }
 
     /// Every variant: the co-processor sets the sensor up for the one the
@@ -234,7 +244,7 @@ pub struct CoProcessor {
     params: ValidParams,
     link: SensorLink,
     extractor: Extractor,
-    host: Emulator<LatestScan>,
+    host: Emulator<LatestScan, MIN_TX_CAPACITY>,
     /// The host line's time budget.
     host_line: HostLine,
     counters: Counters,
@@ -330,7 +340,7 @@ impl CoProcessor {
     }
 
     /// The host face (the LMS the client sees: its rate, mode, variant, units).
-    pub fn host_face(&self) -> &Emulator<LatestScan> {
+    pub fn host_face(&self) -> &Emulator<LatestScan, MIN_TX_CAPACITY> {
         &self.host
     }
 

@@ -114,12 +114,15 @@ use transmit::{Done, Outgoing, Pending, Stream};
 use heapless::Deque;
 
 use crate::frame::{Invalid, Variant};
+use crate::telegram::crc::Crc;
+use crate::telegram::measured::{count_word as measured_count_word, MEASURED_COMMAND};
 use crate::telegram::reply::POWER_ON_LEN;
+use crate::telegram::status::STATUS_BLOCK_LEN;
 use crate::telegram::{
     copy_into, emit_telegram, Baud, Config, Direction, Event as FramerEvent, Framer, FramerStats,
     Handshake, MeasuredValues, ModeResult, RangeBits, Reply, Request, StatusBlock, StatusFields,
-    VariantReply, ACK, DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, MAX_TELEGRAM_LEN,
-    MAX_VALUES, NAK, REPLY_ADDRESS_BIT, SENSOR_TYPE_LMS200,
+    VariantReply, ACK, CRC_LEN, DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, HEADER_LEN,
+    MAX_TELEGRAM_LEN, MAX_VALUES, NAK, REPLY_ADDRESS_BIT, SENSOR_TYPE_LMS200, STX,
 };
 use crate::Unit;
 
@@ -146,8 +149,16 @@ const TURN_US_TIMES_3: u64 = 40_000;
 pub const PENDING_CAPACITY: usize = 8;
 /// Events held until [`Emulator::next_event`] takes them.
 pub const EVENT_CAPACITY: usize = 32;
-/// Largest frame on the line: `ACK` + the largest telegram.
-const TX_CAPACITY: usize = 1 + MAX_TELEGRAM_LEN;
+/// Largest frame on the line: `ACK` + the largest telegram; the default
+/// transmit buffer of an [`Emulator`].
+pub const TX_CAPACITY: usize = 1 + MAX_TELEGRAM_LEN;
+/// The smallest transmit buffer an [`Emulator`] takes: `ACK` + the largest
+/// reply that is not a scan, the `B1` status telegram (161 B). With a buffer
+/// below [`TX_CAPACITY`] the emulator streams each `B0` from
+/// [`ScanSource::word`] (header in the buffer, values and a running CRC
+/// produced byte by byte as they go out) and sends no value-mode telegrams
+/// of its own (the co-processor's face relays the sensor's).
+pub const MIN_TX_CAPACITY: usize = 1 + HEADER_LEN + 1 + STATUS_BLOCK_LEN + 1 + CRC_LEN;
 
 /// Time the line needs for `bytes` bytes at `baud` (µs, rounded up): 10 bits
 /// per byte. A 732-byte `B0` takes 14640 µs at 500000 Bd, 190625 µs at
@@ -174,8 +185,10 @@ pub const fn scan_period_us(variant: Variant) -> u64 {
     (turns_per_scan(variant) * TURN_US_TIMES_3 + 1) / 3
 }
 
-/// The simulated sensor (see the [module docs](self)).
-pub struct Emulator<S> {
+/// The simulated sensor (see the [module docs](self)). `TX` is its
+/// transmit buffer in bytes: [`TX_CAPACITY`] (the default) holds any frame;
+/// down to [`MIN_TX_CAPACITY`] a `B0` is streamed from the source instead.
+pub struct Emulator<S, const TX: usize = TX_CAPACITY> {
     source: S,
     settings: Settings,
     baud: Baud,
@@ -194,12 +207,21 @@ pub struct Emulator<S> {
     external_stream: bool,
     /// Data of the last [`ReplyKind::Extra`] reply.
     extra: [u8; EXTRA_REPLY_CAPACITY],
-    /// The frame on the line: `tx[..tx_len]`, of which `tx_sent` handed out.
-    tx: [u8; TX_CAPACITY],
+    /// The frame on the line: `tx[..tx_len]`, of which `tx_sent` handed out
+    /// (a streamed `B0`: its first `streamed_head` bytes, see `streamed`).
+    tx: [u8; TX],
     tx_len: usize,
     tx_sent: usize,
     tx_start_us: u64,
     tx_done: Done,
+    /// The frame is a `B0` streamed from [`ScanSource::word`]: `tx` holds
+    /// its first `streamed_head` bytes (`ACK`, header, count word), then
+    /// come `streamed_values` words, the status byte and the CRC, whose
+    /// running value is `streamed_crc`.
+    streamed: bool,
+    streamed_head: u8,
+    streamed_values: u16,
+    streamed_crc: Crc,
     /// When the line finished the last frame (µs).
     line_free_us: u64,
     events: Deque<Event, EVENT_CAPACITY>,
@@ -219,6 +241,20 @@ impl<S: ScanSource> Emulator<S> {
     /// `const`, so an emulator can be placed in a `static` without passing
     /// through the stack.
     pub const fn off(source: S, settings: Settings) -> Self {
+        Emulator::off_sized(source, settings)
+    }
+}
+
+impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
+    /// [`Emulator::off`] with a transmit buffer of `TX` bytes (at least
+    /// [`MIN_TX_CAPACITY`], checked at compile time).
+    pub const fn off_sized(source: S, settings: Settings) -> Self {
+        const {
+            assert!(
+                TX >= MIN_TX_CAPACITY,
+                "transmit buffer below MIN_TX_CAPACITY"
+            )
+        };
         let mut settings = settings;
         settings.address &= 0x7F;
         Emulator {
@@ -236,11 +272,15 @@ impl<S: ScanSource> Emulator<S> {
             stream: None,
             external_stream: false,
             extra: [0; EXTRA_REPLY_CAPACITY],
-            tx: [0; TX_CAPACITY],
+            tx: [0; TX],
             tx_len: 0,
             tx_sent: 0,
             tx_start_us: 0,
             tx_done: Done::Nothing,
+            streamed: false,
+            streamed_head: 0,
+            streamed_values: 0,
+            streamed_crc: Crc::new(),
             line_free_us: 0,
             events: Deque::new(),
             stats: EmulatorStats::ZERO,
@@ -262,7 +302,7 @@ impl<S: ScanSource> Emulator<S> {
             restart_us: 0,
             external_scans: false,
         };
-        let mut emulator = Emulator::off(source, zero);
+        let mut emulator = Emulator::off_sized(source, zero);
         emulator.mode = OperatingMode::Installation;
         emulator.framer.set_handshake(Handshake::Expected);
         emulator
@@ -295,6 +335,7 @@ impl<S: ScanSource> Emulator<S> {
         self.tx_len = 0;
         self.tx_sent = 0;
         self.tx_done = Done::Nothing;
+        self.streamed = false;
         self.line_free_us = now_us;
         self.queue(now_us, Outgoing::PowerOn);
     }

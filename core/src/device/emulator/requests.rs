@@ -35,7 +35,7 @@ fn detach(request: Request<'_>) -> Request<'static> {
     }
 }
 
-impl<S: ScanSource> Emulator<S> {
+impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
     /// Feed the framer until it has nothing more, answering what it finds.
     pub(super) fn feed(&mut self, now_us: u64, bytes: &[u8]) {
         let mut input = bytes;

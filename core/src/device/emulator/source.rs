@@ -12,6 +12,18 @@ pub trait ScanSource {
     /// written. Values not written are sent as "not valid" (8191).
     fn next_scan(&mut self, variant: Variant, units: Unit, out: &mut [u16]) -> usize;
 
+    /// Value word `index` of the scan the next `B0` carries, for an
+    /// emulator that streams its `B0`s (a transmit buffer below
+    /// [`TX_CAPACITY`](super::TX_CAPACITY)): such a source keeps its scan
+    /// (the co-processor's latest) and the emulator reads it word by word
+    /// while the telegram goes out, instead of calling
+    /// [`next_scan`](ScanSource::next_scan). `None`: "not valid" (8191).
+    /// `None` by default.
+    fn word(&self, variant: Variant, units: Unit, index: usize) -> Option<u16> {
+        let _ = (variant, units, index);
+        None
+    }
+
     /// `false` if this source cannot produce `variant` (the sensor then
     /// refuses a `3B` for it with `BB 00`). Every variant by default.
     fn supports(&self, variant: Variant) -> bool {

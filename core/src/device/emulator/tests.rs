@@ -82,7 +82,7 @@ fn lms() -> Emulator<Ramp> {
 }
 
 /// Everything sent up to `until_us`.
-fn drain<S: ScanSource>(e: &mut Emulator<S>, until_us: u64) -> Vec<u8> {
+fn drain<S: ScanSource, const TX: usize>(e: &mut Emulator<S, TX>, until_us: u64) -> Vec<u8> {
     let mut out = Vec::new();
     let mut buf = [0u8; 256];
     loop {
@@ -633,4 +633,101 @@ fn emulator_value_modes_are_unknown_on_the_coprocessor_face() {
     drain(&mut e, 1_000_000);
     e.receive(1_000_000, &request(&[0x20, 0x26, 5]));
     assert_eq!(drain(&mut e, 1_100_000), acked(&REPLY_92));
+}
+
+/// A scan kept by the source (like the co-processor's latest), served both
+/// ways: whole (`next_scan`) and word by word (`word`); `count` of them,
+/// the rest "not valid".
+struct Kept {
+    count: usize,
+}
+
+impl Kept {
+    fn at(j: usize) -> u16 {
+        // Flags in the top bits and error codes among the values.
+        (j as u16).wrapping_mul(7919) & 0x9FFF
+    }
+}
+
+impl ScanSource for Kept {
+    fn next_scan(&mut self, _: Variant, _: Unit, out: &mut [u16]) -> usize {
+        let n = self.count.min(out.len());
+        for (j, v) in out.iter_mut().take(n).enumerate() {
+            *v = Self::at(j);
+        }
+        n
+    }
+
+    fn word(&self, _: Variant, _: Unit, index: usize) -> Option<u16> {
+        (index < self.count).then(|| Self::at(index))
+    }
+}
+
+/// Requests and the sensor's bytes at each step, read in odd chunks at odd
+/// times (frames cut anywhere), for a default and a small transmit buffer.
+fn script<const TX: usize>(mut e: Emulator<Kept, TX>) -> (Vec<u8>, EmulatorStats) {
+    let steps: [(u64, &[u8]); 7] = [
+        (1_000_000, &ONE_SCAN),
+        (2_500_000, &STATUS),
+        (3_000_000, &VARIANT_180_050),
+        (3_500_000, &ONE_SCAN),
+        (5_000_000, &START),
+        (5_400_000, &STOP),
+        (6_000_000, &ONE_SCAN),
+    ];
+    let mut out = Vec::new();
+    let mut buf = [0u8; 37];
+    let mut now = 0;
+    for (at, req) in steps {
+        while now < at {
+            now += 3_331;
+            loop {
+                let n = e.transmit(now, &mut buf);
+                if n == 0 {
+                    break;
+                }
+                out.extend_from_slice(&buf[..n]);
+            }
+        }
+        e.receive(now, req);
+    }
+    out.extend(drain(&mut e, 9_000_000));
+    (out, *e.stats())
+}
+
+#[test]
+fn emulator_streamed_b0_is_byte_identical() {
+    for count in [0, 100, 181, 361, 401] {
+        let big = Emulator::new(Kept { count }, Settings::default(), 0);
+        let small: Emulator<Kept, MIN_TX_CAPACITY> =
+            Emulator::off_sized(Kept { count }, Settings::default());
+        let mut small = small;
+        small.power_on(0);
+        let (a, stats_a) = script(big);
+        let (b, stats_b) = script(small);
+        assert_eq!(a, b, "count {count}");
+        assert_eq!(stats_a, stats_b);
+        let parts = split(&a);
+        let b0s: Vec<_> = parts
+            .iter()
+            .filter(|p| p.len() > 5 && p[4] == 0xB0)
+            .collect();
+        // Two 30 01 at 181 beams, one at 361, and the stream's (9600 Bd).
+        assert!(b0s.len() >= 4, "{} B0s", b0s.len());
+        assert!(b0s.iter().any(|t| t.len() == 732) && b0s.iter().any(|t| t.len() == 372));
+        assert!(stats_b.emit_errors == 0 && stats_b.scans_sent as usize == b0s.len());
+    }
+}
+
+#[test]
+fn emulator_small_buffer_sends_no_value_telegrams() {
+    let mut e: Emulator<Kept, MIN_TX_CAPACITY> =
+        Emulator::off_sized(Kept { count: 181 }, Settings::default());
+    e.power_on(0);
+    drain(&mut e, 1_000_000);
+    // 20 27 1 181: subrange, A0 00, then B7s (none fit this buffer).
+    e.receive(1_000_000, &request(&[0x20, 0x27, 1, 0, 181, 0]));
+    let got = drain(&mut e, 2_000_000);
+    assert_eq!(split(&got), std::vec![std::vec![ACK], A0_OK.to_vec()]);
+    assert!(e.stats().emit_errors > 0 && e.stats().scans_sent == 0);
 }

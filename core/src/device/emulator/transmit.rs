@@ -103,7 +103,7 @@ impl Stream {
     }
 }
 
-impl<S: ScanSource> Emulator<S> {
+impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
     /// The sensor → host bytes whose line time has come by `now_us` (see
     /// *Timing* in the module docs), at most `out.len()`; returns how
     /// many were written. It stops right after the last byte sent at the
@@ -122,11 +122,8 @@ impl<S: ScanSource> Emulator<S> {
             let k = due
                 .saturating_sub(self.tx_sent)
                 .min(out.len().saturating_sub(n));
-            let src = self
-                .tx
-                .get(self.tx_sent..self.tx_sent.saturating_add(k))
-                .unwrap_or_default();
-            copy_into(out.get_mut(n..).unwrap_or_default(), src);
+            let dst = out.get_mut(n..n.saturating_add(k)).unwrap_or_default();
+            self.frame_bytes(dst);
             n = n.saturating_add(k);
             self.tx_sent = self.tx_sent.saturating_add(k);
             self.stats.bytes_sent = self.stats.bytes_sent.wrapping_add(k as u64);
@@ -242,7 +239,7 @@ impl<S: ScanSource> Emulator<S> {
                 };
                 self.pending.pop_front();
                 if n > 0 {
-                    self.set_frame(p.ready_us, Some(n.min(TX_CAPACITY)), Done::Nothing);
+                    self.set_frame(p.ready_us, Some(n.min(TX)), Done::Nothing);
                 }
                 return;
             }
@@ -270,6 +267,9 @@ impl<S: ScanSource> Emulator<S> {
             skipped,
         };
         match self.mode {
+            // A buffer too small for a value telegram sends none (counted
+            // in `emit_errors`); the co-processor's face never streams here.
+            OperatingMode::Values(_) if TX < TX_CAPACITY => self.set_frame(tick, None, done),
             OperatingMode::Values(mode) => self.start_value_scan(tick, mode, done),
             _ => self.start_scan(tick, false, done),
         }
@@ -396,8 +396,13 @@ impl<S: ScanSource> Emulator<S> {
         emit(rest).map(|n| n.saturating_add(1))
     }
 
-    /// A `B0` with the source's next scan, with `ACK` before it for `30 01`.
+    /// A `B0` with the source's next scan, with `ACK` before it for `30 01`
+    /// (streamed from [`ScanSource::word`] if `tx` cannot hold it).
     fn start_scan(&mut self, ready_us: u64, ack: bool, done: Done) {
+        if TX < TX_CAPACITY {
+            self.start_streamed_scan(ready_us, ack, done);
+            return;
+        }
         let variant = self.variant;
         let units = self.units();
         let beams = variant.beams().min(MAX_VALUES);
@@ -419,9 +424,76 @@ impl<S: ScanSource> Emulator<S> {
         self.set_frame(ready_us, n.ok(), done);
     }
 
+    /// A `B0` streamed from the source's [`ScanSource::word`]: `ACK` (for
+    /// `30 01`), the header and the count word into `tx`, their CRC begun;
+    /// [`Self::streamed_byte`] produces the rest as it goes out. The bytes
+    /// are those [`MeasuredValues::emit`] writes (flags 0).
+    fn start_streamed_scan(&mut self, ready_us: u64, ack: bool, done: Done) {
+        let beams = self.variant.beams().min(MAX_VALUES);
+        // count word + values + command + status: at most 806 < MAX_LEN.
+        let len = 2 + 2 * beams + 2;
+        let [lo, hi] = (len as u16).to_le_bytes();
+        let [w_lo, w_hi] = measured_count_word(beams, self.units()).to_le_bytes();
+        let address = Direction::SensorToHost.address_byte(self.settings.address);
+        let head = [STX, address, lo, hi, MEASURED_COMMAND, w_lo, w_hi];
+        let at = usize::from(ack);
+        if let Some(slot) = self.tx.get_mut(at..at + head.len()) {
+            slot.copy_from_slice(&head);
+        }
+        if let (Some(b), true) = (self.tx.first_mut(), ack) {
+            *b = ACK;
+        }
+        let mut crc = Crc::new();
+        crc.update(&head);
+        self.set_frame(ready_us, Some(at + HEADER_LEN + len + CRC_LEN), done);
+        self.streamed = true;
+        self.streamed_head = (at + head.len()) as u8;
+        self.streamed_values = beams as u16;
+        self.streamed_crc = crc;
+    }
+
+    /// Hand out the next `out.len()` bytes of the frame on the line, from
+    /// `tx_sent` on (the caller advances `tx_sent`).
+    fn frame_bytes(&mut self, out: &mut [u8]) {
+        if !self.streamed {
+            let end = self.tx_sent.saturating_add(out.len());
+            copy_into(out, self.tx.get(self.tx_sent..end).unwrap_or_default());
+            return;
+        }
+        let from = self.tx_sent;
+        for (i, slot) in out.iter_mut().enumerate() {
+            *slot = self.streamed_byte(from.saturating_add(i));
+        }
+    }
+
+    /// Byte `at` of a streamed `B0` (asked for in order, each once): the
+    /// head from `tx`, then each word's low and high byte, the status byte
+    /// (all added to the CRC), the CRC low and high byte.
+    fn streamed_byte(&mut self, at: usize) -> u8 {
+        let head = usize::from(self.streamed_head);
+        let Some(j) = at.checked_sub(head) else {
+            return self.tx.get(at).copied().unwrap_or(0);
+        };
+        let values = 2 * usize::from(self.streamed_values);
+        let byte = if j < values {
+            let not_valid = RangeBits::Bits13.encode_invalid(Invalid::NoEcho);
+            let units = self.units();
+            let word = self.source.word(self.variant, units, j / 2);
+            word.unwrap_or(not_valid).to_le_bytes()[j % 2]
+        } else if j == values {
+            self.settings.status
+        } else {
+            let [lo, hi] = self.streamed_crc.value().to_le_bytes();
+            return if j == values + 1 { lo } else { hi };
+        };
+        self.streamed_crc.push(byte);
+        byte
+    }
+
     /// Start the frame of `len` bytes in `tx` (`None`: it could not be
     /// written; nothing is sent and `done` is not carried out).
     fn set_frame(&mut self, ready_us: u64, len: Option<usize>, done: Done) {
+        self.streamed = false;
         match len {
             Some(len) if len > 0 => {
                 self.tx_len = len.min(TX_CAPACITY);
