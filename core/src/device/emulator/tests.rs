@@ -86,8 +86,9 @@ fn drain<S: ScanSource>(e: &mut Emulator<S>, until_us: u64) -> Vec<u8> {
     let mut out = Vec::new();
     let mut buf = [0u8; 256];
     loop {
+        let rate = e.baud();
         let n = e.transmit(until_us, &mut buf);
-        if n == 0 {
+        if n == 0 && e.baud() == rate {
             break;
         }
         out.extend_from_slice(&buf[..n]);
