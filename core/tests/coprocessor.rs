@@ -612,3 +612,49 @@ fn every_byte_of_a_clients_configuration_is_written_to_the_sensor() {
     let t = Telegram::new_checked(&reply_tail[0][..], Direction::SensorToHost).unwrap();
     assert_eq!(Reply::parse(&t).ok(), Some(Reply::Config(c)), "F4 tells it");
 }
+
+#[test]
+fn requests_the_face_does_not_interpret_are_the_sensors_to_answer() {
+    let mut bench = Bench::new();
+    // The sensor's status byte differs from the face's (0x10), so a `92`
+    // tells whose it is.
+    let mut settings = Settings::default();
+    settings.status = 0x30;
+    bench.lms.set_settings(settings);
+    bench.run(20_000);
+    assert_ne!(bench.cop.link().step(), Step::Streaming);
+    // Before the sensor streams, the face answers itself.
+    let early = bench.ask(0x36, &[0x01], 50_000);
+    assert_eq!(
+        &early[..6],
+        &[0x02, 0x80, 0x02, 0x00, 0x92, 0x10],
+        "{early:02X?}"
+    );
+    bench.run(2_000_000);
+    assert_eq!(bench.cop.link().step(), Step::Streaming);
+    for (command, data) in [(0x36u8, &[0x01u8, 0x02][..]), (0x63, &[]), (0x3F, &[7; 8])] {
+        let before = bench.lms.stats().requests;
+        let reply = bench.ask(command, data, 100_000);
+        assert_eq!(
+            bench.lms.stats().requests,
+            before + 1,
+            "{command:02X} asked of the sensor"
+        );
+        let t = telegrams(&reply);
+        assert_eq!(t.len(), 1, "one reply: {reply:02X?}");
+        assert_eq!(&t[0][4..6], &[0x92, 0x30], "the sensor's 92: {:02X?}", t[0]);
+        assert!(from_sensor(&bench, &t[0]));
+    }
+    // Not relayed: a request too long for the relay (9 data bytes), a
+    // malformed request of a command the face knows, the co-processor's own.
+    for (command, data) in [(0x36u8, &[0u8; 9][..]), (0x31, &[0x01]), (0x56, &[0x02])] {
+        let before = bench.lms.stats().requests;
+        let reply = bench.ask(command, data, 100_000);
+        assert_eq!(bench.lms.stats().requests, before, "{command:02X}");
+        assert_eq!(&reply[4..6], &[0x92, 0x10], "the face's 92: {reply:02X?}");
+    }
+    // The stream goes on after the relayed requests.
+    let scans = bench.cop.counters().scans_in;
+    bench.run(200_000);
+    assert!(bench.cop.counters().scans_in > scans + 5);
+}

@@ -487,6 +487,8 @@ impl Exchange {
                 Some(Outcome::Reply)
             }
             Phase::AwaitAck | Phase::AwaitReply if command == UNKNOWN_COMMAND => {
+                // Kept: a relayed request's `92` goes to its client as sent.
+                self.keep(t);
                 self.phase = Phase::Done;
                 Some(Outcome::UnknownCommand)
             }

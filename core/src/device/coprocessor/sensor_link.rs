@@ -178,8 +178,9 @@ pub enum LinkEvent {
     /// The sensor refused a step (e.g. the variant); the link retries it.
     Refused(Step),
     /// A [`forward`](SensorLink::forward)ed request is done: answered (its
-    /// reply's bytes in [`SensorLink::scan_bytes`] until the next feed) or
-    /// not (`92`, or no reply within [`REPLY_TIMEOUT_US`] twice).
+    /// reply's bytes, the expected code or the sensor's `92`, in
+    /// [`SensorLink::scan_bytes`] until the next feed) or not (no reply
+    /// within [`REPLY_TIMEOUT_US`] twice).
     Forwarded {
         /// The sensor's reply came.
         answered: bool,
@@ -692,9 +693,10 @@ impl SensorLink {
                 self.resume_stream(now_us);
                 Some(LinkEvent::Forwarded { answered: true })
             }
+            // The sensor does not know it: its `92` is the answer.
             Some(Outcome::UnknownCommand) if self.forward == Forward::Sent => {
                 self.resume_stream(now_us);
-                Some(LinkEvent::Forwarded { answered: false })
+                Some(LinkEvent::Forwarded { answered: true })
             }
             Some(Outcome::Reply) => self.on_reply(now_us),
             // Our request was damaged: resend at once.
