@@ -618,9 +618,10 @@ fn requests_the_face_does_not_interpret_are_the_sensors_to_answer() {
     let mut bench = Bench::new();
     // The sensor's status byte differs from the face's (0x10), so a `92`
     // tells whose it is.
-    let mut settings = Settings::default();
-    settings.status = 0x30;
-    bench.lms.set_settings(settings);
+    bench.lms.set_settings(Settings {
+        status: 0x30,
+        ..Settings::default()
+    });
     bench.run(20_000);
     assert_ne!(bench.cop.link().step(), Step::Streaming);
     // Before the sensor streams, the face answers itself.

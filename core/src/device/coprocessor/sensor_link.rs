@@ -23,6 +23,15 @@
 //! A refused step (a reply that is not what was asked, or `92`) is sent
 //! again when its time is up.
 //!
+//! A reply to a request sent while the sensor streams (`20 25` at the
+//! stream's rate, a [`forward`](SensorLink::forward)ed request) comes behind
+//! the scans already on the line or in a slow link's buffers (the firmware
+//! under QEMU takes ≈ 10 KB/s of a 500 kBd stream): each `B0` that comes
+//! first starts the wait again, for up to [`STREAM_SILENCE_US`] after
+//! sending ([`Client::wait_behind_stream`]). Without it the search left the
+//! right rate, and relayed requests went unanswered, whenever more than
+//! 300 ms of scans were queued ahead of the reply.
+//!
 //! # Recovery
 //!
 //! * A scan time-out: no good `B0` for [`stream_wait_us`] (353 ms at
@@ -606,6 +615,11 @@ impl SensorLink {
         } else {
             let request = self.request()?;
             self.client.prepare(&request, self.limits()).ok()?;
+            // `20 25` to a streaming sensor: its `B0`s ahead of the reply
+            // prove the rate; the reply waits behind them.
+            if self.step == Step::StopStream {
+                self.client.wait_behind_stream(STREAM_SILENCE_US);
+            }
         }
         let bytes = self.client.request_bytes();
         let n = bytes.len();
@@ -629,6 +643,7 @@ impl SensorLink {
             retries: 1,
         };
         self.client.prepare(&request, limits).ok()?;
+        self.client.wait_behind_stream(STREAM_SILENCE_US);
         let bytes = self.client.request_bytes();
         let n = bytes.len();
         crate::telegram::copy_into(buf.get_mut(..n)?, bytes);
