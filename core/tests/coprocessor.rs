@@ -81,10 +81,16 @@ impl Bench {
 
     /// Advance `us` microseconds in steps of 200 µs.
     fn run(&mut self, us: u64) {
+        self.run_in_steps(us, 200);
+    }
+
+    /// Advance `us` microseconds in steps of `step` µs (the co-processor
+    /// polled once a step: a long step hands it several telegrams at once).
+    fn run_in_steps(&mut self, us: u64, step: u64) {
         let end = self.now + us;
         let mut buf = [0u8; 4096];
         while self.now < end {
-            self.now += 200;
+            self.now += step;
             // Co-processor → sensor.
             let to_sensor = std::mem::take(&mut self.sensor.tx);
             self.lms.receive(self.now, &to_sensor);
@@ -658,4 +664,23 @@ fn requests_the_face_does_not_interpret_are_the_sensors_to_answer() {
     let scans = bench.cop.counters().scans_in;
     bench.run(200_000);
     assert!(bench.cop.counters().scans_in > scans + 5);
+}
+
+#[test]
+fn a_relayed_reply_goes_out_before_the_stream_it_starts() {
+    let mut bench = Bench::new();
+    bench.run(2_000_000);
+    bench.host_500k();
+    // Polled every 20 ms: the sensor's A0 and its first B7s come in one
+    // chunk (found under load: a B7 reached the client before the A0).
+    bench.host.tx.clear();
+    let mut buf = [0u8; 64];
+    let n = emit_telegram(&mut buf, 0, 0x20, &[0x27, 10, 0, 60, 0], None).unwrap();
+    bench.host.rx.extend(&buf[..n]);
+    bench.run_in_steps(400_000, 20_000);
+    let (codes, acks) = commands(&std::mem::take(&mut bench.host.tx));
+    assert_eq!(acks, 1);
+    assert!(codes.len() > 3, "{codes:02X?}");
+    assert_eq!(codes[0], 0xA0, "{codes:02X?}");
+    assert!(codes[1..].iter().all(|&c| c == 0xB7), "{codes:02X?}");
 }

@@ -439,7 +439,13 @@ impl CoProcessor {
                         outcome.scans += 1;
                     }
                     Some(LinkEvent::SwitchBaud(b)) => outcome.sensor_baud = Some(b),
-                    Some(LinkEvent::Forwarded { answered }) => self.forwarded(answered),
+                    Some(LinkEvent::Forwarded { answered }) => {
+                        self.forwarded(answered);
+                        // The relayed reply goes out before the stream it
+                        // starts (its first B6/B7/BF may be in this chunk:
+                        // seen under load, a B7 before the A0).
+                        self.drain_host(host, now_us, &mut outcome)?;
+                    }
                     Some(LinkEvent::Refused(_)) | None => {}
                 }
                 if event.is_none() && input.is_empty() {
