@@ -81,10 +81,16 @@ impl Bench {
 
     /// Advance `us` microseconds in steps of 200 µs.
     fn run(&mut self, us: u64) {
+        self.run_in_steps(us, 200);
+    }
+
+    /// Advance `us` microseconds in steps of `step` µs (the co-processor
+    /// polled once a step: a long step hands it several telegrams at once).
+    fn run_in_steps(&mut self, us: u64, step: u64) {
         let end = self.now + us;
         let mut buf = [0u8; 4096];
         while self.now < end {
-            self.now += 200;
+            self.now += step;
             // Co-processor → sensor.
             let to_sensor = std::mem::take(&mut self.sensor.tx);
             self.lms.receive(self.now, &to_sensor);
@@ -611,4 +617,70 @@ fn every_byte_of_a_clients_configuration_is_written_to_the_sensor() {
     let reply_tail = telegrams(&reply);
     let t = Telegram::new_checked(&reply_tail[0][..], Direction::SensorToHost).unwrap();
     assert_eq!(Reply::parse(&t).ok(), Some(Reply::Config(c)), "F4 tells it");
+}
+
+#[test]
+fn requests_the_face_does_not_interpret_are_the_sensors_to_answer() {
+    let mut bench = Bench::new();
+    // The sensor's status byte differs from the face's (0x10), so a `92`
+    // tells whose it is.
+    bench.lms.set_settings(Settings {
+        status: 0x30,
+        ..Settings::default()
+    });
+    bench.run(20_000);
+    assert_ne!(bench.cop.link().step(), Step::Streaming);
+    // Before the sensor streams, the face answers itself.
+    let early = bench.ask(0x36, &[0x01], 50_000);
+    assert_eq!(
+        &early[..6],
+        &[0x02, 0x80, 0x02, 0x00, 0x92, 0x10],
+        "{early:02X?}"
+    );
+    bench.run(2_000_000);
+    assert_eq!(bench.cop.link().step(), Step::Streaming);
+    for (command, data) in [(0x36u8, &[0x01u8, 0x02][..]), (0x63, &[]), (0x3F, &[7; 8])] {
+        let before = bench.lms.stats().requests;
+        let reply = bench.ask(command, data, 100_000);
+        assert_eq!(
+            bench.lms.stats().requests,
+            before + 1,
+            "{command:02X} asked of the sensor"
+        );
+        let t = telegrams(&reply);
+        assert_eq!(t.len(), 1, "one reply: {reply:02X?}");
+        assert_eq!(&t[0][4..6], &[0x92, 0x30], "the sensor's 92: {:02X?}", t[0]);
+        assert!(from_sensor(&bench, &t[0]));
+    }
+    // Not relayed: a request too long for the relay (9 data bytes), a
+    // malformed request of a command the face knows, the co-processor's own.
+    for (command, data) in [(0x36u8, &[0u8; 9][..]), (0x31, &[0x01]), (0x56, &[0x02])] {
+        let before = bench.lms.stats().requests;
+        let reply = bench.ask(command, data, 100_000);
+        assert_eq!(bench.lms.stats().requests, before, "{command:02X}");
+        assert_eq!(&reply[4..6], &[0x92, 0x10], "the face's 92: {reply:02X?}");
+    }
+    // The stream goes on after the relayed requests.
+    let scans = bench.cop.counters().scans_in;
+    bench.run(200_000);
+    assert!(bench.cop.counters().scans_in > scans + 5);
+}
+
+#[test]
+fn a_relayed_reply_goes_out_before_the_stream_it_starts() {
+    let mut bench = Bench::new();
+    bench.run(2_000_000);
+    bench.host_500k();
+    // Polled every 20 ms: the sensor's A0 and its first B7s come in one
+    // chunk (found under load: a B7 reached the client before the A0).
+    bench.host.tx.clear();
+    let mut buf = [0u8; 64];
+    let n = emit_telegram(&mut buf, 0, 0x20, &[0x27, 10, 0, 60, 0], None).unwrap();
+    bench.host.rx.extend(&buf[..n]);
+    bench.run_in_steps(400_000, 20_000);
+    let (codes, acks) = commands(&std::mem::take(&mut bench.host.tx));
+    assert_eq!(acks, 1);
+    assert!(codes.len() > 3, "{codes:02X?}");
+    assert_eq!(codes[0], 0xA0, "{codes:02X?}");
+    assert!(codes[1..].iter().all(|&c| c == 0xB7), "{codes:02X?}");
 }

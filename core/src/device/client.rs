@@ -198,6 +198,12 @@ struct Exchange {
     sent_us: u64,
     /// When its `ACK` came (µs), if it did.
     acked_us: Option<u64>,
+    /// The sensor's last stream telegram while the reply was awaited (µs):
+    /// the reply is queued behind it, so the wait runs from it, but from at
+    /// most `behind_us` after sending ([`Client::wait_behind_stream`]; 0:
+    /// from sending).
+    behind_since_us: u64,
+    behind_us: u64,
     /// Stream: the allowed gap between scans (µs) and the wait's start.
     stream_wait_us: Option<u64>,
     stream_since_us: u64,
@@ -242,6 +248,8 @@ impl Client {
                 attempts: 0,
                 sent_us: 0,
                 acked_us: None,
+                behind_since_us: 0,
+                behind_us: 0,
                 stream_wait_us: None,
                 stream_since_us: 0,
                 kept: false,
@@ -318,7 +326,19 @@ impl Client {
         x.expected = request.reply_command();
         x.limits = limits;
         x.attempts = 0;
+        x.behind_us = 0;
         Ok(self.request_bytes())
+    }
+
+    /// For the prepared request: each stream telegram (`B0`, `B6`/`B7`/`BF`)
+    /// that comes while its reply is awaited was sent before the request
+    /// was read (the reply is queued behind it on the line, or in a slow
+    /// link's buffers), so the wait starts again from it, up to `cap_us`
+    /// after sending. A line carrying the stream at this rate is alive and
+    /// at the right rate; a request lost on it is still sent again, at most
+    /// `cap_us` later.
+    pub fn wait_behind_stream(&mut self, cap_us: u64) {
+        self.x.behind_us = cap_us;
     }
 
     /// The prepared request's bytes (empty before the first
@@ -341,6 +361,7 @@ impl Client {
         }
         x.phase = Phase::AwaitAck;
         x.sent_us = now_us;
+        x.behind_since_us = now_us;
         x.acked_us = None;
     }
 
@@ -384,7 +405,8 @@ impl Client {
     /// When the current wait ends (µs), if one is running.
     pub fn deadline_us(&self) -> Option<u64> {
         let x = &self.x;
-        let ack_deadline = x.sent_us.saturating_add(x.limits.ack_us);
+        let behind = x.behind_since_us.min(x.sent_us.saturating_add(x.behind_us));
+        let ack_deadline = x.sent_us.max(behind).saturating_add(x.limits.ack_us);
         match x.phase {
             Phase::AwaitAck => Some(ack_deadline),
             Phase::AwaitReply => match (x.limits.reply_us, x.acked_us) {
@@ -487,6 +509,8 @@ impl Exchange {
                 Some(Outcome::Reply)
             }
             Phase::AwaitAck | Phase::AwaitReply if command == UNKNOWN_COMMAND => {
+                // Kept: a relayed request's `92` goes to its client as sent.
+                self.keep(t);
                 self.phase = Phase::Done;
                 Some(Outcome::UnknownCommand)
             }
@@ -507,6 +531,10 @@ impl Exchange {
             }
             _ => {
                 self.stats.ignored = self.stats.ignored.wrapping_add(1);
+                let stream = command == MEASURED || VALUE_STREAM_CODES.contains(&command);
+                if stream && matches!(self.phase, Phase::AwaitAck | Phase::AwaitReply) {
+                    self.behind_since_us = now_us;
+                }
                 (command == POWER_ON).then_some(Outcome::PowerOn)
             }
         }

@@ -4,6 +4,18 @@
 //! request and the sensor's `A0 00` reply, seen on the way), as a UART
 //! would; the client line's rate is the firmware's business (QEMU's UARTs
 //! carry bytes at its own pace).
+//!
+//! QEMU's USART takes a received byte per turn of its main loop, about
+//! 10 KB/s (less under load), while the sensor streams 15–28 KB/s at
+//! 500 kBd; passed on as they come, the sensor's bytes queued in the TCP
+//! socket to QEMU (up to its 64 KiB window, seconds of stream) and every
+//! reply of the sensor reached the firmware that late (a bring-up's
+//! `20 25` answered 5.8 s after it was sent, relayed requests unanswered).
+//! A real 500 kBd line never queues: so [`SensorFeed`] passes the sensor's
+//! stream telegrams (`B0`, `B6`/`B7`/`BF`) only while its estimate of what
+//! QEMU has not yet taken is under [`QEMU_QUEUE_BYTES`], dropping the others
+//! whole (counted, said at exit: the firmware sees a slower sensor), and
+//! every reply, `ACK` and `NAK` at once.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -17,6 +29,64 @@ use crate::verify::QemuLines;
 
 /// Longest wait for sensor bytes per round.
 const TICK: Duration = Duration::from_millis(1);
+
+/// The rate QEMU's sensor USART is assumed to take bytes at (B/s): half of
+/// the ≈ 10 KB/s it takes on an idle machine, for a loaded one.
+const QEMU_BYTES_PER_S: f64 = 5_000.0;
+/// The most of the sensor's stream let wait for QEMU (bytes; 0.2 s at
+/// [`QEMU_BYTES_PER_S`]): a stream telegram that finds more is dropped.
+pub(super) const QEMU_QUEUE_BYTES: f64 = 1_000.0;
+
+/// The sensor's bytes on their way to QEMU (see the module docs).
+pub(super) struct SensorFeed {
+    framer: Framer,
+    /// Bytes passed that QEMU has not taken yet (estimate) as of `at`.
+    queued: f64,
+    at: Instant,
+    /// Stream telegrams dropped.
+    pub(super) dropped: u64,
+}
+
+impl SensorFeed {
+    pub(super) fn new() -> Self {
+        SensorFeed {
+            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
+            queued: 0.0,
+            at: Instant::now(),
+            dropped: 0,
+        }
+    }
+
+    /// What of `bytes` goes to QEMU now, appended to `out`: every complete
+    /// telegram, `ACK` and `NAK`, but a stream telegram only while the
+    /// queue is short; bytes that frame nothing are not passed.
+    pub(super) fn pass(&mut self, bytes: &[u8], out: &mut Vec<u8>) {
+        let now = Instant::now();
+        let taken = now.duration_since(self.at).as_secs_f64() * QEMU_BYTES_PER_S;
+        self.queued = (self.queued - taken).max(0.0);
+        self.at = now;
+        let mut input = bytes;
+        loop {
+            let fed = self.framer.feed(input);
+            input = fed.remaining;
+            let start = out.len();
+            match fed.event {
+                Some(Event::Telegram(t)) => {
+                    let stream = matches!(t.command(), 0xB0 | 0xB6 | 0xB7 | 0xBF);
+                    if stream && self.queued > QEMU_QUEUE_BYTES {
+                        self.dropped += 1;
+                    } else {
+                        out.extend_from_slice(t.as_bytes());
+                    }
+                }
+                Some(Event::Ack) => out.push(lms_core::telegram::ACK),
+                Some(Event::Nak) => out.push(lms_core::telegram::NAK),
+                None => return,
+            }
+            self.queued += (out.len() - start) as f64;
+        }
+    }
+}
 
 /// Watches both directions of the sensor line for a completed baud switch.
 struct BaudWatch {
@@ -78,9 +148,30 @@ pub(super) fn bridge(
     stop: &AtomicBool,
     quit_after: Option<Duration>,
 ) -> Result<&'static str> {
+    let mut feed = SensorFeed::new();
+    let reason = pass_bytes(sensor, client, qemu, stop, quit_after, &mut feed);
+    if feed.dropped > 0 {
+        eprintln!(
+            "host-bridge coprocessor: {} sensor scans dropped for QEMU's slower sensor line",
+            feed.dropped
+        );
+    }
+    reason
+}
+
+/// [`bridge`]'s loop.
+fn pass_bytes(
+    sensor: &mut SerialLink,
+    client: &mut PtyPort,
+    qemu: &mut QemuLines,
+    stop: &AtomicBool,
+    quit_after: Option<Duration>,
+    feed: &mut SensorFeed,
+) -> Result<&'static str> {
     let started = Instant::now();
     let mut watch = BaudWatch::new();
     let mut buf = [0u8; 4096];
+    let mut to_qemu = Vec::new();
     loop {
         if stop.load(Ordering::Relaxed) {
             return Ok("signal");
@@ -104,10 +195,10 @@ pub(super) fn bridge(
         }
         let n = sensor.receive(&mut buf, TICK).context("sensor port")?;
         if n > 0 {
-            qemu.sensor
-                .send(&buf[..n])
-                .context("firmware sensor UART")?;
-            if let Some(b) = watch.replies(&buf[..n]) {
+            to_qemu.clear();
+            feed.pass(&buf[..n], &mut to_qemu);
+            qemu.sensor.send(&to_qemu).context("firmware sensor UART")?;
+            if let Some(b) = watch.replies(&to_qemu) {
                 sensor
                     .set_baud(b)
                     .context("sensor port: cannot switch the rate")?;
@@ -116,5 +207,45 @@ pub(super) fn bridge(
         if let Some(console) = qemu.console.as_mut() {
             while console.receive(&mut buf, Duration::ZERO)? > 0 {}
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sensor_telegram(command: u8, data_len: usize) -> Vec<u8> {
+        let mut buf = [0u8; 1024];
+        let data = vec![0u8; data_len];
+        let n =
+            lms_core::telegram::emit_telegram(&mut buf, 0x80, command, &data, Some(0x10)).unwrap();
+        buf[..n].to_vec()
+    }
+
+    #[test]
+    fn the_stream_is_passed_as_qemu_takes_it_replies_always() {
+        let b0 = sensor_telegram(0xB0, 400);
+        let a0 = sensor_telegram(0xA0, 1);
+        let mut feed = SensorFeed::new();
+        let mut burst: Vec<u8> = b0.repeat(6);
+        burst.push(lms_core::telegram::ACK);
+        burst.extend(&a0);
+        burst.extend(&b0);
+        let mut out = Vec::new();
+        feed.pass(&burst, &mut out);
+        // 410-byte B0s: three fill the 1000-byte queue, the rest are
+        // dropped whole; the ACK and the A0 behind them pass.
+        let mut want = b0.repeat(3);
+        want.push(lms_core::telegram::ACK);
+        want.extend(&a0);
+        assert_eq!(out, want);
+        assert_eq!(feed.dropped, 4);
+        // Split anywhere, a telegram passes whole once complete.
+        let mut feed = SensorFeed::new();
+        let mut out = Vec::new();
+        feed.pass(&a0[..4], &mut out);
+        assert!(out.is_empty());
+        feed.pass(&a0[4..], &mut out);
+        assert_eq!(out, a0);
     }
 }

@@ -327,7 +327,7 @@ fn serve(
             // batch went at the rate before the call.
             let rate = lms.baud();
             let n = lms.transmit(now, &mut out);
-            if n == 0 {
+            if n == 0 && lms.baud() == rate {
                 break;
             }
             line.send_to_client(&out[..n], rate)?;

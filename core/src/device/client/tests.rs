@@ -178,3 +178,33 @@ fn awaited_in_words() {
     assert_eq!(std::format!("{}", Awaited::Reply(0xBB)), "reply BB");
     assert_eq!(std::format!("{}", Awaited::Ack), "ACK (06)");
 }
+
+#[test]
+fn the_wait_runs_from_the_stream_telegrams_ahead_of_the_reply() {
+    let mut b0 = [0u8; 64];
+    let n = crate::telegram::emit_telegram(&mut b0, 0x80, 0xB0, &[2, 0, 1, 0, 1, 0], Some(0x10))
+        .unwrap();
+    let b0 = &b0[..n];
+    // Without `wait_behind_stream`: scans change nothing.
+    let mut c = sent(&Request::OnRequest);
+    assert!(feed_all(&mut c, b0, 900).is_empty());
+    assert_eq!(c.deadline_us(), Some(1_100));
+    // With it: the wait starts again from each scan, up to the cap.
+    let mut c = sent(&Request::OnRequest);
+    c.wait_behind_stream(3_000);
+    assert!(feed_all(&mut c, b0, 900).is_empty());
+    assert_eq!(c.deadline_us(), Some(1_900));
+    assert_eq!(c.poll(1_899), None);
+    assert!(feed_all(&mut c, b0, 1_800).is_empty());
+    assert_eq!(c.deadline_us(), Some(2_800));
+    assert!(feed_all(&mut c, b0, 5_000).is_empty());
+    assert_eq!(c.deadline_us(), Some(100 + 3_000 + 1_000), "capped");
+    // Other telegrams do not count; a new request starts without it.
+    assert!(feed_all(&mut c, &reply(0, &Reply::ResetAck), 4_000).is_empty());
+    assert_eq!(c.deadline_us(), Some(4_100));
+    c.prepare(&Request::OnRequest, LIMITS).unwrap();
+    c.mark_sent(10_000);
+    assert!(feed_all(&mut c, b0, 10_500).is_empty());
+    assert_eq!(c.deadline_us(), Some(11_000));
+    assert_eq!(feed_all(&mut c, &a0(), 10_600), [Outcome::Reply]);
+}

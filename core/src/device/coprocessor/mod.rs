@@ -165,13 +165,16 @@ impl ScanSource for LatestScan {
         }
     }
 
-    /// The sensor answers `3A` (its type string) and the value modes
+    /// The sensor answers `3A` (its type string), the value modes
     /// `20 26`/`27`/`28` (it checks their parameters and streams
-    /// `B6`/`B7`/`BF`), one at a time.
+    /// `B6`/`B7`/`BF`) and every request whose command the face does not
+    /// interpret ([`face_interprets`]; once the sensor streams, with at most
+    /// [`sensor_link::FORWARD_DATA_CAPACITY`] data bytes), one at a time.
     fn relay(&mut self, command: u8, data: &[u8]) -> bool {
         let wanted = match command {
             0x3A => data.is_empty() && self.sensor_up,
-            _ => ValueMode::parse(command, data).is_some(),
+            _ if face_interprets(command) => ValueMode::parse(command, data).is_some(),
+            _ => self.sensor_up,
         };
         let Some(slot) = self.relay_data.get_mut(..data.len()) else {
             return false;
@@ -202,6 +205,29 @@ impl ScanSource for LatestScan {
             Relay::Idle | Relay::Asked | Relay::Sent => None,
         }
     }
+}
+
+/// `true` for the commands the face answers itself: those of an LMS 2xx it
+/// emulates (`10`, `20`, `30`, `31`, `3A`, `3B`, `74`, `77`; malformed
+/// ones get `92`, a mode `20 xx` it does not know too: the sensor must stay
+/// on the stream the co-processor lives on) and the co-processor's own
+/// `55`/`56`. A request with any other command is relayed to the sensor
+/// ([`ScanSource::relay`]).
+pub const fn face_interprets(command: u8) -> bool {
+    use crate::telegram::request::code;
+    matches!(
+        command,
+        code::MODE
+            | code::MEASURED
+            | code::STATUS
+            | code::SENSOR_TYPE
+            | code::VARIANT
+            | code::READ_CONFIG
+            | code::WRITE_CONFIG
+            | code::RESET
+            | REQ_COUNTERS
+            | REQ_FEATURES
+    )
 }
 
 /// What a poll asks the board to do.
@@ -423,7 +449,13 @@ impl CoProcessor {
                         outcome.scans += 1;
                     }
                     Some(LinkEvent::SwitchBaud(b)) => outcome.sensor_baud = Some(b),
-                    Some(LinkEvent::Forwarded { answered }) => self.forwarded(answered),
+                    Some(LinkEvent::Forwarded { answered }) => {
+                        self.forwarded(answered);
+                        // The relayed reply goes out before the stream it
+                        // starts (its first B6/B7/BF may be in this chunk:
+                        // seen under load, a B7 before the A0).
+                        self.drain_host(host, now_us, &mut outcome)?;
+                    }
                     Some(LinkEvent::Refused(_)) | None => {}
                 }
                 if event.is_none() && input.is_empty() {
@@ -546,8 +578,11 @@ impl CoProcessor {
     fn forwarded(&mut self, answered: bool) {
         let latest = self.host.source_mut();
         if latest.relay != Relay::Sent {
-            self.restore_stream |= !answered;
-            if answered {
+            // Ours (`20 24`): done when the sensor took it (`A0`).
+            let reply = self.link.scan_bytes().get(4).copied();
+            let accepted = answered && reply == Some(crate::telegram::reply::code::MODE_CHANGED);
+            self.restore_stream |= !accepted;
+            if accepted {
                 self.link.set_stream_samples(1);
             }
             return;

@@ -23,6 +23,15 @@
 //! A refused step (a reply that is not what was asked, or `92`) is sent
 //! again when its time is up.
 //!
+//! A reply to a request sent while the sensor streams (`20 25` at the
+//! stream's rate, a [`forward`](SensorLink::forward)ed request) comes behind
+//! the scans already on the line or in a slow link's buffers (the firmware
+//! under QEMU takes ≈ 10 KB/s of a 500 kBd stream): each `B0` that comes
+//! first starts the wait again, for up to [`STREAM_SILENCE_US`] after
+//! sending ([`Client::wait_behind_stream`]). Without it the search left the
+//! right rate, and relayed requests went unanswered, whenever more than
+//! 300 ms of scans were queued ahead of the reply.
+//!
 //! # Recovery
 //!
 //! * A scan time-out: no good `B0` for [`stream_wait_us`] (353 ms at
@@ -178,8 +187,9 @@ pub enum LinkEvent {
     /// The sensor refused a step (e.g. the variant); the link retries it.
     Refused(Step),
     /// A [`forward`](SensorLink::forward)ed request is done: answered (its
-    /// reply's bytes in [`SensorLink::scan_bytes`] until the next feed) or
-    /// not (`92`, or no reply within [`REPLY_TIMEOUT_US`] twice).
+    /// reply's bytes, the expected code or the sensor's `92`, in
+    /// [`SensorLink::scan_bytes`] until the next feed) or not (no reply
+    /// within [`REPLY_TIMEOUT_US`] twice).
     Forwarded {
         /// The sensor's reply came.
         answered: bool,
@@ -605,6 +615,11 @@ impl SensorLink {
         } else {
             let request = self.request()?;
             self.client.prepare(&request, self.limits()).ok()?;
+            // `20 25` to a streaming sensor: its `B0`s ahead of the reply
+            // prove the rate; the reply waits behind them.
+            if self.step == Step::StopStream {
+                self.client.wait_behind_stream(STREAM_SILENCE_US);
+            }
         }
         let bytes = self.client.request_bytes();
         let n = bytes.len();
@@ -628,6 +643,7 @@ impl SensorLink {
             retries: 1,
         };
         self.client.prepare(&request, limits).ok()?;
+        self.client.wait_behind_stream(STREAM_SILENCE_US);
         let bytes = self.client.request_bytes();
         let n = bytes.len();
         crate::telegram::copy_into(buf.get_mut(..n)?, bytes);
@@ -692,9 +708,10 @@ impl SensorLink {
                 self.resume_stream(now_us);
                 Some(LinkEvent::Forwarded { answered: true })
             }
+            // The sensor does not know it: its `92` is the answer.
             Some(Outcome::UnknownCommand) if self.forward == Forward::Sent => {
                 self.resume_stream(now_us);
-                Some(LinkEvent::Forwarded { answered: false })
+                Some(LinkEvent::Forwarded { answered: true })
             }
             Some(Outcome::Reply) => self.on_reply(now_us),
             // Our request was damaged: resend at once.

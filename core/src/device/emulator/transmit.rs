@@ -107,15 +107,20 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
     /// The sensor → host bytes whose line time has come by `now_us` (see
     /// *Timing* in the module docs), at most `out.len()`; returns how
     /// many were written. It stops right after the last byte sent at the
-    /// old rate when the line switches ([`Event::BaudSwitched`]): call it
-    /// again until it returns 0.
+    /// old rate when the line switches ([`Event::BaudSwitched`]), and
+    /// before the first byte when a power-on puts the line back to 9600 Bd:
+    /// call it again until it returns 0 with [`Emulator::baud`] unchanged.
     pub fn transmit(&mut self, now_us: u64, out: &mut [u8]) -> usize {
         let mut n = 0;
+        let entry_baud = self.baud;
         // Each round completes a frame or stops; the bound only guards
         // against a logic error.
         for _ in 0..out.len().saturating_add(PENDING_CAPACITY).saturating_add(4) {
             self.advance(now_us);
-            if self.tx_len == 0 {
+            // A power-on inside `advance` put the line back to 9600 Bd:
+            // stop, so that every byte of a batch goes at the rate the
+            // caller read before the call (it calls again at the new rate).
+            if self.tx_len == 0 || self.baud != entry_baud {
                 break;
             }
             let due = self.bytes_due(now_us);
