@@ -32,17 +32,33 @@ pub fn segment<const S: usize, const E: usize>(
     segments: &mut Vec<Segment, S>,
     edges: &mut Vec<u16, E>,
 ) -> SegmentationCounts {
+    segment_strided(mahalanobis, 1, tau, min_points, segments, edges)
+}
+
+/// [`segment`] for windows of stride `stride` (§10 proposal): window `i`
+/// spans beams `i..=i + 2·stride`, so a run of windows `i..=k` covers
+/// `i..=k + 2·stride` and the edge point of a breaking window is its middle
+/// beam `i + stride`. `stride = 1` is §6.
+pub fn segment_strided<const S: usize, const E: usize>(
+    mahalanobis: &[f32],
+    stride: usize,
+    tau: f32,
+    min_points: u16,
+    segments: &mut Vec<Segment, S>,
+    edges: &mut Vec<u16, E>,
+) -> SegmentationCounts {
+    let stride = stride.clamp(1, 8);
     segments.clear();
     edges.clear();
     let mut counts = SegmentationCounts::default();
     let mut run_start: Option<usize> = None;
-    let windows = mahalanobis.len().min(u16::MAX as usize - 2);
+    let windows = mahalanobis.len().min(u16::MAX as usize - 2 * stride);
     for i in 0..=windows {
         // `i == windows` closes the last run.
         let breaks = match mahalanobis.get(i) {
             Some(&d) => {
                 let breaks = !(d < tau); // NaN breaks too
-                if breaks && d.is_finite() && edges.push((i + 1) as u16).is_err() {
+                if breaks && d.is_finite() && edges.push((i + stride) as u16).is_err() {
                     counts.edge_overflow = counts.edge_overflow.saturating_add(1);
                 }
                 breaks
@@ -55,7 +71,7 @@ pub fn segment<const S: usize, const E: usize>(
                 run_start = None;
                 let seg = Segment {
                     first: start as u16,
-                    last: (i - 1 + 2) as u16,
+                    last: (i - 1 + 2 * stride) as u16,
                 };
                 if seg.points() < min_points as usize {
                     counts.short_segments = counts.short_segments.saturating_add(1);
@@ -133,5 +149,39 @@ mod tests {
         assert_eq!(segs.len(), 4);
         assert_eq!(c.segment_overflow, 6);
         assert_eq!(c.edge_overflow, 7); // 10 breaking windows, 3 slots
+    }
+
+    #[test]
+    fn strided_runs_cover_their_whole_span() {
+        let mut segs: Vec<Segment, 8> = Vec::new();
+        let mut edges: Vec<u16, 16> = Vec::new();
+        // Stride 2: windows span 5 beams. A jump between beams 9 and 10
+        // breaks the windows 6..=9 (those holding both beams).
+        let mut d = [0.0f32; 20];
+        for x in &mut d[6..=9] {
+            *x = 50.0;
+        }
+        let c = segment_strided(&d, 2, 9.0, 5, &mut segs, &mut edges);
+        assert_eq!(c, SegmentationCounts::default());
+        assert_eq!(
+            segs.as_slice(),
+            &[
+                Segment { first: 0, last: 9 },
+                Segment {
+                    first: 10,
+                    last: 23
+                }
+            ]
+        );
+        // Edge points: the middle beams i + 2 of the breaking windows.
+        assert_eq!(edges.as_slice(), &[8, 9, 10, 11]);
+        // Stride 1 is §6.
+        let mut s1: Vec<Segment, 8> = Vec::new();
+        let mut e1: Vec<u16, 16> = Vec::new();
+        let mut s2: Vec<Segment, 8> = Vec::new();
+        let mut e2: Vec<u16, 16> = Vec::new();
+        segment(&d, 9.0, 5, &mut s1, &mut e1);
+        segment_strided(&d, 1, 9.0, 5, &mut s2, &mut e2);
+        assert_eq!((s1, e1), (s2, e2));
     }
 }

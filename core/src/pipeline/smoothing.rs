@@ -62,17 +62,53 @@ pub fn usable_windows(beams: &[Beam], ranges: &[f32], max_range: f32, window_ok:
     }
 }
 
+/// [`usable_windows`] for windows of stride `stride` (§10 proposal): window
+/// `i` needs every beam of `i..=i + 2·stride` usable, so that a segment
+/// (a run of windows) never spans an unusable beam. `stride = 1` is
+/// [`usable_windows`].
+pub fn usable_windows_strided(
+    beams: &[Beam],
+    ranges: &[f32],
+    max_range: f32,
+    stride: usize,
+    window_ok: &mut [bool],
+) {
+    let ok = |j: usize| match (beams.get(j), ranges.get(j)) {
+        (Some(&b), Some(&d)) => usable(b, d, max_range),
+        _ => false,
+    };
+    // Beams from the last unusable one: a window is usable when the run of
+    // usable beams ending at its last beam is 2·stride + 1 long.
+    let span = 2 * stride + 1;
+    let mut run = 0usize;
+    for j in 0..window_ok.len() + 2 * stride {
+        run = if ok(j) { run + 1 } else { 0 };
+        if let Some(w) = j.checked_sub(2 * stride).and_then(|i| window_ok.get_mut(i)) {
+            *w = run >= span;
+        }
+    }
+}
+
 /// Windows processed together: the filter runs branch-free over a block
 /// (so a host CPU can vectorise it, with the same per-window IEEE
 /// operations), then the block's points are blended. Stack use is a few
 /// hundred bytes whatever the frame size.
 const BLOCK: usize = 32;
 
-/// Per-block working storage. Slots `0` and `1` of `third_weight` and
-/// `posterior` carry the last two windows of the previous block.
+/// Largest window stride of [`smoothing_pass_strided`] (the 0.25° modes'
+/// four interleaved mirror turns).
+pub const MAX_STRIDE: usize = 4;
+
+/// Slots before a block's first window: the windows of the previous block
+/// a point still needs (`2·stride` of them).
+const CARRY: usize = 2 * MAX_STRIDE;
+
+/// Per-block working storage. Slots `CARRY − 2·K .. CARRY` of
+/// `third_weight` and `posterior` carry the last `2·K` windows of the
+/// previous block.
 struct Block {
-    third_weight: [f32; BLOCK + 2],
-    posterior: [[f32; BLOCK + 2]; 3],
+    third_weight: [f32; BLOCK + CARRY],
+    posterior: [[f32; BLOCK + CARRY]; 3],
 }
 
 /// Run one Jacobi smoothing pass in place.
@@ -96,32 +132,50 @@ pub fn smoothing_pass(
     ranges: &mut [f32],
     mahalanobis: &mut [f32],
 ) {
+    smoothing_pass_strided::<1>(filter, window_ok, ranges, mahalanobis);
+}
+
+/// [`smoothing_pass`] with windows of stride `K` (ALGORITHM.md §10
+/// proposal, `Params::same_turn_windows`): window `i` is beams
+/// `i, i+K, i+2K` (the filter built for the angle `K·γ`), point `j` is
+/// blended from windows `j, j−K, j−2K` in that order; there are `n − 2K`
+/// windows (`window_ok` and `mahalanobis` entries beyond them are left
+/// alone). `K = 1` is §4 exactly. `K` above [`MAX_STRIDE`] does nothing.
+pub fn smoothing_pass_strided<const K: usize>(
+    filter: &WindowFilter,
+    window_ok: &[bool],
+    ranges: &mut [f32],
+    mahalanobis: &mut [f32],
+) {
+    if K == 0 || K > MAX_STRIDE {
+        return;
+    }
     let windows = window_ok
         .len()
         .min(mahalanobis.len())
-        .min(ranges.len().saturating_sub(2));
+        .min(ranges.len().saturating_sub(2 * K));
     if windows == 0 {
         return;
     }
-    let n = windows + 2;
+    let n = windows + 2 * K;
     let mut block = Block {
-        third_weight: [0.0; BLOCK + 2],
-        posterior: [[0.0; BLOCK + 2]; 3],
+        third_weight: [0.0; BLOCK + CARRY],
+        posterior: [[0.0; BLOCK + CARRY]; 3],
     };
     let mut start = 0;
     while start < windows {
         let m = BLOCK.min(windows - start);
         let (Some(points), Some(ok), Some(d)) = (
-            ranges.get(start..start + m + 2),
+            ranges.get(start..start + m + 2 * K),
             window_ok.get(start..start + m),
             mahalanobis.get_mut(start..start + m),
         ) else {
             break; // not reached: `windows` fits all three slices
         };
         // The filter on every window of the block (§2–3).
-        filter_block(filter, points, ok, &mut block, d);
+        filter_block::<K>(filter, points, ok, &mut block, d);
         // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
-        for (w, &d) in block.third_weight[2..].iter_mut().zip(d.iter()) {
+        for (w, &d) in block.third_weight[CARRY..].iter_mut().zip(d.iter()) {
             *w = if d < f32::INFINITY {
                 weight(d) / 3.0
             } else {
@@ -133,10 +187,10 @@ pub fn smoothing_pass(
             break; // not reached, as above
         };
         for (t, point) in points.iter_mut().enumerate() {
-            *point = blend(&block, *point, t + 2);
+            *point = blend::<K>(&block, *point, t + CARRY);
         }
-        // Carry the last two windows into slots 0 and 1.
-        for slot in 0..2 {
+        // Carry the last 2K windows into the slots before CARRY.
+        for slot in CARRY - 2 * K..CARRY {
             block.third_weight[slot] = block.third_weight[m + slot];
             for k in 0..3 {
                 block.posterior[k][slot] = block.posterior[k][m + slot];
@@ -144,40 +198,42 @@ pub fn smoothing_pass(
         }
         start += m;
     }
-    // Points n−2 and n−1 have no window starting at them. Slots 0 and 1
-    // hold windows n−4 and n−3; slots 2 and 3 stand for absent windows.
-    block.third_weight[2] = 0.0;
-    block.third_weight[3] = 0.0;
-    if let Some(point) = ranges.get_mut(n - 2) {
-        *point = blend(&block, *point, 2);
+    // Points n−2K … n−1 have no window starting at them. The slots before
+    // CARRY hold windows n−4K … n−2K−1; the slots from CARRY on stand for
+    // absent windows.
+    for w in &mut block.third_weight[CARRY..CARRY + 2 * K] {
+        *w = 0.0;
     }
-    if let Some(point) = ranges.get_mut(n - 1) {
-        *point = blend(&block, *point, 3);
+    for t in 0..2 * K {
+        if let Some(point) = ranges.get_mut(n - 2 * K + t) {
+            *point = blend::<K>(&block, *point, CARRY + t);
+        }
     }
 }
 
-/// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2`):
-/// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − 1`, `j − 2`,
-/// added in that order. Absent or invalid windows have weight 0 and estimate 0.
+/// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2K`):
+/// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − K`,
+/// `j − 2K`, added in that order. Absent or invalid windows have weight 0
+/// and estimate 0.
 #[inline]
-fn blend(block: &Block, d: f32, slot: usize) -> f32 {
+fn blend<const K: usize>(block: &Block, d: f32, slot: usize) -> f32 {
     let w = &block.third_weight;
     let x = &block.posterior;
-    let weight_sum = w[slot] + w[slot - 1] + w[slot - 2];
-    let estimate_sum =
-        w[slot] * x[0][slot] + w[slot - 1] * x[1][slot - 1] + w[slot - 2] * x[2][slot - 2];
+    let (s1, s2) = (slot - K, slot - 2 * K);
+    let weight_sum = w[slot] + w[s1] + w[s2];
+    let estimate_sum = w[slot] * x[0][slot] + w[s1] * x[1][s1] + w[s2] * x[2][s2];
     (1.0 - weight_sum) * d + estimate_sum
 }
 
-/// The window filter on `m` consecutive windows, `ranges` holding their
-/// `m + 2` points. Writes `D` (or `+inf`) and the estimates (or 0) of
-/// window `t` into `d[t]` and slot `t + 2` of the block.
+/// The window filter on `m` consecutive windows of stride `K`, `ranges`
+/// holding their `m + 2K` points. Writes `D` (or `+inf`) and the estimates
+/// (or 0) of window `t` into `d[t]` and slot `t + CARRY` of the block.
 ///
 /// Branch-free over the windows: every window is computed, invalid ones are
 /// masked afterwards. The arithmetic per window is exactly that of
 /// [`WindowFilter::update`].
 #[inline]
-fn filter_block(
+fn filter_block<const K: usize>(
     filter: &WindowFilter,
     ranges: &[f32],
     ok: &[bool],
@@ -187,23 +243,130 @@ fn filter_block(
     let m = d
         .len()
         .min(ok.len())
-        .min(ranges.len().saturating_sub(2))
+        .min(ranges.len().saturating_sub(2 * K))
         .min(BLOCK);
-    // Exactly the block's points: `t + 2 < m + 2` below needs no check.
-    let Some(ranges) = ranges.get(..m + 2) else {
+    // Exactly the block's points: `t + 2K < m + 2K` below needs no check.
+    let Some(ranges) = ranges.get(..m + 2 * K) else {
         return;
     };
     // A fixed-size copy of the flags keeps the loop free of bounds checks.
     let mut window_ok = [false; BLOCK];
     window_ok[..m].copy_from_slice(&ok[..m]);
+    if filter.grazing_on() {
+        filter_windows::<K, true>(filter, ranges, &window_ok, block, d, m);
+    } else {
+        filter_windows::<K, false>(filter, ranges, &window_ok, block, d, m);
+    }
+}
+
+/// The loop of [`filter_block`]; `GRAZING` picks the window's `R`
+/// (ALGORITHM.md §3, or with the grazing term of §10's proposal), so the
+/// default path is exactly the filter of §3.
+#[inline(always)]
+fn filter_windows<const K: usize, const GRAZING: bool>(
+    filter: &WindowFilter,
+    ranges: &[f32],
+    window_ok: &[bool; BLOCK],
+    block: &mut Block,
+    d: &mut [f32],
+    m: usize,
+) {
+    let (Some(ranges), Some(d)) = (ranges.get(..m + 2 * K), d.get_mut(..m)) else {
+        return;
+    };
     let post = &mut block.posterior;
-    for t in 0..m {
-        let z = Vec3([ranges[t], ranges[t + 1], ranges[t + 2]]);
-        let (est, valid) = filter.update_unchecked(z);
+    for t in 0..m.min(BLOCK) {
+        let z = Vec3([ranges[t], ranges[t + K], ranges[t + 2 * K]]);
+        let (est, valid) = if GRAZING {
+            filter.update_grazing_unchecked(z)
+        } else {
+            filter.update_unchecked(z)
+        };
         let keep = valid & window_ok[t];
         d[t] = if keep { est.mahalanobis } else { f32::INFINITY };
-        post[0][t + 2] = if keep { est.posterior.0[0] } else { 0.0 };
-        post[1][t + 2] = if keep { est.posterior.0[1] } else { 0.0 };
-        post[2][t + 2] = if keep { est.posterior.0[2] } else { 0.0 };
+        post[0][t + CARRY] = if keep { est.posterior.0[0] } else { 0.0 };
+        post[1][t + CARRY] = if keep { est.posterior.0[1] } else { 0.0 };
+        post[2][t + CARRY] = if keep { est.posterior.0[2] } else { 0.0 };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GAMMA: f32 = 0.5 * core::f32::consts::PI / 180.0;
+
+    /// A wall at 1.5 m, normal at 20°, with a deterministic ±1 cm ripple.
+    fn wall(n: usize) -> [f32; 41] {
+        let mut r = [0.0f32; 41];
+        for (j, x) in r.iter_mut().enumerate().take(n) {
+            let phi = (j as f32 - 20.0) * GAMMA;
+            let ripple = 0.01 * (((j * 7919) % 13) as f32 / 6.0 - 1.0);
+            *x = 1.5 / libm::cosf(phi - 0.35) + ripple;
+        }
+        r
+    }
+
+    #[test]
+    fn stride_two_is_two_independent_sub_scans_bit_for_bit() {
+        let n = 41;
+        let filter = WindowFilter::new(2.0 * GAMMA, 0.01, 0.0);
+        let mut all = wall(n);
+        let ok = [true; 41];
+        let mut d = [0.0f32; 39];
+        smoothing_pass_strided::<2>(&filter, &ok[..n - 2], &mut all[..n], &mut d);
+        // The same pass on the even and on the odd beams alone (stride 1).
+        let raw = wall(n);
+        for parity in 0..2 {
+            let mut sub = [0.0f32; 21];
+            let m = (n - parity).div_ceil(2);
+            for (k, x) in sub.iter_mut().enumerate().take(m) {
+                *x = raw[parity + 2 * k];
+            }
+            let mut sub_d = [0.0f32; 19];
+            smoothing_pass(&filter, &ok[..m - 2], &mut sub[..m], &mut sub_d[..m - 2]);
+            for k in 0..m {
+                assert_eq!(
+                    sub[k].to_bits(),
+                    all[parity + 2 * k].to_bits(),
+                    "beam {}",
+                    parity + 2 * k
+                );
+            }
+            for k in 0..m - 2 {
+                assert_eq!(sub_d[k].to_bits(), d[parity + 2 * k].to_bits());
+            }
+        }
+    }
+
+    #[test]
+    fn stride_one_is_the_spec_pass() {
+        let n = 41;
+        let filter = WindowFilter::new(GAMMA, 0.01, 0.0);
+        let (mut a, mut b) = (wall(n), wall(n));
+        let ok = [true; 39];
+        let (mut da, mut db) = ([0.0f32; 39], [0.0f32; 39]);
+        smoothing_pass(&filter, &ok, &mut a[..n], &mut da);
+        smoothing_pass_strided::<1>(&filter, &ok, &mut b[..n], &mut db);
+        assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits));
+        assert_eq!(da.map(f32::to_bits), db.map(f32::to_bits));
+    }
+
+    #[test]
+    fn strided_windows_need_every_beam_of_their_span() {
+        use crate::frame::{Frame, Invalid, Variant};
+        let mut frame = Frame::for_variant(Variant::Fov180Res50);
+        for j in 0..frame.len() {
+            frame.set_metres(j, 2.0);
+        }
+        frame.set_invalid(10, Invalid::NoEcho);
+        frame.set_metres(30, 90.0); // beyond max_range below
+        let n = frame.len();
+        let mut ok = [false; 359];
+        usable_windows_strided(frame.beams(), frame.ranges(), 80.0, 2, &mut ok);
+        for (i, &w) in ok.iter().enumerate() {
+            let want = i + 4 < n && (i..=i + 4).all(|j| j != 10 && j != 30);
+            assert_eq!(w, want, "window {i}");
+        }
     }
 }
