@@ -92,7 +92,15 @@ impl WindowFilter {
     /// `(FFᵀ)22 = f21² + f23²`, `(FFᵀ)23 = f21·f31`, `(FFᵀ)33 = f31² + f32²`.
     #[inline]
     pub fn predicted_covariance(&self, p: &Prediction) -> Sym3 {
-        self.predicted_covariance_with(p, self.r)
+        let r = self.r;
+        Sym3 {
+            s11: r * (p.f12 * p.f12 + p.f13 * p.f13) + self.q,
+            s12: r * (p.f13 * p.f23),
+            s13: r * (p.f12 * p.f32_),
+            s22: r * (p.f21 * p.f21 + p.f23 * p.f23) + self.q,
+            s23: r * (p.f21 * p.f31),
+            s33: r * (p.f31 * p.f31 + p.f32_ * p.f32_) + self.q,
+        }
     }
 
     /// [`WindowFilter::predicted_covariance`] with the window's own
@@ -127,11 +135,35 @@ impl WindowFilter {
     /// can be computed in lock-step; [`WindowFilter::update`] wraps it.
     #[inline(always)]
     pub fn update_unchecked(&self, z: Vec3) -> (WindowEstimate, bool) {
-        self.update_with(z, self.r)
+        let (pred, in_front) = predict_unchecked(z, self.k);
+        let p_hat = self.predicted_covariance(&pred);
+        let s = p_hat.add_diagonal(self.r);
+        let v = z - pred.f;
+        let (u, solvable) = s.solve_spd_unchecked(v); // S⁻¹·v
+        let d = v.dot(u);
+        // x⁺ = x̂ + K·v with K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·u,
+        // so x⁺ = z − sigma²·u: the same quantity without the 3×3 product.
+        let posterior = z - Vec3([self.r * u.0[0], self.r * u.0[1], self.r * u.0[2]]);
+        let [x0, x1, x2] = posterior.0;
+        // Overflow or NaN anywhere upstream propagates into the sum (a sum
+        // that overflows marks the window invalid too: D or a range near
+        // f32::MAX is no estimate).
+        let finite = (d + x0 + x1 + x2).is_finite();
+        // D is a quadratic form with S⁻¹ positive definite: clamp the
+        // rounding of a near-zero result to 0.
+        let mahalanobis = if d < 0.0 { 0.0 } else { d };
+        (
+            WindowEstimate {
+                mahalanobis,
+                posterior,
+            },
+            in_front & solvable & finite,
+        )
     }
 
     /// [`WindowFilter::update_unchecked`] with the grazing term: the
-    /// window's `R = sigma_w²·I` from [`WindowFilter::grazing_variance`].
+    /// window's `R = sigma_w²·I` from [`WindowFilter::grazing_variance`]
+    /// (the same operations as `update_unchecked` with `sigma²` replaced).
     #[inline(always)]
     pub fn update_grazing_unchecked(&self, z: Vec3) -> (WindowEstimate, bool) {
         self.update_with(z, self.grazing_variance(z))

@@ -14,7 +14,7 @@ use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
 use crate::pipeline::line_fit::{fit_piece, Bearings, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
-use crate::pipeline::segmentation::segment_strided;
+use crate::pipeline::segmentation::{segment, segment_strided};
 use crate::pipeline::smoothing::{
     smoothing_pass, smoothing_pass_strided, usable, usable_windows, usable_windows_strided,
     MAX_STRIDE,
@@ -90,14 +90,25 @@ impl Extractor {
         f.lines.clear();
         f.corners.clear();
         let d = &self.mahalanobis[..windows];
-        let counts = segment_strided(
-            d,
-            window_stride(params, frame.geometry()),
-            params.tau,
-            params.min_points,
-            &mut f.segments,
-            &mut f.edges,
-        );
+        let stride = window_stride(params, frame.geometry());
+        let counts = if stride == 1 {
+            segment(
+                d,
+                params.tau,
+                params.min_points,
+                &mut f.segments,
+                &mut f.edges,
+            )
+        } else {
+            segment_strided(
+                d,
+                stride,
+                params.tau,
+                params.min_points,
+                &mut f.segments,
+                &mut f.edges,
+            )
+        };
         let (usable_beams, beyond) = count_usable(frame, params.max_range);
         let mut stats = Stats {
             valid_beams: usable_beams,
@@ -165,19 +176,18 @@ impl Extractor {
             let t = GRAZING_MAX_INCIDENCE_DEG * (core::f32::consts::PI / 180.0);
             filter = filter.with_grazing(params.grazing_noise, t, step);
         }
-        let pass_fn = match stride {
-            2 => smoothing_pass_strided::<2>,
-            3 => smoothing_pass_strided::<3>,
-            4 => smoothing_pass_strided::<4>,
-            _ => smoothing_pass,
-        };
+        // §4 as specified unless a §10 option is on.
+        let spec = stride == 1 && !filter.grazing_on();
         for pass in 1..=params.iterations {
-            pass_fn(
-                &filter,
-                &self.window_ok[..windows],
-                &mut self.smoothed[..n],
-                &mut self.mahalanobis[..windows],
-            );
+            let (ok, r) = (&self.window_ok[..windows], &mut self.smoothed[..n]);
+            let d = &mut self.mahalanobis[..windows];
+            match stride {
+                _ if spec => smoothing_pass(&filter, ok, r, d),
+                2 => smoothing_pass_strided::<2>(&filter, ok, r, d),
+                3 => smoothing_pass_strided::<3>(&filter, ok, r, d),
+                4 => smoothing_pass_strided::<4>(&filter, ok, r, d),
+                _ => smoothing_pass_strided::<1>(&filter, ok, r, d),
+            }
             after_pass(pass, &self.mahalanobis[..windows], &self.smoothed[..n]);
         }
     }

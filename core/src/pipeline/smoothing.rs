@@ -95,20 +95,11 @@ pub fn usable_windows_strided(
 /// hundred bytes whatever the frame size.
 const BLOCK: usize = 32;
 
-/// Largest window stride of [`smoothing_pass_strided`] (the 0.25° modes'
-/// four interleaved mirror turns).
-pub const MAX_STRIDE: usize = 4;
-
-/// Slots before a block's first window: the windows of the previous block
-/// a point still needs (`2·stride` of them).
-const CARRY: usize = 2 * MAX_STRIDE;
-
-/// Per-block working storage. Slots `CARRY − 2·K .. CARRY` of
-/// `third_weight` and `posterior` carry the last `2·K` windows of the
-/// previous block.
+/// Per-block working storage. Slots `0` and `1` of `third_weight` and
+/// `posterior` carry the last two windows of the previous block.
 struct Block {
-    third_weight: [f32; BLOCK + CARRY],
-    posterior: [[f32; BLOCK + CARRY]; 3],
+    third_weight: [f32; BLOCK + 2],
+    posterior: [[f32; BLOCK + 2]; 3],
 }
 
 /// Run one Jacobi smoothing pass in place.
@@ -132,7 +123,143 @@ pub fn smoothing_pass(
     ranges: &mut [f32],
     mahalanobis: &mut [f32],
 ) {
-    smoothing_pass_strided::<1>(filter, window_ok, ranges, mahalanobis);
+    let windows = window_ok
+        .len()
+        .min(mahalanobis.len())
+        .min(ranges.len().saturating_sub(2));
+    if windows == 0 {
+        return;
+    }
+    let n = windows + 2;
+    let mut block = Block {
+        third_weight: [0.0; BLOCK + 2],
+        posterior: [[0.0; BLOCK + 2]; 3],
+    };
+    let mut start = 0;
+    while start < windows {
+        let m = BLOCK.min(windows - start);
+        let (Some(points), Some(ok), Some(d)) = (
+            ranges.get(start..start + m + 2),
+            window_ok.get(start..start + m),
+            mahalanobis.get_mut(start..start + m),
+        ) else {
+            break; // not reached: `windows` fits all three slices
+        };
+        // The filter on every window of the block (§2–3).
+        filter_block(filter, points, ok, &mut block, d);
+        // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
+        third_weights(d, &mut block.third_weight[2..]);
+        // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
+        let Some(points) = ranges.get_mut(start..start + m) else {
+            break; // not reached, as above
+        };
+        for (t, point) in points.iter_mut().enumerate() {
+            *point = blend(&block, *point, t + 2);
+        }
+        // Carry the last two windows into slots 0 and 1.
+        for slot in 0..2 {
+            block.third_weight[slot] = block.third_weight[m + slot];
+            for k in 0..3 {
+                block.posterior[k][slot] = block.posterior[k][m + slot];
+            }
+        }
+        start += m;
+    }
+    // Points n−2 and n−1 have no window starting at them. Slots 0 and 1
+    // hold windows n−4 and n−3; slots 2 and 3 stand for absent windows.
+    block.third_weight[2] = 0.0;
+    block.third_weight[3] = 0.0;
+    if let Some(point) = ranges.get_mut(n - 2) {
+        *point = blend(&block, *point, 2);
+    }
+    if let Some(point) = ranges.get_mut(n - 1) {
+        *point = blend(&block, *point, 3);
+    }
+}
+
+/// The weights `w/3` (eq. 11) of windows with `D` in `d` (0 for `+inf`).
+///
+/// One function for every pass (§4 and the strided ones of §10's
+/// proposal): `expf` then has one call site and is inlined into it. With a
+/// call site in each pass it was not inlined at all (+0.13 M instructions
+/// per scan on the M4F).
+#[inline(never)]
+fn third_weights(d: &[f32], third_weight: &mut [f32]) {
+    for (w, &d) in third_weight.iter_mut().zip(d.iter()) {
+        *w = if d < f32::INFINITY {
+            weight(d) / 3.0
+        } else {
+            0.0
+        };
+    }
+}
+
+/// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2`):
+/// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − 1`, `j − 2`,
+/// added in that order. Absent or invalid windows have weight 0 and estimate 0.
+#[inline]
+fn blend(block: &Block, d: f32, slot: usize) -> f32 {
+    let w = &block.third_weight;
+    let x = &block.posterior;
+    let weight_sum = w[slot] + w[slot - 1] + w[slot - 2];
+    let estimate_sum =
+        w[slot] * x[0][slot] + w[slot - 1] * x[1][slot - 1] + w[slot - 2] * x[2][slot - 2];
+    (1.0 - weight_sum) * d + estimate_sum
+}
+
+/// The window filter on `m` consecutive windows, `ranges` holding their
+/// `m + 2` points. Writes `D` (or `+inf`) and the estimates (or 0) of
+/// window `t` into `d[t]` and slot `t + 2` of the block.
+///
+/// Branch-free over the windows: every window is computed, invalid ones are
+/// masked afterwards. The arithmetic per window is exactly that of
+/// [`WindowFilter::update`].
+#[inline]
+fn filter_block(
+    filter: &WindowFilter,
+    ranges: &[f32],
+    ok: &[bool],
+    block: &mut Block,
+    d: &mut [f32],
+) {
+    let m = d
+        .len()
+        .min(ok.len())
+        .min(ranges.len().saturating_sub(2))
+        .min(BLOCK);
+    // Exactly the block's points: `t + 2 < m + 2` below needs no check.
+    let Some(ranges) = ranges.get(..m + 2) else {
+        return;
+    };
+    // A fixed-size copy of the flags keeps the loop free of bounds checks.
+    let mut window_ok = [false; BLOCK];
+    window_ok[..m].copy_from_slice(&ok[..m]);
+    let post = &mut block.posterior;
+    for t in 0..m {
+        let z = Vec3([ranges[t], ranges[t + 1], ranges[t + 2]]);
+        let (est, valid) = filter.update_unchecked(z);
+        let keep = valid & window_ok[t];
+        d[t] = if keep { est.mahalanobis } else { f32::INFINITY };
+        post[0][t + 2] = if keep { est.posterior.0[0] } else { 0.0 };
+        post[1][t + 2] = if keep { est.posterior.0[1] } else { 0.0 };
+        post[2][t + 2] = if keep { est.posterior.0[2] } else { 0.0 };
+    }
+}
+
+/// Largest window stride of [`smoothing_pass_strided`] (the 0.25° modes'
+/// four interleaved mirror turns).
+pub const MAX_STRIDE: usize = 4;
+
+/// Slots before a block's first window: the windows of the previous block
+/// a point still needs (`2·stride` of them).
+const CARRY: usize = 2 * MAX_STRIDE;
+
+/// Per-block working storage. Slots `CARRY − 2·K .. CARRY` of
+/// `third_weight` and `posterior` carry the last `2·K` windows of the
+/// previous block.
+struct StridedBlock {
+    third_weight: [f32; BLOCK + CARRY],
+    posterior: [[f32; BLOCK + CARRY]; 3],
 }
 
 /// [`smoothing_pass`] with windows of stride `K` (ALGORITHM.md §10
@@ -141,6 +268,9 @@ pub fn smoothing_pass(
 /// blended from windows `j, j−K, j−2K` in that order; there are `n − 2K`
 /// windows (`window_ok` and `mahalanobis` entries beyond them are left
 /// alone). `K = 1` is §4 exactly. `K` above [`MAX_STRIDE`] does nothing.
+// Never inlined: the §10 options must not change how the default pass
+// is compiled into the extractor.
+#[inline(never)]
 pub fn smoothing_pass_strided<const K: usize>(
     filter: &WindowFilter,
     window_ok: &[bool],
@@ -158,7 +288,7 @@ pub fn smoothing_pass_strided<const K: usize>(
         return;
     }
     let n = windows + 2 * K;
-    let mut block = Block {
+    let mut block = StridedBlock {
         third_weight: [0.0; BLOCK + CARRY],
         posterior: [[0.0; BLOCK + CARRY]; 3],
     };
@@ -173,21 +303,15 @@ pub fn smoothing_pass_strided<const K: usize>(
             break; // not reached: `windows` fits all three slices
         };
         // The filter on every window of the block (§2–3).
-        filter_block::<K>(filter, points, ok, &mut block, d);
+        filter_block_strided::<K>(filter, points, ok, &mut block, d);
         // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
-        for (w, &d) in block.third_weight[CARRY..].iter_mut().zip(d.iter()) {
-            *w = if d < f32::INFINITY {
-                weight(d) / 3.0
-            } else {
-                0.0
-            };
-        }
+        third_weights(d, &mut block.third_weight[CARRY..]);
         // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
         let Some(points) = ranges.get_mut(start..start + m) else {
             break; // not reached, as above
         };
         for (t, point) in points.iter_mut().enumerate() {
-            *point = blend::<K>(&block, *point, t + CARRY);
+            *point = blend_strided::<K>(&block, *point, t + CARRY);
         }
         // Carry the last 2K windows into the slots before CARRY.
         for slot in CARRY - 2 * K..CARRY {
@@ -206,7 +330,7 @@ pub fn smoothing_pass_strided<const K: usize>(
     }
     for t in 0..2 * K {
         if let Some(point) = ranges.get_mut(n - 2 * K + t) {
-            *point = blend::<K>(&block, *point, CARRY + t);
+            *point = blend_strided::<K>(&block, *point, CARRY + t);
         }
     }
 }
@@ -216,7 +340,7 @@ pub fn smoothing_pass_strided<const K: usize>(
 /// `j − 2K`, added in that order. Absent or invalid windows have weight 0
 /// and estimate 0.
 #[inline]
-fn blend<const K: usize>(block: &Block, d: f32, slot: usize) -> f32 {
+fn blend_strided<const K: usize>(block: &StridedBlock, d: f32, slot: usize) -> f32 {
     let w = &block.third_weight;
     let x = &block.posterior;
     let (s1, s2) = (slot - K, slot - 2 * K);
@@ -233,11 +357,11 @@ fn blend<const K: usize>(block: &Block, d: f32, slot: usize) -> f32 {
 /// masked afterwards. The arithmetic per window is exactly that of
 /// [`WindowFilter::update`].
 #[inline]
-fn filter_block<const K: usize>(
+fn filter_block_strided<const K: usize>(
     filter: &WindowFilter,
     ranges: &[f32],
     ok: &[bool],
-    block: &mut Block,
+    block: &mut StridedBlock,
     d: &mut [f32],
 ) {
     let m = d
@@ -259,7 +383,7 @@ fn filter_block<const K: usize>(
     }
 }
 
-/// The loop of [`filter_block`]; `GRAZING` picks the window's `R`
+/// The loop of [`filter_block_strided`]; `GRAZING` picks the window's `R`
 /// (ALGORITHM.md §3, or with the grazing term of §10's proposal), so the
 /// default path is exactly the filter of §3.
 #[inline(always)]
@@ -267,7 +391,7 @@ fn filter_windows<const K: usize, const GRAZING: bool>(
     filter: &WindowFilter,
     ranges: &[f32],
     window_ok: &[bool; BLOCK],
-    block: &mut Block,
+    block: &mut StridedBlock,
     d: &mut [f32],
     m: usize,
 ) {
