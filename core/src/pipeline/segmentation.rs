@@ -70,9 +70,11 @@ pub fn segment<const S: usize, const E: usize>(
 }
 
 /// [`segment`] for windows of stride `stride` (§10 proposal): window `i`
-/// spans beams `i..=i + 2·stride`, so a run of windows `i..=k` covers
-/// `i..=k + 2·stride` and the edge point of a breaking window is its middle
-/// beam `i + stride`. `stride = 1` is §6.
+/// is beams `i, i + stride, i + 2·stride` with middle beam `i + stride`. A
+/// run of windows `i..=k` covers the middle beams of its windows and one
+/// beam either side, `i + stride − 1 ..= k + stride + 1` (so two segments
+/// share at most one point, as in §6); the edge point of a breaking window
+/// is its middle beam. `stride = 1` is §6.
 pub fn segment_strided<const S: usize, const E: usize>(
     mahalanobis: &[f32],
     stride: usize,
@@ -104,8 +106,8 @@ pub fn segment_strided<const S: usize, const E: usize>(
             (true, Some(start)) => {
                 run_start = None;
                 let seg = Segment {
-                    first: start as u16,
-                    last: (i - 1 + 2 * stride) as u16,
+                    first: (start + stride - 1) as u16,
+                    last: (i + stride) as u16,
                 };
                 if seg.points() < min_points as usize {
                     counts.short_segments = counts.short_segments.saturating_add(1);
@@ -186,7 +188,7 @@ mod tests {
     }
 
     #[test]
-    fn strided_runs_cover_their_whole_span() {
+    fn strided_runs_cover_their_middle_beams_and_one_more() {
         let mut segs: Vec<Segment, 8> = Vec::new();
         let mut edges: Vec<u16, 16> = Vec::new();
         // Stride 2: windows span 5 beams. A jump between beams 9 and 10
@@ -197,18 +199,25 @@ mod tests {
         }
         let c = segment_strided(&d, 2, 9.0, 5, &mut segs, &mut edges);
         assert_eq!(c, SegmentationCounts::default());
+        // Runs 0..=5 and 10..=19: middles 2..=7 and 12..=21, one beam more
+        // either side; beams 9 and 10 (the jump) in neither.
         assert_eq!(
             segs.as_slice(),
             &[
-                Segment { first: 0, last: 9 },
+                Segment { first: 1, last: 8 },
                 Segment {
-                    first: 10,
-                    last: 23
+                    first: 11,
+                    last: 22
                 }
             ]
         );
         // Edge points: the middle beams i + 2 of the breaking windows.
         assert_eq!(edges.as_slice(), &[8, 9, 10, 11]);
+        // One breaking window: the neighbours share exactly one point.
+        let mut d1 = [0.0f32; 20];
+        d1[7] = 50.0;
+        segment_strided(&d1, 2, 9.0, 5, &mut segs, &mut edges);
+        assert_eq!(segs[0].last, segs[1].first);
         // Stride 1 is §6.
         let mut s1: Vec<Segment, 8> = Vec::new();
         let mut e1: Vec<u16, 16> = Vec::new();
