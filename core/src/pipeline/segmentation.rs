@@ -75,6 +75,8 @@ pub fn segment<const S: usize, const E: usize>(
 /// beam either side, `i + stride − 1 ..= k + stride + 1` (so two segments
 /// share at most one point, as in §6); the edge point of a breaking window
 /// is its middle beam. `stride = 1` is §6.
+// Never inlined: the §10 option must not grow the extractor's stack frame.
+#[inline(never)]
 pub fn segment_strided<const S: usize, const E: usize>(
     mahalanobis: &[f32],
     stride: usize,
