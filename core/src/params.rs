@@ -69,7 +69,32 @@ pub struct Params {
     /// certain than this is dropped and counted (`Stats::rejected_wide`;
     /// beyond ALGORITHM.md, issue 14 item 6). `+inf` keeps every line (v1).
     pub max_alpha_sd_deg: f32,
+    /// Grazing-incidence observation noise `ρ` (dimensionless, ALGORITHM.md
+    /// §10 proposal, `docs/ALGORITHM-v3-section10.md`): each window's
+    /// `R = sigma_w²·I` with `sigma_w² = sigma² + ρ²·min(h², (t·γ·b)²)`,
+    /// `h = (c − a)/2` the range step per beam of the window (`= b·γ·tan β`
+    /// at incidence `β`), `t = tan` [`GRAZING_MAX_INCIDENCE_DEG`]. `0` is
+    /// the independent range noise of §3 (v1, v2).
+    pub grazing_noise: f32,
+    /// Same-turn windows (ALGORITHM.md §10 proposal,
+    /// `docs/ALGORITHM-v3-section10.md`): in the modes that interleave
+    /// mirror turns (0.5°: two, 0.25°: four), window `i` is the beams
+    /// `i, i+k, i+2k` of one turn (`k` turns, the filter's angle `k·γ`),
+    /// so the offset between turns (platform motion in 13.3 ms) is no
+    /// break. `false` is §2–6 (v1, v2); 1° modes are the same either way.
+    pub same_turn_windows: bool,
+    /// Range noise of the line fits and their tests (m; §7, split, merge;
+    /// ALGORITHM.md §10 proposal): the raw ranges of both mirror turns
+    /// scatter more about one line than one turn's about its own (the
+    /// offset between turns), while `sigma` stays the noise `D` sees.
+    /// `0` uses `sigma` (v1, v2).
+    pub fit_sigma: f32,
 }
+
+/// Largest incidence (degrees) the grazing term of
+/// [`Params::grazing_noise`] follows; a window whose outer ranges differ
+/// more (a jump edge) gets the term of this incidence.
+pub const GRAZING_MAX_INCIDENCE_DEG: f32 = 80.0;
 
 impl Default for Params {
     fn default() -> Self {
@@ -78,6 +103,16 @@ impl Default for Params {
 }
 
 impl Params {
+    /// The range noise of the line fits (m): `fit_sigma`, or `sigma` if 0.
+    #[inline]
+    pub const fn line_sigma(&self) -> f32 {
+        if self.fit_sigma > 0.0 {
+            self.fit_sigma
+        } else {
+            self.sigma
+        }
+    }
+
     /// The defaults of ALGORITHM.md v2, usable in `const` contexts.
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
@@ -97,6 +132,9 @@ impl Params {
         max_range: max_range_of(crate::Unit::Centimetre, RangeMode::Bits13),
         merge_collinear: true,
         max_alpha_sd_deg: 5.0 / 3.0,
+        grazing_noise: 0.0,
+        same_turn_windows: false,
+        fit_sigma: 0.0,
     };
 
     /// ALGORITHM.md v1: no split before reject, shared corner points in
@@ -148,6 +186,10 @@ pub enum ParamError {
     MaxRange,
     /// `max_alpha_sd_deg` must be > 0 (`+inf` allowed).
     MaxAlphaSd,
+    /// `grazing_noise` must be finite and ≥ 0.
+    GrazingNoise,
+    /// `fit_sigma` must be finite and ≥ 0.
+    FitSigma,
 }
 
 impl fmt::Display for ParamError {
@@ -166,6 +208,8 @@ impl fmt::Display for ParamError {
             ParamError::SplitDepth => "split_depth must be at most 16",
             ParamError::MaxRange => "max_range must be > 0 (metres; inf for no limit)",
             ParamError::MaxAlphaSd => "max_alpha_sd_deg must be > 0 (degrees; inf for no limit)",
+            ParamError::GrazingNoise => "grazing_noise must be finite and >= 0",
+            ParamError::FitSigma => "fit_sigma must be finite and >= 0 (metres; 0: sigma)",
         })
     }
 }
@@ -204,6 +248,9 @@ impl ValidParams {
         max_range: 0.0,
         merge_collinear: false,
         max_alpha_sd_deg: 0.0,
+        grazing_noise: 0.0,
+        same_turn_windows: false,
+        fit_sigma: 0.0,
     });
 
     /// The parameters.
@@ -288,6 +335,12 @@ impl Params {
         }
         if !(self.max_alpha_sd_deg > 0.0) {
             return Err(ParamError::MaxAlphaSd);
+        }
+        if !non_neg(self.grazing_noise) {
+            return Err(ParamError::GrazingNoise);
+        }
+        if !non_neg(self.fit_sigma) {
+            return Err(ParamError::FitSigma);
         }
         Ok(ValidParams(*self))
     }

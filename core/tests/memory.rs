@@ -57,6 +57,8 @@ fn coprocessor_parts_sizes() {
     // forwarded request) and a client's whole 77 kept for the sensor.
     // 19 848 B with the face's `30 01` streamed from the latest scan (a
     // 161-byte transmit buffer instead of 819 B), + 16 B for the sensor
-    // link's wait behind the stream (two u64).
-    assert!(size_of::<CoProcessor>() <= 19_864);
+    // link's wait behind the stream (two u64), + 8 B of Params for the
+    // ALGORITHM.md §10 proposals (grazing_noise, same_turn_windows,
+    // fit_sigma).
+    assert!(size_of::<CoProcessor>() <= 19_872);
 }

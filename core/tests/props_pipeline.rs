@@ -140,8 +140,14 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             prop_oneof![Just(0u8), 1u8..=lms_core::params::MAX_SPLIT_DEPTH],
             prop_oneof![Just(f32::INFINITY), Just(81.83f32), 0.5f32..100.0],
         ),
+        // The §10 proposals (docs/ALGORITHM-v3-section10.md).
+        (
+            any::<bool>(),
+            prop_oneof![Just(0.0f32), 0.0f32..3.0],
+            prop_oneof![Just(0.0f32), 1e-4f32..0.2],
+        ),
     )
-        .prop_map(|(a, b, c, d)| Params {
+        .prop_map(|(a, b, c, d, e)| Params {
             sigma: a.0,
             q: a.1,
             iterations: a.2,
@@ -159,6 +165,9 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             max_range: d.3,
             merge_collinear: c.1,
             max_alpha_sd_deg: if c.0 { f32::INFINITY } else { 5.0 / 3.0 },
+            same_turn_windows: e.0,
+            grazing_noise: e.1,
+            fit_sigma: e.2,
         })
 }
 

@@ -429,7 +429,8 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
     let raw: [u32; 12] = core::array::from_fn(|_| input.u32());
     let flags = input.u8();
     // ALGORITHM.md v2's range limit and the line gate (issue 14).
-    let limits: [u32; 2] = core::array::from_fn(|_| input.u32());
+    // The ALGORITHM.md §10 proposals: grazing term, fit σ (limits 2, 3).
+    let limits: [u32; 4] = core::array::from_fn(|_| input.u32());
     let params = match mode {
         PARAMS_RAW => {
             let iterations = raw[2] as u16;
@@ -456,6 +457,9 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 max_range: f32::from_bits(limits[0]),
                 merge_collinear: flags & 8 != 0,
                 max_alpha_sd_deg: f32::from_bits(limits[1]),
+                grazing_noise: f32::from_bits(limits[2]),
+                same_turn_windows: flags & 64 != 0,
+                fit_sigma: f32::from_bits(limits[3]),
             }
         }
         PARAMS_SANE => Params {
@@ -491,6 +495,17 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 f32::INFINITY
             } else {
                 0.01 + unit(limits[1]) * 90.0
+            },
+            grazing_noise: if flags & 128 == 0 {
+                0.0
+            } else {
+                unit(limits[2]) * 3.0
+            },
+            same_turn_windows: flags & 64 != 0,
+            fit_sigma: if limits[3] & 1 == 0 {
+                0.0
+            } else {
+                1e-4 + unit(limits[3]) * 0.1
             },
         },
         _ => Params {

@@ -74,6 +74,33 @@ pub fn methods() -> Vec<Method> {
             sigma: p.sigma,
             ..Params::default()
         }),
+        Method::with("v2 + grazing ρ = 0.5", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            grazing_noise: 0.5,
+            ..Params::default()
+        }),
+        Method::with("v2 + same-turn windows", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            same_turn_windows: true,
+            ..Params::default()
+        }),
+        Method::with("v2 + same-turn, fit σ = 1.5σ", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            same_turn_windows: true,
+            fit_sigma: 1.5 * p.sigma,
+            ..Params::default()
+        }),
+        Method::with("v2 + same-turn, fit σ = 2σ", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            same_turn_windows: true,
+            fit_sigma: 2.0 * p.sigma,
+            ..Params::default()
+        }),
+        Method::with("v2, fit σ = 2σ", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            fit_sigma: 2.0 * p.sigma,
+            ..Params::default()
+        }),
         Method::new(crate::SPLIT_MERGE, Kind::SplitMerge { k: crate::SPLIT_K }),
     ]
 }

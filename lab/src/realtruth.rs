@@ -117,6 +117,8 @@ pub struct RealMethod {
     pub base: Base,
     /// σ.
     pub sigma: SigmaChoice,
+    /// Changes after σ (identity for most methods).
+    pub adjust: fn(Params) -> Params,
 }
 
 impl RealMethod {
@@ -131,7 +133,7 @@ impl RealMethod {
             SigmaChoice::ByUnit => crate::real::sigma_for(unit) as f32,
             SigmaChoice::Fixed(s) => s as f32,
         };
-        Params { sigma, ..base }
+        (self.adjust)(Params { sigma, ..base })
     }
 }
 
@@ -149,6 +151,12 @@ pub fn methods() -> Vec<RealMethod> {
         kind,
         base,
         sigma,
+        adjust: |p| p,
+    };
+    // No flags with changes (docs/ALGORITHM-v3-section10.md).
+    let g = |name, adjust| RealMethod {
+        adjust,
+        ..m(name, RealKind::Core, Base::NoFlags, SigmaChoice::Base)
     };
     use Base::{NoFlags, V1};
     use RealKind::*;
@@ -167,6 +175,33 @@ pub fn methods() -> Vec<RealMethod> {
             NoFlags,
             ByUnit,
         ),
+        g("no flags + grazing ρ = 0.5", |p| Params {
+            grazing_noise: 0.5,
+            ..p
+        }),
+        g("no flags + same-turn windows", |p| Params {
+            same_turn_windows: true,
+            ..p
+        }),
+        g("no flags + same-turn + ρ = 0.5", |p| Params {
+            same_turn_windows: true,
+            grazing_noise: 0.5,
+            ..p
+        }),
+        g("same-turn, fit σ = 1.5σ", |p| Params {
+            same_turn_windows: true,
+            fit_sigma: 1.5 * p.sigma,
+            ..p
+        }),
+        g("same-turn, fit σ = 2σ", |p| Params {
+            same_turn_windows: true,
+            fit_sigma: 2.0 * p.sigma,
+            ..p
+        }),
+        g("fit σ = 2σ (windows as v2)", |p| Params {
+            fit_sigma: 2.0 * p.sigma,
+            ..p
+        }),
         m(ORACLE, Oracle, NoFlags, own),
     ]
 }

@@ -34,6 +34,11 @@ pub struct WindowFilter {
     pub r: f32,
     /// Process noise `q` (m²).
     pub q: f32,
+    /// `ρ²` of the grazing term (`Params::grazing_noise`; 0: off).
+    pub grazing: f32,
+    /// `(t·γ)²`, `t` the tangent of the largest incidence the grazing
+    /// term follows (`params::GRAZING_MAX_INCIDENCE_DEG`).
+    pub grazing_cap: f32,
 }
 
 impl WindowFilter {
@@ -44,7 +49,40 @@ impl WindowFilter {
             k: 2.0 * libm::cosf(gamma),
             r: sigma * sigma,
             q,
+            grazing: 0.0,
+            grazing_cap: 0.0,
         }
+    }
+
+    /// This filter with the grazing-incidence term (ALGORITHM.md §10
+    /// proposal): `rho` dimensionless, `max_incidence` (rad) the largest
+    /// incidence it follows, `gamma` the beam step (rad).
+    pub fn with_grazing(self, rho: f32, max_incidence: f32, gamma: f32) -> Self {
+        let t = libm::tanf(max_incidence) * gamma;
+        WindowFilter {
+            grazing: rho * rho,
+            grazing_cap: t * t,
+            ..self
+        }
+    }
+
+    /// Whether the grazing term is on.
+    #[inline]
+    pub fn grazing_on(&self) -> bool {
+        self.grazing > 0.0
+    }
+
+    /// The window's measurement variance with the grazing term (m²):
+    /// `sigma² + ρ²·min(h², (t·γ·b)²)`, `h = (c − a)/2` the range step per
+    /// beam (`b·γ·tan β` on a wall at incidence `β`).
+    #[inline(always)]
+    pub fn grazing_variance(&self, z: Vec3) -> f32 {
+        let [a, b, c] = z.0;
+        let h = 0.5 * (c - a);
+        let h2 = h * h;
+        let cap = self.grazing_cap * (b * b);
+        let e = if h2 < cap { h2 } else { cap };
+        self.r + self.grazing * e
     }
 
     /// `P̂ = sigma²·F·Fᵀ + q·I` for the zero-diagonal Jacobian of §2.
@@ -55,6 +93,20 @@ impl WindowFilter {
     #[inline]
     pub fn predicted_covariance(&self, p: &Prediction) -> Sym3 {
         let r = self.r;
+        Sym3 {
+            s11: r * (p.f12 * p.f12 + p.f13 * p.f13) + self.q,
+            s12: r * (p.f13 * p.f23),
+            s13: r * (p.f12 * p.f32_),
+            s22: r * (p.f21 * p.f21 + p.f23 * p.f23) + self.q,
+            s23: r * (p.f21 * p.f31),
+            s33: r * (p.f31 * p.f31 + p.f32_ * p.f32_) + self.q,
+        }
+    }
+
+    /// [`WindowFilter::predicted_covariance`] with the window's own
+    /// measurement variance `r` (m²).
+    #[inline(always)]
+    fn predicted_covariance_with(&self, p: &Prediction, r: f32) -> Sym3 {
         Sym3 {
             s11: r * (p.f12 * p.f12 + p.f13 * p.f13) + self.q,
             s12: r * (p.f13 * p.f23),
@@ -92,6 +144,43 @@ impl WindowFilter {
         // x⁺ = x̂ + K·v with K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·u,
         // so x⁺ = z − sigma²·u: the same quantity without the 3×3 product.
         let posterior = z - Vec3([self.r * u.0[0], self.r * u.0[1], self.r * u.0[2]]);
+        let [x0, x1, x2] = posterior.0;
+        // Overflow or NaN anywhere upstream propagates into the sum (a sum
+        // that overflows marks the window invalid too: D or a range near
+        // f32::MAX is no estimate).
+        let finite = (d + x0 + x1 + x2).is_finite();
+        // D is a quadratic form with S⁻¹ positive definite: clamp the
+        // rounding of a near-zero result to 0.
+        let mahalanobis = if d < 0.0 { 0.0 } else { d };
+        (
+            WindowEstimate {
+                mahalanobis,
+                posterior,
+            },
+            in_front & solvable & finite,
+        )
+    }
+
+    /// [`WindowFilter::update_unchecked`] with the grazing term: the
+    /// window's `R = sigma_w²·I` from [`WindowFilter::grazing_variance`]
+    /// (the same operations as `update_unchecked` with `sigma²` replaced).
+    #[inline(always)]
+    pub fn update_grazing_unchecked(&self, z: Vec3) -> (WindowEstimate, bool) {
+        self.update_with(z, self.grazing_variance(z))
+    }
+
+    /// The filter with `R = r·I` (m²); `x⁺ = z − r·u`.
+    #[inline(always)]
+    fn update_with(&self, z: Vec3, r: f32) -> (WindowEstimate, bool) {
+        let (pred, in_front) = predict_unchecked(z, self.k);
+        let p_hat = self.predicted_covariance_with(&pred, r);
+        let s = p_hat.add_diagonal(r);
+        let v = z - pred.f;
+        let (u, solvable) = s.solve_spd_unchecked(v); // S⁻¹·v
+        let d = v.dot(u);
+        // x⁺ = x̂ + K·v with K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·u,
+        // so x⁺ = z − sigma²·u: the same quantity without the 3×3 product.
+        let posterior = z - Vec3([r * u.0[0], r * u.0[1], r * u.0[2]]);
         let [x0, x1, x2] = posterior.0;
         // Overflow or NaN anywhere upstream propagates into the sum (a sum
         // that overflows marks the window invalid too: D or a range near

@@ -9,13 +9,16 @@
 
 use crate::features::{Features, Stats, MAX_WINDOWS};
 use crate::frame::{Frame, Geometry, MAX_BEAMS};
-use crate::params::{Params, ValidParams};
+use crate::params::{Params, ValidParams, GRAZING_MAX_INCIDENCE_DEG};
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
 use crate::pipeline::line_fit::{fit_piece, Bearings, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
-use crate::pipeline::segmentation::segment;
-use crate::pipeline::smoothing::{smoothing_pass, usable, usable_windows};
+use crate::pipeline::segmentation::{segment, segment_strided};
+use crate::pipeline::smoothing::{
+    smoothing_pass, smoothing_pass_strided, usable, usable_windows, usable_windows_strided,
+    MAX_STRIDE,
+};
 use crate::pipeline::split::split_before_reject;
 
 /// All working memory of the pipeline, reused frame after frame.
@@ -87,13 +90,25 @@ impl Extractor {
         f.lines.clear();
         f.corners.clear();
         let d = &self.mahalanobis[..windows];
-        let counts = segment(
-            d,
-            params.tau,
-            params.min_points,
-            &mut f.segments,
-            &mut f.edges,
-        );
+        let stride = window_stride(params, frame.geometry());
+        let counts = if stride == 1 {
+            segment(
+                d,
+                params.tau,
+                params.min_points,
+                &mut f.segments,
+                &mut f.edges,
+            )
+        } else {
+            segment_strided(
+                d,
+                stride,
+                params.tau,
+                params.min_points,
+                &mut f.segments,
+                &mut f.edges,
+            )
+        };
         let (usable_beams, beyond) = count_usable(frame, params.max_range);
         let mut stats = Stats {
             valid_beams: usable_beams,
@@ -142,20 +157,37 @@ impl Extractor {
         for (s, &r) in self.smoothed.iter_mut().zip(frame.ranges()) {
             *s = r;
         }
-        usable_windows(
-            frame.beams(),
-            frame.ranges(),
-            params.max_range,
-            &mut self.window_ok[..windows],
-        );
-        let filter = WindowFilter::new(frame.geometry().step, params.sigma, params.q);
+        let stride = window_stride(params, frame.geometry());
+        let (beams, raw) = (frame.beams(), frame.ranges());
+        let ok = &mut self.window_ok[..windows];
+        if stride == 1 {
+            usable_windows(beams, raw, params.max_range, ok);
+        } else {
+            usable_windows_strided(beams, raw, params.max_range, stride, ok);
+            // Windows n − 2k … n − 3 do not exist at stride k.
+            let d = &mut self.mahalanobis[..windows];
+            for x in d.iter_mut().skip(windows.saturating_sub(2 * stride - 2)) {
+                *x = f32::INFINITY;
+            }
+        }
+        let step = stride as f32 * frame.geometry().step;
+        let mut filter = WindowFilter::new(step, params.sigma, params.q);
+        if params.grazing_noise > 0.0 {
+            let t = GRAZING_MAX_INCIDENCE_DEG * (core::f32::consts::PI / 180.0);
+            filter = filter.with_grazing(params.grazing_noise, t, step);
+        }
+        // §4 as specified unless a §10 option is on.
+        let spec = stride == 1 && !filter.grazing_on();
         for pass in 1..=params.iterations {
-            smoothing_pass(
-                &filter,
-                &self.window_ok[..windows],
-                &mut self.smoothed[..n],
-                &mut self.mahalanobis[..windows],
-            );
+            let (ok, r) = (&self.window_ok[..windows], &mut self.smoothed[..n]);
+            let d = &mut self.mahalanobis[..windows];
+            match stride {
+                _ if spec => smoothing_pass(&filter, ok, r, d),
+                2 => smoothing_pass_strided::<2>(&filter, ok, r, d),
+                3 => smoothing_pass_strided::<3>(&filter, ok, r, d),
+                4 => smoothing_pass_strided::<4>(&filter, ok, r, d),
+                _ => smoothing_pass_strided::<1>(&filter, ok, r, d),
+            }
             after_pass(pass, &self.mahalanobis[..windows], &self.smoothed[..n]);
         }
     }
@@ -192,6 +224,21 @@ impl Extractor {
     }
 }
 
+/// The window stride (§10 proposal): the number of interleaved mirror
+/// turns (`1°/step`, 1 … [`MAX_STRIDE`]) with `Params::same_turn_windows`,
+/// else 1.
+fn window_stride(params: &Params, geometry: Geometry) -> usize {
+    if !params.same_turn_windows {
+        return 1;
+    }
+    let turns = (core::f32::consts::PI / 180.0) / geometry.step + 0.5;
+    if turns >= 1.0 && turns < (MAX_STRIDE + 1) as f32 {
+        turns as usize
+    } else {
+        1
+    }
+}
+
 /// Beams of `frame` that are valid and below `max_range`, and valid beams
 /// at or beyond it (§1 v2), saturated to `u16`.
 fn count_usable(frame: &Frame, max_range: f32) -> (u16, u16) {
@@ -213,7 +260,7 @@ fn fit_lines(f: &mut Features, scan: &RawScan<'_>, params: &Params, stats: &mut 
     let (bearings, raw, beams) = (scan.bearings, scan.ranges, scan.beams);
     for k in 0..f.segments.len() {
         let (first, last) = fit_span(&f.segments, k, params.fit_shared_points);
-        let line = match fit_piece(scan, first, last, params.sigma) {
+        let line = match fit_piece(scan, first, last, params.line_sigma()) {
             Ok(line) => line,
             Err(_) => {
                 stats.degenerate_fits = stats.degenerate_fits.saturating_add(1);

@@ -59,7 +59,7 @@ pub fn try_merge(
         beams,
         max_range,
     };
-    let merged = fit_piece(&scan, prev.first, next.last, params.sigma).ok()?;
+    let merged = fit_piece(&scan, prev.first, next.last, params.line_sigma()).ok()?;
     if merged.chi2 <= params.max_chi2 {
         Some(merged)
     } else {

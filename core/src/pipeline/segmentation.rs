@@ -69,6 +69,60 @@ pub fn segment<const S: usize, const E: usize>(
     counts
 }
 
+/// [`segment`] for windows of stride `stride` (§10 proposal): window `i`
+/// is beams `i, i + stride, i + 2·stride` with middle beam `i + stride`. A
+/// run of windows `i..=k` covers the middle beams of its windows and one
+/// beam either side, `i + stride − 1 ..= k + stride + 1` (so two segments
+/// share at most one point, as in §6); the edge point of a breaking window
+/// is its middle beam. `stride = 1` is §6.
+// Never inlined: the §10 option must not grow the extractor's stack frame.
+#[inline(never)]
+pub fn segment_strided<const S: usize, const E: usize>(
+    mahalanobis: &[f32],
+    stride: usize,
+    tau: f32,
+    min_points: u16,
+    segments: &mut Vec<Segment, S>,
+    edges: &mut Vec<u16, E>,
+) -> SegmentationCounts {
+    let stride = stride.clamp(1, 8);
+    segments.clear();
+    edges.clear();
+    let mut counts = SegmentationCounts::default();
+    let mut run_start: Option<usize> = None;
+    let windows = mahalanobis.len().min(u16::MAX as usize - 2 * stride);
+    for i in 0..=windows {
+        // `i == windows` closes the last run.
+        let breaks = match mahalanobis.get(i) {
+            Some(&d) => {
+                let breaks = !(d < tau); // NaN breaks too
+                if breaks && d.is_finite() && edges.push((i + stride) as u16).is_err() {
+                    counts.edge_overflow = counts.edge_overflow.saturating_add(1);
+                }
+                breaks
+            }
+            None => true,
+        };
+        match (breaks, run_start) {
+            (false, None) => run_start = Some(i),
+            (true, Some(start)) => {
+                run_start = None;
+                let seg = Segment {
+                    first: (start + stride - 1) as u16,
+                    last: (i + stride) as u16,
+                };
+                if seg.points() < min_points as usize {
+                    counts.short_segments = counts.short_segments.saturating_add(1);
+                } else if segments.push(seg).is_err() {
+                    counts.segment_overflow = counts.segment_overflow.saturating_add(1);
+                }
+            }
+            _ => {}
+        }
+    }
+    counts
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -133,5 +187,46 @@ mod tests {
         assert_eq!(segs.len(), 4);
         assert_eq!(c.segment_overflow, 6);
         assert_eq!(c.edge_overflow, 7); // 10 breaking windows, 3 slots
+    }
+
+    #[test]
+    fn strided_runs_cover_their_middle_beams_and_one_more() {
+        let mut segs: Vec<Segment, 8> = Vec::new();
+        let mut edges: Vec<u16, 16> = Vec::new();
+        // Stride 2: windows span 5 beams. A jump between beams 9 and 10
+        // breaks the windows 6..=9 (those holding both beams).
+        let mut d = [0.0f32; 20];
+        for x in &mut d[6..=9] {
+            *x = 50.0;
+        }
+        let c = segment_strided(&d, 2, 9.0, 5, &mut segs, &mut edges);
+        assert_eq!(c, SegmentationCounts::default());
+        // Runs 0..=5 and 10..=19: middles 2..=7 and 12..=21, one beam more
+        // either side; beams 9 and 10 (the jump) in neither.
+        assert_eq!(
+            segs.as_slice(),
+            &[
+                Segment { first: 1, last: 8 },
+                Segment {
+                    first: 11,
+                    last: 22
+                }
+            ]
+        );
+        // Edge points: the middle beams i + 2 of the breaking windows.
+        assert_eq!(edges.as_slice(), &[8, 9, 10, 11]);
+        // One breaking window: the neighbours share exactly one point.
+        let mut d1 = [0.0f32; 20];
+        d1[7] = 50.0;
+        segment_strided(&d1, 2, 9.0, 5, &mut segs, &mut edges);
+        assert_eq!(segs[0].last, segs[1].first);
+        // Stride 1 is §6.
+        let mut s1: Vec<Segment, 8> = Vec::new();
+        let mut e1: Vec<u16, 16> = Vec::new();
+        let mut s2: Vec<Segment, 8> = Vec::new();
+        let mut e2: Vec<u16, 16> = Vec::new();
+        segment(&d, 9.0, 5, &mut s1, &mut e1);
+        segment_strided(&d, 1, 9.0, 5, &mut s2, &mut e2);
+        assert_eq!((s1, e1), (s2, e2));
     }
 }

@@ -62,6 +62,33 @@ pub fn usable_windows(beams: &[Beam], ranges: &[f32], max_range: f32, window_ok:
     }
 }
 
+/// [`usable_windows`] for windows of stride `stride` (§10 proposal): window
+/// `i` needs every beam of `i..=i + 2·stride` usable, so that a segment
+/// (a run of windows) never spans an unusable beam. `stride = 1` is
+/// [`usable_windows`].
+pub fn usable_windows_strided(
+    beams: &[Beam],
+    ranges: &[f32],
+    max_range: f32,
+    stride: usize,
+    window_ok: &mut [bool],
+) {
+    let ok = |j: usize| match (beams.get(j), ranges.get(j)) {
+        (Some(&b), Some(&d)) => usable(b, d, max_range),
+        _ => false,
+    };
+    // Beams from the last unusable one: a window is usable when the run of
+    // usable beams ending at its last beam is 2·stride + 1 long.
+    let span = 2 * stride + 1;
+    let mut run = 0usize;
+    for j in 0..window_ok.len() + 2 * stride {
+        run = if ok(j) { run + 1 } else { 0 };
+        if let Some(w) = j.checked_sub(2 * stride).and_then(|i| window_ok.get_mut(i)) {
+            *w = run >= span;
+        }
+    }
+}
+
 /// Windows processed together: the filter runs branch-free over a block
 /// (so a host CPU can vectorise it, with the same per-window IEEE
 /// operations), then the block's points are blended. Stack use is a few
@@ -121,13 +148,7 @@ pub fn smoothing_pass(
         // The filter on every window of the block (§2–3).
         filter_block(filter, points, ok, &mut block, d);
         // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
-        for (w, &d) in block.third_weight[2..].iter_mut().zip(d.iter()) {
-            *w = if d < f32::INFINITY {
-                weight(d) / 3.0
-            } else {
-                0.0
-            };
-        }
+        third_weights(d, &mut block.third_weight[2..]);
         // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
         let Some(points) = ranges.get_mut(start..start + m) else {
             break; // not reached, as above
@@ -153,6 +174,23 @@ pub fn smoothing_pass(
     }
     if let Some(point) = ranges.get_mut(n - 1) {
         *point = blend(&block, *point, 3);
+    }
+}
+
+/// The weights `w/3` (eq. 11) of windows with `D` in `d` (0 for `+inf`).
+///
+/// One function for every pass (§4 and the strided ones of §10's
+/// proposal): `expf` then has one call site and is inlined into it. With a
+/// call site in each pass it was not inlined at all (+0.13 M instructions
+/// per scan on the M4F).
+#[inline(never)]
+fn third_weights(d: &[f32], third_weight: &mut [f32]) {
+    for (w, &d) in third_weight.iter_mut().zip(d.iter()) {
+        *w = if d < f32::INFINITY {
+            weight(d) / 3.0
+        } else {
+            0.0
+        };
     }
 }
 
@@ -205,5 +243,254 @@ fn filter_block(
         post[0][t + 2] = if keep { est.posterior.0[0] } else { 0.0 };
         post[1][t + 2] = if keep { est.posterior.0[1] } else { 0.0 };
         post[2][t + 2] = if keep { est.posterior.0[2] } else { 0.0 };
+    }
+}
+
+/// Largest window stride of [`smoothing_pass_strided`] (the 0.25° modes'
+/// four interleaved mirror turns).
+pub const MAX_STRIDE: usize = 4;
+
+/// Slots before a block's first window: the windows of the previous block
+/// a point still needs (`2·stride` of them).
+const CARRY: usize = 2 * MAX_STRIDE;
+
+/// Per-block working storage. Slots `CARRY − 2·K .. CARRY` of
+/// `third_weight` and `posterior` carry the last `2·K` windows of the
+/// previous block.
+struct StridedBlock {
+    third_weight: [f32; BLOCK + CARRY],
+    posterior: [[f32; BLOCK + CARRY]; 3],
+}
+
+/// [`smoothing_pass`] with windows of stride `K` (ALGORITHM.md §10
+/// proposal, `Params::same_turn_windows`): window `i` is beams
+/// `i, i+K, i+2K` (the filter built for the angle `K·γ`), point `j` is
+/// blended from windows `j, j−K, j−2K` in that order; there are `n − 2K`
+/// windows (`window_ok` and `mahalanobis` entries beyond them are left
+/// alone). `K = 1` is §4 exactly. `K` above [`MAX_STRIDE`] does nothing.
+// Never inlined: the §10 options must not change how the default pass
+// is compiled into the extractor.
+#[inline(never)]
+pub fn smoothing_pass_strided<const K: usize>(
+    filter: &WindowFilter,
+    window_ok: &[bool],
+    ranges: &mut [f32],
+    mahalanobis: &mut [f32],
+) {
+    if K == 0 || K > MAX_STRIDE {
+        return;
+    }
+    let windows = window_ok
+        .len()
+        .min(mahalanobis.len())
+        .min(ranges.len().saturating_sub(2 * K));
+    if windows == 0 {
+        return;
+    }
+    let n = windows + 2 * K;
+    let mut block = StridedBlock {
+        third_weight: [0.0; BLOCK + CARRY],
+        posterior: [[0.0; BLOCK + CARRY]; 3],
+    };
+    let mut start = 0;
+    while start < windows {
+        let m = BLOCK.min(windows - start);
+        let (Some(points), Some(ok), Some(d)) = (
+            ranges.get(start..start + m + 2 * K),
+            window_ok.get(start..start + m),
+            mahalanobis.get_mut(start..start + m),
+        ) else {
+            break; // not reached: `windows` fits all three slices
+        };
+        // The filter on every window of the block (§2–3).
+        filter_block_strided::<K>(filter, points, ok, &mut block, d);
+        // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
+        third_weights(d, &mut block.third_weight[CARRY..]);
+        // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
+        let Some(points) = ranges.get_mut(start..start + m) else {
+            break; // not reached, as above
+        };
+        for (t, point) in points.iter_mut().enumerate() {
+            *point = blend_strided::<K>(&block, *point, t + CARRY);
+        }
+        // Carry the last 2K windows into the slots before CARRY.
+        for slot in CARRY - 2 * K..CARRY {
+            block.third_weight[slot] = block.third_weight[m + slot];
+            for k in 0..3 {
+                block.posterior[k][slot] = block.posterior[k][m + slot];
+            }
+        }
+        start += m;
+    }
+    // Points n−2K … n−1 have no window starting at them. The slots before
+    // CARRY hold windows n−4K … n−2K−1; the slots from CARRY on stand for
+    // absent windows.
+    for w in &mut block.third_weight[CARRY..CARRY + 2 * K] {
+        *w = 0.0;
+    }
+    for t in 0..2 * K {
+        if let Some(point) = ranges.get_mut(n - 2 * K + t) {
+            *point = blend_strided::<K>(&block, *point, CARRY + t);
+        }
+    }
+}
+
+/// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2K`):
+/// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − K`,
+/// `j − 2K`, added in that order. Absent or invalid windows have weight 0
+/// and estimate 0.
+#[inline]
+fn blend_strided<const K: usize>(block: &StridedBlock, d: f32, slot: usize) -> f32 {
+    let w = &block.third_weight;
+    let x = &block.posterior;
+    let (s1, s2) = (slot - K, slot - 2 * K);
+    let weight_sum = w[slot] + w[s1] + w[s2];
+    let estimate_sum = w[slot] * x[0][slot] + w[s1] * x[1][s1] + w[s2] * x[2][s2];
+    (1.0 - weight_sum) * d + estimate_sum
+}
+
+/// The window filter on `m` consecutive windows of stride `K`, `ranges`
+/// holding their `m + 2K` points. Writes `D` (or `+inf`) and the estimates
+/// (or 0) of window `t` into `d[t]` and slot `t + CARRY` of the block.
+///
+/// Branch-free over the windows: every window is computed, invalid ones are
+/// masked afterwards. The arithmetic per window is exactly that of
+/// [`WindowFilter::update`].
+#[inline]
+fn filter_block_strided<const K: usize>(
+    filter: &WindowFilter,
+    ranges: &[f32],
+    ok: &[bool],
+    block: &mut StridedBlock,
+    d: &mut [f32],
+) {
+    let m = d
+        .len()
+        .min(ok.len())
+        .min(ranges.len().saturating_sub(2 * K))
+        .min(BLOCK);
+    // Exactly the block's points: `t + 2K < m + 2K` below needs no check.
+    let Some(ranges) = ranges.get(..m + 2 * K) else {
+        return;
+    };
+    // A fixed-size copy of the flags keeps the loop free of bounds checks.
+    let mut window_ok = [false; BLOCK];
+    window_ok[..m].copy_from_slice(&ok[..m]);
+    if filter.grazing_on() {
+        filter_windows::<K, true>(filter, ranges, &window_ok, block, d, m);
+    } else {
+        filter_windows::<K, false>(filter, ranges, &window_ok, block, d, m);
+    }
+}
+
+/// The loop of [`filter_block_strided`]; `GRAZING` picks the window's `R`
+/// (ALGORITHM.md §3, or with the grazing term of §10's proposal), so the
+/// default path is exactly the filter of §3.
+#[inline(always)]
+fn filter_windows<const K: usize, const GRAZING: bool>(
+    filter: &WindowFilter,
+    ranges: &[f32],
+    window_ok: &[bool; BLOCK],
+    block: &mut StridedBlock,
+    d: &mut [f32],
+    m: usize,
+) {
+    let (Some(ranges), Some(d)) = (ranges.get(..m + 2 * K), d.get_mut(..m)) else {
+        return;
+    };
+    let post = &mut block.posterior;
+    for t in 0..m.min(BLOCK) {
+        let z = Vec3([ranges[t], ranges[t + K], ranges[t + 2 * K]]);
+        let (est, valid) = if GRAZING {
+            filter.update_grazing_unchecked(z)
+        } else {
+            filter.update_unchecked(z)
+        };
+        let keep = valid & window_ok[t];
+        d[t] = if keep { est.mahalanobis } else { f32::INFINITY };
+        post[0][t + CARRY] = if keep { est.posterior.0[0] } else { 0.0 };
+        post[1][t + CARRY] = if keep { est.posterior.0[1] } else { 0.0 };
+        post[2][t + CARRY] = if keep { est.posterior.0[2] } else { 0.0 };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GAMMA: f32 = 0.5 * core::f32::consts::PI / 180.0;
+
+    /// A wall at 1.5 m, normal at 20°, with a deterministic ±1 cm ripple.
+    fn wall(n: usize) -> [f32; 41] {
+        let mut r = [0.0f32; 41];
+        for (j, x) in r.iter_mut().enumerate().take(n) {
+            let phi = (j as f32 - 20.0) * GAMMA;
+            let ripple = 0.01 * (((j * 7919) % 13) as f32 / 6.0 - 1.0);
+            *x = 1.5 / libm::cosf(phi - 0.35) + ripple;
+        }
+        r
+    }
+
+    #[test]
+    fn stride_two_is_two_independent_sub_scans_bit_for_bit() {
+        let n = 41;
+        let filter = WindowFilter::new(2.0 * GAMMA, 0.01, 0.0);
+        let mut all = wall(n);
+        let ok = [true; 41];
+        let mut d = [0.0f32; 39];
+        smoothing_pass_strided::<2>(&filter, &ok[..n - 2], &mut all[..n], &mut d);
+        // The same pass on the even and on the odd beams alone (stride 1).
+        let raw = wall(n);
+        for parity in 0..2 {
+            let mut sub = [0.0f32; 21];
+            let m = (n - parity).div_ceil(2);
+            for (k, x) in sub.iter_mut().enumerate().take(m) {
+                *x = raw[parity + 2 * k];
+            }
+            let mut sub_d = [0.0f32; 19];
+            smoothing_pass(&filter, &ok[..m - 2], &mut sub[..m], &mut sub_d[..m - 2]);
+            for k in 0..m {
+                assert_eq!(
+                    sub[k].to_bits(),
+                    all[parity + 2 * k].to_bits(),
+                    "beam {}",
+                    parity + 2 * k
+                );
+            }
+            for k in 0..m - 2 {
+                assert_eq!(sub_d[k].to_bits(), d[parity + 2 * k].to_bits());
+            }
+        }
+    }
+
+    #[test]
+    fn stride_one_is_the_spec_pass() {
+        let n = 41;
+        let filter = WindowFilter::new(GAMMA, 0.01, 0.0);
+        let (mut a, mut b) = (wall(n), wall(n));
+        let ok = [true; 39];
+        let (mut da, mut db) = ([0.0f32; 39], [0.0f32; 39]);
+        smoothing_pass(&filter, &ok, &mut a[..n], &mut da);
+        smoothing_pass_strided::<1>(&filter, &ok, &mut b[..n], &mut db);
+        assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits));
+        assert_eq!(da.map(f32::to_bits), db.map(f32::to_bits));
+    }
+
+    #[test]
+    fn strided_windows_need_every_beam_of_their_span() {
+        use crate::frame::{Frame, Invalid, Variant};
+        let mut frame = Frame::for_variant(Variant::Fov180Res50);
+        for j in 0..frame.len() {
+            frame.set_metres(j, 2.0);
+        }
+        frame.set_invalid(10, Invalid::NoEcho);
+        frame.set_metres(30, 90.0); // beyond max_range below
+        let n = frame.len();
+        let mut ok = [false; 359];
+        usable_windows_strided(frame.beams(), frame.ranges(), 80.0, 2, &mut ok);
+        for (i, &w) in ok.iter().enumerate() {
+            let want = i + 4 < n && (i..=i + 4).all(|j| j != 10 && j != 30);
+            assert_eq!(w, want, "window {i}");
+        }
     }
 }

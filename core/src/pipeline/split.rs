@@ -315,13 +315,13 @@ pub fn split_before_reject(
         let _ = todo.push((segment, 0, shared));
         while let Some((piece, level, shared)) = todo.pop() {
             let tested = if trim { trimmed(piece, shared) } else { piece };
-            if !not_straight(scan, tested, params.sigma) {
+            if !not_straight(scan, tested, params.line_sigma()) {
                 if out.push(piece).is_err() {
                     stats.segment_overflow = stats.segment_overflow.saturating_add(1);
                 }
                 continue;
             }
-            let split_at = if level < depth && !circle_explains(scan, tested, params.sigma) {
+            let split_at = if level < depth && !circle_explains(scan, tested, params.line_sigma()) {
                 farthest_from_chord(scan, piece)
             } else {
                 None

@@ -120,6 +120,9 @@ fn any_params() -> Params {
         max_range: any_f32(),
         merge_collinear: black_box(true),
         max_alpha_sd_deg: any_f32(),
+        grazing_noise: any_f32(),
+        same_turn_windows: black_box(true),
+        fit_sigma: any_f32(),
     }
 }
 

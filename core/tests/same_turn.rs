@@ -1,0 +1,99 @@
+//! `Params::same_turn_windows` (ALGORITHM.md §10 proposal,
+//! docs/ALGORITHM-v3-section10.md): in a 0.5° mode the two mirror turns
+//! are offset (platform motion in 13.3 ms); windows of one turn do not
+//! break on the offset, windows of §2 do. In 1° modes nothing changes.
+
+use lms_core::{Extractor, Frame, Params, Variant};
+
+/// A wall `x·cos α + y·sin α = r` seen at 0.5°, the odd beams (the second
+/// turn) from a pose moved `offset` metres towards the wall; a ±`ripple`
+/// deterministic pattern as noise. Beams not on the wall's front half: 0.
+fn interleaved_wall(alpha: f32, r: f32, offset: f32, ripple: f32) -> Frame {
+    let mut frame = Frame::for_variant(Variant::Fov180Res50);
+    for j in 0..frame.len() {
+        let phi = frame.geometry().bearing(j);
+        let c = libm::cosf(phi - alpha);
+        if c < 0.25 {
+            frame.set_metres(j, 0.0);
+            continue;
+        }
+        let shift = if j % 2 == 1 { offset } else { 0.0 };
+        let noise = ripple * (((j * 7919) % 11) as f32 / 5.0 - 1.0);
+        frame.set_metres(j, (r - shift) / c + noise);
+    }
+    frame
+}
+
+fn breaking_windows(ex: &Extractor, tau: f32) -> usize {
+    ex.mahalanobis()
+        .iter()
+        .filter(|d| d.is_finite() && **d >= tau)
+        .count()
+}
+
+#[test]
+fn a_turn_offset_breaks_spec_windows_but_not_same_turn_windows() {
+    // Offset 2 cm between turns, σ = 1 cm, ripple ±5 mm, incidences up to 75°.
+    let frame = interleaved_wall(0.2, 2.0, 0.02, 0.005);
+    // No split before reject: the segments are the windows' (§6).
+    let spec = Params {
+        sigma: 0.01,
+        split_depth: 0,
+        ..Params::DEFAULT
+    };
+    let turn = Params {
+        same_turn_windows: true,
+        ..spec
+    };
+    let mut ex = Extractor::new();
+    ex.run(&frame, &spec.validate().unwrap());
+    let spec_breaks = breaking_windows(&ex, spec.tau);
+    ex.run(&frame, &turn.validate().unwrap());
+    let turn_breaks = breaking_windows(&ex, turn.tau);
+    assert!(spec_breaks > 50, "§2 windows broke {spec_breaks} times");
+    assert_eq!(
+        turn_breaks, 0,
+        "same-turn windows broke {turn_breaks} times"
+    );
+    // One segment over the whole wall.
+    let segs = ex.features().segments();
+    let longest = segs.iter().map(|s| s.points()).max().unwrap_or(0);
+    let valid = frame.beams().iter().filter(|b| b.is_valid()).count();
+    assert!(
+        longest + 2 >= valid,
+        "longest segment {longest} of {valid} beams"
+    );
+}
+
+#[test]
+fn one_degree_modes_are_unchanged() {
+    let mut frame = Frame::for_variant(Variant::Fov180Res100);
+    for j in 0..frame.len() {
+        let phi = frame.geometry().bearing(j);
+        let c = libm::cosf(phi - 0.4).max(0.3);
+        let noise = 0.004 * (((j * 31) % 7) as f32 / 3.0 - 1.0);
+        frame.set_metres(j, 3.0 / c + noise);
+    }
+    let spec = Params::DEFAULT.validate().unwrap();
+    let turn = Params {
+        same_turn_windows: true,
+        ..Params::DEFAULT
+    }
+    .validate()
+    .unwrap();
+    let mut a = Extractor::new();
+    let mut b = Extractor::new();
+    let (fa, fb) = (a.run(&frame, &spec).clone(), b.run(&frame, &turn).clone());
+    assert_eq!(fa.lines(), fb.lines());
+    assert_eq!(fa.corners(), fb.corners());
+    assert_eq!(fa.segments(), fb.segments());
+    assert_eq!(fa.edges(), fb.edges());
+    assert!(!fa.lines().is_empty());
+    let bits = |e: &Extractor| {
+        e.mahalanobis()
+            .iter()
+            .map(|d| d.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&a), bits(&b));
+}
