@@ -10,14 +10,15 @@
 use crate::features::{Features, Stats, MAX_WINDOWS};
 use crate::frame::{Frame, Geometry, MAX_BEAMS};
 use crate::params::{Params, ValidParams, GRAZING_MAX_INCIDENCE_DEG};
+use crate::pipeline::bearings::TwoLevelBearings;
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
-use crate::pipeline::line_fit::{fit_piece, Bearings, RawScan};
+use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{segment, segment_strided};
 use crate::pipeline::smoothing::{
     smoothing_pass, smoothing_pass_strided, usable, usable_windows, usable_windows_strided,
-    MAX_STRIDE,
+    MAX_STRIDE, WINDOW_WORDS,
 };
 use crate::pipeline::split::split_before_reject;
 
@@ -25,10 +26,10 @@ use crate::pipeline::split::split_before_reject;
 pub struct Extractor {
     geometry: Option<Geometry>,
     len: usize,
-    cos_phi: [f32; MAX_BEAMS],
-    sin_phi: [f32; MAX_BEAMS],
+    bearings: TwoLevelBearings,
     smoothed: [f32; MAX_BEAMS],
-    window_ok: [bool; MAX_WINDOWS],
+    /// Usable windows, a bitset ([`usable_windows`]).
+    window_ok: [u32; WINDOW_WORDS],
     mahalanobis: [f32; MAX_WINDOWS],
     features: Features,
 }
@@ -45,10 +46,9 @@ impl Extractor {
         Extractor {
             geometry: None,
             len: 0,
-            cos_phi: [0.0; MAX_BEAMS],
-            sin_phi: [0.0; MAX_BEAMS],
+            bearings: TwoLevelBearings::new(),
             smoothed: [0.0; MAX_BEAMS],
-            window_ok: [false; MAX_WINDOWS],
+            window_ok: [0; WINDOW_WORDS],
             mahalanobis: [0.0; MAX_WINDOWS],
             features: Features::EMPTY,
         }
@@ -81,7 +81,7 @@ impl Extractor {
         // that visible to the optimiser, so no slice below can panic.
         let n = frame.len().min(MAX_BEAMS);
         self.len = n;
-        self.prepare_bearings(frame.geometry(), n);
+        self.prepare_bearings(frame.geometry());
         let windows = n.saturating_sub(2).min(MAX_WINDOWS);
         self.scale_space(frame, params, n, windows, &mut after_pass);
 
@@ -121,12 +121,8 @@ impl Extractor {
         };
 
         // §7: lines on the raw ranges.
-        let bearings = Bearings {
-            cos: &self.cos_phi[..n],
-            sin: &self.sin_phi[..n],
-        };
         let scan = RawScan {
-            bearings,
+            bearings: &self.bearings,
             ranges: frame.ranges(),
             beams: frame.beams(),
             max_range: params.max_range,
@@ -159,11 +155,11 @@ impl Extractor {
         }
         let stride = window_stride(params, frame.geometry());
         let (beams, raw) = (frame.beams(), frame.ranges());
-        let ok = &mut self.window_ok[..windows];
+        let ok = &mut self.window_ok;
         if stride == 1 {
-            usable_windows(beams, raw, params.max_range, ok);
+            usable_windows(beams, raw, params.max_range, windows, ok);
         } else {
-            usable_windows_strided(beams, raw, params.max_range, stride, ok);
+            usable_windows_strided(beams, raw, params.max_range, stride, windows, ok);
             // Windows n − 2k … n − 3 do not exist at stride k.
             let d = &mut self.mahalanobis[..windows];
             for x in d.iter_mut().skip(windows.saturating_sub(2 * stride - 2)) {
@@ -179,7 +175,7 @@ impl Extractor {
         // §4 as specified unless a §10 option is on.
         let spec = stride == 1 && !filter.grazing_on();
         for pass in 1..=params.iterations {
-            let (ok, r) = (&self.window_ok[..windows], &mut self.smoothed[..n]);
+            let (ok, r) = (&self.window_ok, &mut self.smoothed[..n]);
             let d = &mut self.mahalanobis[..windows];
             match stride {
                 _ if spec => smoothing_pass(&filter, ok, r, d),
@@ -209,17 +205,12 @@ impl Extractor {
             .unwrap_or_default()
     }
 
-    /// Fill the `cos phi_j`, `sin phi_j` tables if the geometry changed.
-    fn prepare_bearings(&mut self, geometry: Geometry, n: usize) {
+    /// Fill the bearing table if the geometry changed.
+    fn prepare_bearings(&mut self, geometry: Geometry) {
         if self.geometry == Some(geometry) {
             return;
         }
-        for j in 0..MAX_BEAMS {
-            let phi = geometry.bearing(j);
-            self.cos_phi[j] = libm::cosf(phi);
-            self.sin_phi[j] = libm::sinf(phi);
-        }
-        let _ = n;
+        self.bearings.fill(geometry);
         self.geometry = Some(geometry);
     }
 }
@@ -256,7 +247,12 @@ fn count_usable(frame: &Frame, max_range: f32) -> (u16, u16) {
 /// §7: a line per segment, χ²-gated, merged with its predecessor where §7.6
 /// allows it, then judged on length (after merging, so that a wall cut by a
 /// no-echo beam is judged whole).
-fn fit_lines(f: &mut Features, scan: &RawScan<'_>, params: &Params, stats: &mut Stats) {
+fn fit_lines<B: BearingTable>(
+    f: &mut Features,
+    scan: &RawScan<'_, B>,
+    params: &Params,
+    stats: &mut Stats,
+) {
     let (bearings, raw, beams) = (scan.bearings, scan.ranges, scan.beams);
     for k in 0..f.segments.len() {
         let (first, last) = fit_span(&f.segments, k, params.fit_shared_points);

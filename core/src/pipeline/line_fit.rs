@@ -11,8 +11,9 @@
 //! 4. quality `chi2 = Σ e² / (sigma²·(m − 2))`;
 //! 5. endpoints: the first and last points projected onto the line.
 //!
-//! Bearings enter through per-beam tables of `cos phi_j` and `sin phi_j`,
-//! and the line's direction is carried as the unit normal `(cos α, sin α)`:
+//! Bearings enter through a [`BearingTable`] (`cos phi_j`, `sin phi_j` per
+//! beam: a caller's [`Bearings`] slices, or the extractor's two-level table
+//! of [`crate::pipeline::bearings`]), and the line's direction is carried as the unit normal `(cos α, sin α)`:
 //! the start's normal comes from the scatter matrix by half-angle formulas,
 //! each Gauss–Newton step rotates it by `Δα` with a short Taylor series of
 //! `cos Δα`, `sin Δα` (exact to f32 for `|Δα| ≤ 0.25`; a larger step falls
@@ -24,6 +25,7 @@
 use crate::features::Line;
 use crate::frame::Beam;
 use crate::maths::{wrap_angle, Sym2};
+pub use crate::pipeline::bearings::BearingTable;
 
 /// Most Gauss–Newton steps per fit (§7.2).
 pub const MAX_GN_STEPS: usize = 5;
@@ -65,13 +67,13 @@ pub struct Bearings<'a> {
     pub sin: &'a [f32],
 }
 
-/// The raw ranges of a frame with its bearing tables and beam status: what
+/// The raw ranges of a frame with its bearing table and beam status: what
 /// the fits of §7 (and split before reject) read. §7 fits the raw, not the
 /// smoothed, ranges.
 #[derive(Clone, Copy, Debug)]
-pub struct RawScan<'a> {
+pub struct RawScan<'a, B: BearingTable = Bearings<'a>> {
     /// `cos phi_j`, `sin phi_j` per beam.
-    pub bearings: Bearings<'a>,
+    pub bearings: B,
     /// Raw ranges (m).
     pub ranges: &'a [f32],
     /// Status per beam (invalid beams are skipped).
@@ -101,7 +103,12 @@ pub fn fit_line(
 
 /// [`fit_line`] on the beams of `scan` that are valid and below its
 /// `max_range`.
-pub fn fit_piece(scan: &RawScan<'_>, first: u16, last: u16, sigma: f32) -> Result<Line, FitError> {
+pub fn fit_piece<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    first: u16,
+    last: u16,
+    sigma: f32,
+) -> Result<Line, FitError> {
     let span = Span::new(scan, first, last).ok_or(FitError::TooFewPoints)?;
     // 1. Total least squares start.
     let (m, start) = span.total_least_squares()?;
@@ -130,25 +137,22 @@ pub fn fit_piece(scan: &RawScan<'_>, first: u16, last: u16, sigma: f32) -> Resul
     })
 }
 
-/// The beams `first..=last` of a segment as four slices of one length,
-/// indexed from 0: no index below can be out of bounds.
-struct Span<'a> {
+/// The beams `first..=last` of a segment as two slices of one length,
+/// indexed from 0 (beam `lo + i` of the bearing table): no index below can
+/// be out of bounds.
+struct Span<'a, B> {
     ranges: &'a [f32],
     beams: &'a [Beam],
-    cos: &'a [f32],
-    sin: &'a [f32],
+    bearings: B,
+    lo: usize,
     max_range: f32,
 }
 
-impl<'a> Span<'a> {
+impl<'a, B: BearingTable> Span<'a, B> {
     /// The span, or `None` if it holds no beam.
-    fn new(scan: &RawScan<'a>, first: u16, last: u16) -> Option<Self> {
+    fn new(scan: &RawScan<'a, B>, first: u16, last: u16) -> Option<Self> {
         let (bearings, ranges, beams) = (scan.bearings, scan.ranges, scan.beams);
-        let n = ranges
-            .len()
-            .min(beams.len())
-            .min(bearings.cos.len())
-            .min(bearings.sin.len());
+        let n = ranges.len().min(beams.len()).min(bearings.beams());
         let lo = first as usize;
         let hi = (last as usize + 1).min(n);
         if lo >= hi {
@@ -157,20 +161,24 @@ impl<'a> Span<'a> {
         Some(Span {
             ranges: ranges.get(lo..hi)?,
             beams: beams.get(lo..hi)?,
-            cos: bearings.cos.get(lo..hi)?,
-            sin: bearings.sin.get(lo..hi)?,
+            bearings,
+            lo,
             max_range: scan.max_range,
         })
     }
 
-    /// `(d_j, cos phi_j, sin phi_j)` of every valid beam, in order.
-    fn valid(&self) -> impl DoubleEndedIterator<Item = (f32, f32, f32)> + '_ {
-        self.ranges
-            .iter()
-            .zip(self.beams)
-            .zip(self.cos.iter().zip(self.sin))
-            .filter(|((&d, b), _)| b.is_valid() && d < self.max_range)
-            .map(|((&d, _), (&c, &s))| (d, c, s))
+    /// `f(d_j, cos(phi_j − α), sin(phi_j − α))` for every valid beam, in
+    /// order, with `(ca, sa) = (cos α, sin α)` (`(1, 0)`: the bearings).
+    #[inline]
+    fn each_valid(&self, ca: f32, sa: f32, mut f: impl FnMut(f32, f32, f32)) {
+        let max_range = self.max_range;
+        let (ranges, beams) = (self.ranges, self.beams);
+        self.bearings
+            .for_each_relative(self.lo, ranges, beams, (ca, sa), |_, d, b, c, s| {
+                if b.is_valid() && d < max_range {
+                    f(d, c, s);
+                }
+            });
     }
 
     /// §7.1: the total-least-squares line through the valid points
@@ -178,23 +186,23 @@ impl<'a> Span<'a> {
     fn total_least_squares(&self) -> Result<(u32, Normal), FitError> {
         let mut m = 0u32;
         let (mut sx, mut sy) = (0.0f32, 0.0f32);
-        for (d, c, s) in self.valid() {
+        self.each_valid(1.0, 0.0, |d, c, s| {
             sx += d * c;
             sy += d * s;
             m += 1;
-        }
+        });
         if m < 3 {
             return Err(FitError::TooFewPoints);
         }
         let mf = m as f32;
         let (xm, ym) = (sx / mf, sy / mf);
         let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
-        for (d, c, s) in self.valid() {
+        self.each_valid(1.0, 0.0, |d, c, s| {
             let (dx, dy) = (d * c - xm, d * s - ym);
             sxx += dx * dx;
             syy += dy * dy;
             sxy += dx * dy;
-        }
+        });
         // α = ½·atan2(−2·Sxy, Syy − Sxx) ∈ (−π/2, π/2], by half angles:
         // cos 2α = (Syy − Sxx)/h, sin 2α = −2·Sxy/h.
         let (c2, s2) = (syy - sxx, -2.0 * sxy);
@@ -228,8 +236,10 @@ impl<'a> Span<'a> {
         for _ in 0..MAX_GN_STEPS {
             let mut jte = [0.0f32; 2];
             let mut jtj = Sym2::default();
-            for (d, c, s) in self.valid() {
-                let (cd, sd) = incidence(c, s, ca, sa).ok_or(FitError::Degenerate)?;
+            let mut edge_on = false;
+            self.each_valid(ca, sa, |d, cd, sd| {
+                // The beam must meet the line from the front.
+                edge_on |= !(cd > MIN_INCIDENCE_COS);
                 let inv_c = 1.0 / cd;
                 let e = d - r * inv_c;
                 let ja = -r * sd * inv_c * inv_c;
@@ -239,6 +249,9 @@ impl<'a> Span<'a> {
                 jtj.c += jr * jr;
                 jte[0] += ja * e;
                 jte[1] += jr * e;
+            });
+            if edge_on {
+                return Err(FitError::Degenerate);
             }
             let inv = jtj.inverse_spd().ok_or(FitError::Degenerate)?;
             let d_alpha = inv.a * jte[0] + inv.b * jte[1];
@@ -261,8 +274,9 @@ impl<'a> Span<'a> {
     ) -> Result<(Sym2, f32), FitError> {
         let mut jtj = Sym2::default();
         let mut sum_e2 = 0.0f32;
-        for (d, c, s) in self.valid() {
-            let (cd, sd) = incidence(c, s, ca, sa).ok_or(FitError::Degenerate)?;
+        let mut edge_on = false;
+        self.each_valid(ca, sa, |d, cd, sd| {
+            edge_on |= !(cd > MIN_INCIDENCE_COS);
             let inv_c = 1.0 / cd;
             let e = d - r * inv_c;
             let ja = -r * sd * inv_c * inv_c;
@@ -270,6 +284,9 @@ impl<'a> Span<'a> {
             jtj.b += ja * inv_c;
             jtj.c += inv_c * inv_c;
             sum_e2 += e * e;
+        });
+        if edge_on {
+            return Err(FitError::Degenerate);
         }
         Ok((jtj, sum_e2))
     }
@@ -277,21 +294,18 @@ impl<'a> Span<'a> {
     /// §7.5: the first and last valid points projected onto the line
     /// (the first beam's point if none is valid).
     fn endpoints(&self, ca: f32, sa: f32, r: f32) -> [[f32; 2]; 2] {
-        let project = |(d, c, s): (f32, f32, f32)| {
+        let project = |i: usize| {
+            let d = self.ranges.get(i).copied().unwrap_or(0.0);
+            let (c, s) = self.bearings.cos_sin(self.lo + i);
             let (x, y) = (d * c, d * s);
             let dist = x * ca + y * sa - r;
             [x - dist * ca, y - dist * sa]
         };
-        let fallback = || {
-            let first = (self.ranges.first(), self.cos.first(), self.sin.first());
-            match first {
-                (Some(&d), Some(&c), Some(&s)) => project((d, c, s)),
-                _ => [0.0; 2],
-            }
-        };
-        let first = self.valid().next().map_or_else(fallback, project);
-        let last = self.valid().next_back().map_or_else(fallback, project);
-        [first, last]
+        let valid = |(_, (&d, b)): &(usize, (&f32, &Beam))| b.is_valid() && d < self.max_range;
+        let mut beams = self.ranges.iter().zip(self.beams).enumerate();
+        let first = beams.clone().find(valid).map_or(0, |(i, _)| i);
+        let last = beams.rfind(valid).map_or(0, |(i, _)| i);
+        [project(first), project(last)]
     }
 }
 
@@ -336,19 +350,6 @@ fn rotate(ca: f32, sa: f32, delta: f32) -> (f32, f32) {
     } else {
         let alpha = wrap_angle(libm::atan2f(sa, ca) + delta);
         (libm::cosf(alpha), libm::sinf(alpha))
-    }
-}
-
-/// `(cos(phi_j − α), sin(phi_j − α))` from a beam's `cos phi_j`, `sin phi_j`,
-/// if the beam meets the line from the front (`cos > MIN_INCIDENCE_COS`).
-#[inline]
-fn incidence(cos_phi: f32, sin_phi: f32, ca: f32, sa: f32) -> Option<(f32, f32)> {
-    let cd = cos_phi * ca + sin_phi * sa;
-    let sd = sin_phi * ca - cos_phi * sa;
-    if cd > MIN_INCIDENCE_COS {
-        Some((cd, sd))
-    } else {
-        None
     }
 }
 

@@ -7,7 +7,7 @@ use crate::features::{Line, Segment};
 use crate::frame::Beam;
 use crate::maths::wrap_angle;
 use crate::params::Params;
-use crate::pipeline::line_fit::{fit_piece, parameter_distance, Bearings, RawScan};
+use crate::pipeline::line_fit::{fit_piece, parameter_distance, BearingTable, RawScan};
 use crate::pipeline::smoothing::usable;
 
 /// The beams fitted for segment `k`: the whole segment (§7), or, with
@@ -31,8 +31,8 @@ pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16
 /// §7.6: merge `prev` and `next` if only invalid beams (or at most
 /// `merge_gap_beams` valid ones) lie between them, their parameters agree
 /// within `merge_gate`, and the refit of the union passes `max_chi2`.
-pub fn try_merge(
-    bearings: Bearings<'_>,
+pub fn try_merge<B: BearingTable>(
+    bearings: B,
     raw: &[f32],
     beams: &[Beam],
     prev: &Line,

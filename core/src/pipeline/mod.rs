@@ -19,6 +19,7 @@
 //! [`crate::features`] and never a later stage; only the extractor knows
 //! them all.
 
+pub mod bearings;
 pub mod corners;
 pub mod ekf;
 pub mod extractor;

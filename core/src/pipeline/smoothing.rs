@@ -13,6 +13,7 @@
 //! is done, and no later window reads it. Only the three most recent window
 //! estimates are kept, so a pass needs no storage beyond the ranges and `D`.
 
+use crate::features::MAX_WINDOWS;
 use crate::frame::Beam;
 use crate::maths::Vec3;
 use crate::pipeline::ekf::WindowFilter;
@@ -50,19 +51,38 @@ pub fn usable(beam: Beam, d: f32, max_range: f32) -> bool {
     beam.is_valid() && d < max_range
 }
 
-/// [`valid_windows`] with the range limit: a window needs three
-/// [`usable`] beams.
-pub fn usable_windows(beams: &[Beam], ranges: &[f32], max_range: f32, window_ok: &mut [bool]) {
+/// Words of a window bitset for [`MAX_WINDOWS`] windows: window `i` is bit
+/// `i % 32` of word `i / 32` (one word per smoothing block).
+pub const WINDOW_WORDS: usize = MAX_WINDOWS.div_ceil(BLOCK);
+
+/// [`valid_windows`] with the range limit, as a bitset: window `i` (beams
+/// `i, i+1, i+2`) is set iff its three beams are [`usable`]. Sets the bits
+/// of the first `windows` windows (as many as `window_ok` holds) and clears
+/// every other bit.
+pub fn usable_windows(
+    beams: &[Beam],
+    ranges: &[f32],
+    max_range: f32,
+    windows: usize,
+    window_ok: &mut [u32],
+) {
     let ok = |j: usize| match (beams.get(j), ranges.get(j)) {
         (Some(&b), Some(&d)) => usable(b, d, max_range),
         _ => false,
     };
-    for (i, w) in window_ok.iter_mut().enumerate() {
-        *w = ok(i) && ok(i + 1) && ok(i + 2);
+    for (w, word) in window_ok.iter_mut().enumerate() {
+        *word = 0;
+        for t in 0..BLOCK {
+            let i = w * BLOCK + t;
+            if i < windows && ok(i) && ok(i + 1) && ok(i + 2) {
+                *word |= 1 << t;
+            }
+        }
     }
 }
 
-/// [`usable_windows`] for windows of stride `stride` (§10 proposal): window
+/// [`usable_windows`] for windows of stride `stride` (§10 proposal), into
+/// the same bitset (the first `windows` windows): window
 /// `i` needs every beam of `i..=i + 2·stride` usable, so that a segment
 /// (a run of windows) never spans an unusable beam. `stride = 1` is
 /// [`usable_windows`].
@@ -71,8 +91,11 @@ pub fn usable_windows_strided(
     ranges: &[f32],
     max_range: f32,
     stride: usize,
-    window_ok: &mut [bool],
+    windows: usize,
+    window_ok: &mut [u32],
 ) {
+    let windows = windows.min(window_ok.len() * BLOCK);
+    window_ok.fill(0);
     let ok = |j: usize| match (beams.get(j), ranges.get(j)) {
         (Some(&b), Some(&d)) => usable(b, d, max_range),
         _ => false,
@@ -81,10 +104,12 @@ pub fn usable_windows_strided(
     // usable beams ending at its last beam is 2·stride + 1 long.
     let span = 2 * stride + 1;
     let mut run = 0usize;
-    for j in 0..window_ok.len() + 2 * stride {
+    for j in 0..windows + 2 * stride {
         run = if ok(j) { run + 1 } else { 0 };
-        if let Some(w) = j.checked_sub(2 * stride).and_then(|i| window_ok.get_mut(i)) {
-            *w = run >= span;
+        if let Some(i) = j.checked_sub(2 * stride) {
+            if let Some(w) = window_ok.get_mut(i / BLOCK) {
+                *w |= u32::from(run >= span) << (i % BLOCK);
+            }
         }
     }
 }
@@ -105,7 +130,8 @@ struct Block {
 /// Run one Jacobi smoothing pass in place.
 ///
 /// - `window_ok`: for each of the `n − 2` windows, whether its three beams
-///   are valid ([`valid_windows`]); invalid beams never take part in a window.
+///   are usable, as the bitset of [`usable_windows`] (bit `i % 32` of word
+///   `i / 32`); invalid beams never take part in a window.
 /// - `ranges`: the ranges of the previous pass (m), replaced by the new ones.
 ///   A point all of whose windows are invalid (in particular an invalid
 ///   beam) gets weight 0 from each and so keeps its value exactly.
@@ -119,12 +145,11 @@ struct Block {
 /// block's first window, and only points of earlier windows have been written.
 pub fn smoothing_pass(
     filter: &WindowFilter,
-    window_ok: &[bool],
+    window_ok: &[u32],
     ranges: &mut [f32],
     mahalanobis: &mut [f32],
 ) {
-    let windows = window_ok
-        .len()
+    let windows = (window_ok.len() * BLOCK)
         .min(mahalanobis.len())
         .min(ranges.len().saturating_sub(2));
     if windows == 0 {
@@ -138,9 +163,9 @@ pub fn smoothing_pass(
     let mut start = 0;
     while start < windows {
         let m = BLOCK.min(windows - start);
-        let (Some(points), Some(ok), Some(d)) = (
+        let (Some(points), Some(&ok), Some(d)) = (
             ranges.get(start..start + m + 2),
-            window_ok.get(start..start + m),
+            window_ok.get(start / BLOCK),
             mahalanobis.get_mut(start..start + m),
         ) else {
             break; // not reached: `windows` fits all three slices
@@ -208,37 +233,27 @@ fn blend(block: &Block, d: f32, slot: usize) -> f32 {
 }
 
 /// The window filter on `m` consecutive windows, `ranges` holding their
-/// `m + 2` points. Writes `D` (or `+inf`) and the estimates (or 0) of
-/// window `t` into `d[t]` and slot `t + 2` of the block.
+/// `m + 2` points, `ok` their usable flags (bit `t` for window `t`).
+/// Writes `D` (or `+inf`) and the estimates (or 0) of window `t` into
+/// `d[t]` and slot `t + 2` of the block.
 ///
 /// Branch-free over the windows: every window is computed, invalid ones are
 /// masked afterwards. The arithmetic per window is exactly that of
 /// [`WindowFilter::update`].
 #[inline]
-fn filter_block(
-    filter: &WindowFilter,
-    ranges: &[f32],
-    ok: &[bool],
-    block: &mut Block,
-    d: &mut [f32],
-) {
-    let m = d
-        .len()
-        .min(ok.len())
-        .min(ranges.len().saturating_sub(2))
-        .min(BLOCK);
+fn filter_block(filter: &WindowFilter, ranges: &[f32], ok: u32, block: &mut Block, d: &mut [f32]) {
+    let m = d.len().min(ranges.len().saturating_sub(2)).min(BLOCK);
     // Exactly the block's points: `t + 2 < m + 2` below needs no check.
     let Some(ranges) = ranges.get(..m + 2) else {
         return;
     };
-    // A fixed-size copy of the flags keeps the loop free of bounds checks.
-    let mut window_ok = [false; BLOCK];
-    window_ok[..m].copy_from_slice(&ok[..m]);
     let post = &mut block.posterior;
+    let mut ok = ok; // bit 0: window t
     for t in 0..m {
         let z = Vec3([ranges[t], ranges[t + 1], ranges[t + 2]]);
         let (est, valid) = filter.update_unchecked(z);
-        let keep = valid & window_ok[t];
+        let keep = valid & (ok & 1 != 0);
+        ok >>= 1;
         d[t] = if keep { est.mahalanobis } else { f32::INFINITY };
         post[0][t + 2] = if keep { est.posterior.0[0] } else { 0.0 };
         post[1][t + 2] = if keep { est.posterior.0[1] } else { 0.0 };
@@ -273,15 +288,14 @@ struct StridedBlock {
 #[inline(never)]
 pub fn smoothing_pass_strided<const K: usize>(
     filter: &WindowFilter,
-    window_ok: &[bool],
+    window_ok: &[u32],
     ranges: &mut [f32],
     mahalanobis: &mut [f32],
 ) {
     if K == 0 || K > MAX_STRIDE {
         return;
     }
-    let windows = window_ok
-        .len()
+    let windows = (window_ok.len() * BLOCK)
         .min(mahalanobis.len())
         .min(ranges.len().saturating_sub(2 * K));
     if windows == 0 {
@@ -295,9 +309,9 @@ pub fn smoothing_pass_strided<const K: usize>(
     let mut start = 0;
     while start < windows {
         let m = BLOCK.min(windows - start);
-        let (Some(points), Some(ok), Some(d)) = (
+        let (Some(points), Some(&ok), Some(d)) = (
             ranges.get(start..start + m + 2 * K),
-            window_ok.get(start..start + m),
+            window_ok.get(start / BLOCK),
             mahalanobis.get_mut(start..start + m),
         ) else {
             break; // not reached: `windows` fits all three slices
@@ -360,22 +374,21 @@ fn blend_strided<const K: usize>(block: &StridedBlock, d: f32, slot: usize) -> f
 fn filter_block_strided<const K: usize>(
     filter: &WindowFilter,
     ranges: &[f32],
-    ok: &[bool],
+    ok: u32,
     block: &mut StridedBlock,
     d: &mut [f32],
 ) {
-    let m = d
-        .len()
-        .min(ok.len())
-        .min(ranges.len().saturating_sub(2 * K))
-        .min(BLOCK);
+    let m = d.len().min(ranges.len().saturating_sub(2 * K)).min(BLOCK);
     // Exactly the block's points: `t + 2K < m + 2K` below needs no check.
     let Some(ranges) = ranges.get(..m + 2 * K) else {
         return;
     };
-    // A fixed-size copy of the flags keeps the loop free of bounds checks.
+    // The block's flags unpacked (bit t: window t): the loop stays free of
+    // bounds checks.
     let mut window_ok = [false; BLOCK];
-    window_ok[..m].copy_from_slice(&ok[..m]);
+    for (t, w) in window_ok.iter_mut().enumerate() {
+        *w = (ok >> t) & 1 != 0;
+    }
     if filter.grazing_on() {
         filter_windows::<K, true>(filter, ranges, &window_ok, block, d, m);
     } else {
@@ -436,9 +449,9 @@ mod tests {
         let n = 41;
         let filter = WindowFilter::new(2.0 * GAMMA, 0.01, 0.0);
         let mut all = wall(n);
-        let ok = [true; 41];
+        let ok = [u32::MAX; 2]; // every window usable (the bitset of usable_windows)
         let mut d = [0.0f32; 39];
-        smoothing_pass_strided::<2>(&filter, &ok[..n - 2], &mut all[..n], &mut d);
+        smoothing_pass_strided::<2>(&filter, &ok, &mut all[..n], &mut d);
         // The same pass on the even and on the odd beams alone (stride 1).
         let raw = wall(n);
         for parity in 0..2 {
@@ -448,7 +461,7 @@ mod tests {
                 *x = raw[parity + 2 * k];
             }
             let mut sub_d = [0.0f32; 19];
-            smoothing_pass(&filter, &ok[..m - 2], &mut sub[..m], &mut sub_d[..m - 2]);
+            smoothing_pass(&filter, &ok, &mut sub[..m], &mut sub_d[..m - 2]);
             for k in 0..m {
                 assert_eq!(
                     sub[k].to_bits(),
@@ -468,7 +481,7 @@ mod tests {
         let n = 41;
         let filter = WindowFilter::new(GAMMA, 0.01, 0.0);
         let (mut a, mut b) = (wall(n), wall(n));
-        let ok = [true; 39];
+        let ok = [u32::MAX; 2];
         let (mut da, mut db) = ([0.0f32; 39], [0.0f32; 39]);
         smoothing_pass(&filter, &ok, &mut a[..n], &mut da);
         smoothing_pass_strided::<1>(&filter, &ok, &mut b[..n], &mut db);
@@ -486,9 +499,10 @@ mod tests {
         frame.set_invalid(10, Invalid::NoEcho);
         frame.set_metres(30, 90.0); // beyond max_range below
         let n = frame.len();
-        let mut ok = [false; 359];
-        usable_windows_strided(frame.beams(), frame.ranges(), 80.0, 2, &mut ok);
-        for (i, &w) in ok.iter().enumerate() {
+        let mut ok = [u32::MAX; WINDOW_WORDS];
+        usable_windows_strided(frame.beams(), frame.ranges(), 80.0, 2, n - 2, &mut ok);
+        for i in 0..WINDOW_WORDS * BLOCK {
+            let w = (ok[i / BLOCK] >> (i % BLOCK)) & 1 != 0;
             let want = i + 4 < n && (i..=i + 4).all(|j| j != 10 && j != 30);
             assert_eq!(w, want, "window {i}");
         }

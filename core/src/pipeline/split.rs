@@ -31,7 +31,7 @@ use heapless::Vec;
 
 use crate::features::{Segment, Stats, MAX_SEGMENTS};
 use crate::params::{Params, MAX_SPLIT_DEPTH};
-use crate::pipeline::line_fit::{fit_piece, RawScan};
+use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 
 /// Upper 0.1 % quantile of χ² with `nu` degrees of freedom (Wilson–Hilferty:
 /// 1.8 % above the exact value at ν = 3, 0.6 % at ν = 10, 0.04 % at ν = 100).
@@ -59,7 +59,7 @@ pub fn chi2_quantile_999(nu: f32) -> f32 {
 ///   fit's.
 ///
 /// Only a piece between the bounds (or seen nearly edge-on) is fitted.
-fn not_straight(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> bool {
+fn not_straight<B: BearingTable>(scan: &RawScan<'_, B>, piece: Segment, sigma: f32) -> bool {
     match straightness_bounds(scan, piece, sigma) {
         Bounds::Above => return true,
         Bounds::Below => return false,
@@ -85,19 +85,22 @@ enum Bounds {
 }
 
 /// The bounds of [`not_straight`] for `piece` (see there).
-fn straightness_bounds(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> Bounds {
-    let points = || scan.valid_points(piece);
-    let (m, cx, cy) = centroid(points());
+fn straightness_bounds<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    piece: Segment,
+    sigma: f32,
+) -> Bounds {
+    let (m, cx, cy) = centroid(scan, piece);
     if m < 3 {
         return Bounds::Between;
     }
     let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
-    for (x, y) in points() {
+    scan.each_point(piece, |_, x, y| {
         let (u, v) = (x - cx, y - cy);
         sxx += u * u;
         syy += v * v;
         sxy += u * v;
-    }
+    });
     let half_diff = (sxx - syy) / 2.0;
     let root = libm::sqrtf(half_diff * half_diff + sxy * sxy);
     let least = (sxx + syy) / 2.0 - root;
@@ -118,17 +121,17 @@ fn straightness_bounds(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> Bounds
         return Bounds::Between;
     }
     let (nx, ny) = (nx / norm, ny / norm);
-    let mut upper = 0.0f32;
-    for (d, c, s) in scan.valid_beams(piece) {
+    let (mut upper, mut edge_on) = (0.0f32, false);
+    scan.each_valid(piece, 1.0, 0.0, |_, d, c, s| {
         // |cos| of the incidence: the beam's direction against the normal.
         let incidence = libm::fabsf(c * nx + s * ny);
-        if !(incidence > MIN_UPPER_INCIDENCE) {
-            return Bounds::Between;
-        }
+        edge_on |= !(incidence > MIN_UPPER_INCIDENCE);
         let e = ((d * c - cx) * nx + (d * s - cy) * ny) / incidence;
         upper += e * e;
-    }
-    if upper <= limit {
+    });
+    if edge_on {
+        Bounds::Between
+    } else if upper <= limit {
         Bounds::Below
     } else {
         Bounds::Between
@@ -139,53 +142,47 @@ fn straightness_bounds(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> Bounds
 /// the upper bound (nearer edge-on, the fit decides).
 const MIN_UPPER_INCIDENCE: f32 = 0.05;
 
-impl<'a> RawScan<'a> {
-    /// The point of beam `j` (m), if it is valid and inside the slices.
-    fn point(&self, j: usize) -> Option<(f32, f32)> {
-        match (
-            self.beams.get(j),
-            self.ranges.get(j),
-            self.bearings.cos.get(j),
-            self.bearings.sin.get(j),
-        ) {
-            (Some(b), Some(&d), Some(&c), Some(&s)) if b.is_valid() && d < self.max_range => {
-                Some((d * c, d * s))
-            }
-            _ => None,
-        }
-    }
-
-    /// The valid points of `piece` (m), in beam order.
-    fn valid_points(&self, piece: Segment) -> impl Iterator<Item = (f32, f32)> + '_ {
-        self.valid_beams(piece).map(|(d, c, s)| (d * c, d * s))
-    }
-
-    /// `(d_j, cos phi_j, sin phi_j)` of the valid beams of `piece` below
-    /// `max_range`, in beam order (one pass over four slices, no index
-    /// checks per beam).
-    fn valid_beams(&self, piece: Segment) -> impl Iterator<Item = (f32, f32, f32)> + '_ {
+impl<B: BearingTable> RawScan<'_, B> {
+    /// `f(j, d_j, cos(phi_j − α), sin(phi_j − α))` for the valid beams `j`
+    /// of `piece` below `max_range`, in beam order, with `(ca, sa) =
+    /// (cos α, sin α)` (`(1, 0)`: the bearings themselves).
+    #[inline]
+    fn each_valid(
+        &self,
+        piece: Segment,
+        ca: f32,
+        sa: f32,
+        mut f: impl FnMut(usize, f32, f32, f32),
+    ) {
         let lo = usize::from(piece.first);
         let hi = usize::from(piece.last) + 1;
-        let part = |s: &'a [f32]| s.get(lo..hi).unwrap_or_default();
+        let ranges = self.ranges.get(lo..hi).unwrap_or_default();
         let beams = self.beams.get(lo..hi).unwrap_or_default();
         let max_range = self.max_range;
-        part(self.ranges)
-            .iter()
-            .zip(beams)
-            .zip(part(self.bearings.cos).iter().zip(part(self.bearings.sin)))
-            .filter(move |((&d, b), _)| b.is_valid() && d < max_range)
-            .map(|((&d, _), (&c, &s))| (d, c, s))
+        self.bearings
+            .for_each_relative(lo, ranges, beams, (ca, sa), |i, d, b, c, s| {
+                if b.is_valid() && d < max_range {
+                    f(lo + i, d, c, s);
+                }
+            });
+    }
+
+    /// `f(j, x_j, y_j)` for the valid points of `piece` (m), in beam order.
+    #[inline]
+    fn each_point(&self, piece: Segment, mut f: impl FnMut(usize, f32, f32)) {
+        self.each_valid(piece, 1.0, 0.0, |j, d, c, s| f(j, d * c, d * s));
     }
 }
 
-/// How many `points` there are and their centroid (m); `(0, 0, 0)` for none.
-fn centroid(points: impl Iterator<Item = (f32, f32)>) -> (u32, f32, f32) {
+/// How many valid points `piece` has and their centroid (m); `(0, 0, 0)`
+/// for none.
+fn centroid<B: BearingTable>(scan: &RawScan<'_, B>, piece: Segment) -> (u32, f32, f32) {
     let (mut m, mut sx, mut sy) = (0u32, 0.0f32, 0.0f32);
-    for (x, y) in points {
+    scan.each_point(piece, |_, x, y| {
         m += 1;
         sx += x;
         sy += y;
-    }
+    });
     if m == 0 {
         return (0, 0.0, 0.0);
     }
@@ -197,18 +194,17 @@ fn centroid(points: impl Iterator<Item = (f32, f32)>) -> (u32, f32, f32) {
 /// `sigma` (m): the algebraic (Kåsa) fit of `x² + y² + D·x + E·y + F = 0`
 /// on centred, scaled points, then `Σ(‖p − c‖ − R)²/σ²` against
 /// [`chi2_quantile_999`] of `m − 3`. Fewer than 5 points: no.
-pub fn circle_explains(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> bool {
-    let points = || scan.valid_points(piece);
+pub fn circle_explains<B: BearingTable>(scan: &RawScan<'_, B>, piece: Segment, sigma: f32) -> bool {
     // Centroid and RMS spread: the fit runs on O(1) coordinates.
-    let (m, cx, cy) = centroid(points());
+    let (m, cx, cy) = centroid(scan, piece);
     if m < 5 {
         return false;
     }
     let mf = m as f32;
     let mut spread = 0.0f32;
-    for (x, y) in points() {
+    scan.each_point(piece, |_, x, y| {
         spread += (x - cx) * (x - cx) + (y - cy) * (y - cy);
-    }
+    });
     let scale = libm::sqrtf(spread / mf);
     if !(scale > 0.0) {
         return false;
@@ -216,7 +212,7 @@ pub fn circle_explains(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> bool {
     // Normal equations: rows (u, v, 1), right-hand side −(u² + v²).
     let (mut suu, mut suv, mut svv, mut su, mut sv) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
     let (mut bu, mut bv, mut b1) = (0.0f32, 0.0f32, 0.0f32);
-    for (x, y) in points() {
+    scan.each_point(piece, |_, x, y| {
         let (u, v) = ((x - cx) / scale, (y - cy) / scale);
         let rhs = -(u * u + v * v);
         suu += u * u;
@@ -227,7 +223,7 @@ pub fn circle_explains(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> bool {
         bu += u * rhs;
         bv += v * rhs;
         b1 += rhs;
-    }
+    });
     // Cramer's rule on the symmetric [[suu, suv, su], [suv, svv, sv], [su, sv, m]].
     let det3 = |a: [[f32; 3]; 3]| {
         a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
@@ -255,46 +251,52 @@ pub fn circle_explains(scan: &RawScan<'_>, piece: Segment, sigma: f32) -> bool {
     }
     let radius = libm::sqrtf(rr);
     let mut sum = 0.0f32;
-    for (x, y) in points() {
+    scan.each_point(piece, |_, x, y| {
         let (u, v) = ((x - cx) / scale, (y - cy) / scale);
         // `sqrtf`, not `hypotf`: libm's `hypotf` works in f64, which the
         // M4F does in software; the coordinates here are O(1), no overflow.
         let (du, dv) = (u - ou, v - ov);
         let e = (libm::sqrtf(du * du + dv * dv) - radius) * scale / sigma;
         sum += e * e;
-    }
+    });
     sum < chi2_quantile_999(mf - 3.0)
 }
 
 /// The valid beam of `piece` farthest from the chord of its first and last
 /// valid points, strictly between them; `None` if there is none.
-fn farthest_from_chord(scan: &RawScan<'_>, piece: Segment) -> Option<u16> {
-    let span = usize::from(piece.first)..=usize::from(piece.last);
-    let a = span.clone().find(|&j| scan.point(j).is_some())?;
-    let b = span.rev().find(|&j| scan.point(j).is_some())?;
-    let (pa, pb) = (scan.point(a)?, scan.point(b)?);
-    let (ex, ey) = (pb.0 - pa.0, pb.1 - pa.1);
+fn farthest_from_chord<B: BearingTable>(scan: &RawScan<'_, B>, piece: Segment) -> Option<u16> {
+    // (beam, x, y) of the first and the last valid point.
+    type Point = (usize, f32, f32);
+    let mut ends: Option<(Point, Point)> = None;
+    scan.each_point(piece, |j, x, y| {
+        ends = Some(match ends {
+            None => ((j, x, y), (j, x, y)),
+            Some((first, _)) => (first, (j, x, y)),
+        });
+    });
+    let ((a, ax, ay), (b, bx, by)) = ends?;
+    let (ex, ey) = (bx - ax, by - ay);
     let len = libm::sqrtf(ex * ex + ey * ey);
     if !(len > 0.0) {
         return None;
     }
     let mut best: Option<(f32, usize)> = None;
-    for j in a + 1..b {
-        if let Some(p) = scan.point(j) {
-            let dist = libm::fabsf(ex * (p.1 - pa.1) - ey * (p.0 - pa.0)) / len;
+    scan.each_point(piece, |j, x, y| {
+        if j > a && j < b {
+            let dist = libm::fabsf(ex * (y - ay) - ey * (x - ax)) / len;
             if best.is_none_or(|(d, _)| dist > d) {
                 best = Some((dist, j));
             }
         }
-    }
+    });
     best.and_then(|(_, j)| u16::try_from(j).ok())
 }
 
 /// Replace `segments` by their pieces (see the module docs), counting in
 /// `stats`. `ranges` are the raw ranges (m) the lines are fitted to.
 #[inline(never)] // its buffers live on the stack only while it runs
-pub fn split_before_reject(
-    scan: &RawScan<'_>,
+pub fn split_before_reject<B: BearingTable>(
+    scan: &RawScan<'_, B>,
     params: &Params,
     segments: &mut Vec<Segment, MAX_SEGMENTS>,
     stats: &mut Stats,
