@@ -12,6 +12,10 @@
 //! With `u = S⁻¹·v` (solved once, it serves `D = vᵀ·u` too), the update is
 //! evaluated as `x⁺ = z − sigma²·u`, which equals `x̂ + K·v`:
 //! `K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·u` and `x̂ + v = z`.
+//!
+//! `S` is solved scaled by `1/sigma²`: `M = S/sigma² = F·Fᵀ + (1 + q/sigma²)·I`
+//! and `w = M⁻¹·v = sigma²·u`, so `x⁺ = z − w` and `D = vᵀ·w / sigma²`. The
+//! same quantities without the nine products by `sigma²` a window.
 
 use crate::maths::{Sym3, Vec3};
 use crate::pipeline::line_model::{predict_unchecked, Prediction};
@@ -39,18 +43,22 @@ pub struct WindowFilter {
     /// `(t·γ)²`, `t` the tangent of the largest incidence the grazing
     /// term follows (`params::GRAZING_MAX_INCIDENCE_DEG`).
     pub grazing_cap: f32,
+    /// `1 + q/sigma²`: the diagonal added to `F·Fᵀ` in `S/sigma²`.
+    diagonal: f32,
 }
 
 impl WindowFilter {
     /// The filter for beam step `gamma` (radians), range noise `sigma` (m)
     /// and process noise `q` (m²).
     pub fn new(gamma: f32, sigma: f32, q: f32) -> Self {
+        let r = sigma * sigma;
         WindowFilter {
             k: 2.0 * libm::cosf(gamma),
-            r: sigma * sigma,
+            r,
             q,
             grazing: 0.0,
             grazing_cap: 0.0,
+            diagonal: 1.0 + q / r,
         }
     }
 
@@ -117,6 +125,21 @@ impl WindowFilter {
         }
     }
 
+    /// `M = S/sigma² = F·Fᵀ + (1 + q/sigma²)·I` (the products of
+    /// [`WindowFilter::predicted_covariance`] without the factor `sigma²`).
+    #[inline]
+    pub fn scaled_innovation_covariance(&self, p: &Prediction) -> Sym3 {
+        let c = self.diagonal;
+        Sym3 {
+            s11: (p.f12 * p.f12 + p.f13 * p.f13) + c,
+            s12: p.f13 * p.f23,
+            s13: p.f12 * p.f32_,
+            s22: (p.f21 * p.f21 + p.f23 * p.f23) + c,
+            s23: p.f21 * p.f31,
+            s33: (p.f31 * p.f31 + p.f32_ * p.f32_) + c,
+        }
+    }
+
     /// Run the filter on the window `z = (a, b, c)` of valid ranges (metres).
     ///
     /// `None` means the window is invalid (§2: a prediction behind the
@@ -136,14 +159,13 @@ impl WindowFilter {
     #[inline(always)]
     pub fn update_unchecked(&self, z: Vec3) -> (WindowEstimate, bool) {
         let (pred, in_front) = predict_unchecked(z, self.k);
-        let p_hat = self.predicted_covariance(&pred);
-        let s = p_hat.add_diagonal(self.r);
+        let m = self.scaled_innovation_covariance(&pred); // S/sigma²
         let v = z - pred.f;
-        let (u, solvable) = s.solve_spd_unchecked(v); // S⁻¹·v
-        let d = v.dot(u);
-        // x⁺ = x̂ + K·v with K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·u,
-        // so x⁺ = z − sigma²·u: the same quantity without the 3×3 product.
-        let posterior = z - Vec3([self.r * u.0[0], self.r * u.0[1], self.r * u.0[2]]);
+        let (w, solvable) = m.solve_spd_unchecked(v); // sigma²·S⁻¹·v
+        let d = v.dot(w) / self.r;
+        // x⁺ = x̂ + K·v with K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·S⁻¹·v,
+        // so x⁺ = z − w: the same quantity without the 3×3 product.
+        let posterior = z - w;
         let [x0, x1, x2] = posterior.0;
         // Overflow or NaN anywhere upstream propagates into the sum (a sum
         // that overflows marks the window invalid too: D or a range near
