@@ -107,8 +107,16 @@ impl Sym3 {
     /// returns whether `det > 0` and finite.
     #[inline(always)]
     pub fn solve_spd_unchecked(&self, v: Vec3) -> (Vec3, bool) {
+        let (u, det) = self.solve_adjugate(v);
+        (u, (det > 0.0) & (det < f32::INFINITY))
+    }
+
+    /// `u = adj(S)·v / det(S)` and `det(S)`, with no check at all: the
+    /// caller decides from `det` (for a `det` of `+0` or `+inf`, `u` is
+    /// non-finite or 0).
+    #[inline(always)]
+    pub fn solve_adjugate(&self, v: Vec3) -> (Vec3, f32) {
         let ([c11, c12, c13, c22, c23, c33], det) = self.cofactors();
-        let ok = (det > 0.0) & (det < f32::INFINITY);
         let inv_det = 1.0 / det;
         let [x, y, z] = v.0;
         (
@@ -117,7 +125,7 @@ impl Sym3 {
                 (c12 * x + c22 * y + c23 * z) * inv_det,
                 (c13 * x + c23 * y + c33 * z) * inv_det,
             ]),
-            ok,
+            det,
         )
     }
 

@@ -18,7 +18,7 @@
 //! same quantities without the nine products by `sigma²` a window.
 
 use crate::maths::{Sym3, Vec3};
-use crate::pipeline::line_model::{predict_unchecked, Prediction};
+use crate::pipeline::line_model::{predict_unchecked, predict_with_denominators, Prediction};
 
 /// Result of the filter on one valid window.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -158,19 +158,26 @@ impl WindowFilter {
     /// can be computed in lock-step; [`WindowFilter::update`] wraps it.
     #[inline(always)]
     pub fn update_unchecked(&self, z: Vec3) -> (WindowEstimate, bool) {
-        let (pred, in_front) = predict_unchecked(z, self.k);
+        let (pred, [den1, den3]) = predict_with_denominators(z, self.k);
         let m = self.scaled_innovation_covariance(&pred); // S/sigma²
         let v = z - pred.f;
-        let (w, solvable) = m.solve_spd_unchecked(v); // sigma²·S⁻¹·v
+        let (w, det) = m.solve_adjugate(v); // sigma²·S⁻¹·v and det(S/sigma²)
         let d = v.dot(w) / self.r;
         // x⁺ = x̂ + K·v with K·v = P̂·S⁻¹·v = (S − R)·S⁻¹·v = v − sigma²·S⁻¹·v,
         // so x⁺ = z − w: the same quantity without the 3×3 product.
         let posterior = z - w;
         let [x0, x1, x2] = posterior.0;
-        // Overflow or NaN anywhere upstream propagates into the sum (a sum
-        // that overflows marks the window invalid too: D or a range near
-        // f32::MAX is no estimate).
-        let finite = (d + x0 + x1 + x2).is_finite();
+        // Valid iff `k·c − b > 0`, `k·a − b > 0` (§2), `det > 0` and all
+        // finite. The three signs are tested at once on their sign bits
+        // (set for a negative value, −0 or a negative NaN); a `+0` left
+        // through makes an infinite or NaN term (1/0 in the prediction or
+        // the solve, with ranges > 0), and so does a NaN, so the finite
+        // test below rejects it. Overflow or NaN anywhere upstream
+        // propagates into the sum, `det` included (a sum that overflows
+        // marks the window invalid too: D or a range near f32::MAX is no
+        // estimate).
+        let positive = (den1.to_bits() | den3.to_bits() | det.to_bits()) >> 31 == 0;
+        let finite = (d + x0 + x1 + x2 + det).is_finite();
         // D is a quadratic form with S⁻¹ positive definite: clamp the
         // rounding of a near-zero result to 0.
         let mahalanobis = if d < 0.0 { 0.0 } else { d };
@@ -179,7 +186,7 @@ impl WindowFilter {
                 mahalanobis,
                 posterior,
             },
-            in_front & solvable & finite,
+            positive & finite,
         )
     }
 
@@ -224,7 +231,7 @@ impl WindowFilter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::line_model::predict;
+    use crate::pipeline::line_model::{predict, predict_unchecked};
 
     const GAMMA: f32 = 0.5 * core::f32::consts::PI / 180.0;
 
@@ -239,6 +246,65 @@ mod tests {
         for i in 0..3 {
             assert!((e.posterior.0[i] - z.0[i]).abs() < 1e-5);
         }
+    }
+
+    /// The validity of [`WindowFilter::update_unchecked`] is the explicit
+    /// one of §2–3: both denominators > 0, `det S > 0` and finite, `D` and
+    /// `x⁺` finite, on windows of valid (finite, positive) ranges,
+    /// including zero denominators and extreme ranges.
+    #[test]
+    fn validity_by_sign_bits_is_the_explicit_test() {
+        let filter = WindowFilter::new(GAMMA, 0.005, 0.0);
+        let k = filter.k;
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let scales = [
+            1e-30f32,
+            1e-6,
+            1e-3,
+            0.5,
+            2.0,
+            80.0,
+            1e6,
+            1e19,
+            1e30,
+            f32::MAX,
+        ];
+        let (mut checked, mut invalid) = (0, 0);
+        for _ in 0..200_000 {
+            let mut pick = || {
+                let s = scales[(next() % scales.len() as u64) as usize];
+                s * (0.5 + (next() % 1000) as f32 / 1000.0)
+            };
+            let (a, mut b, c) = (pick(), pick(), pick());
+            match next() % 4 {
+                0 => b = k * c,                                       // k·c − b = 0 exactly
+                1 => b = k * a,                                       // k·a − b = 0 exactly
+                2 => b = c * (0.999 + (next() % 3000) as f32 * 1e-6), // near-degenerate
+                _ => {}
+            }
+            if !(b > 0.0 && b.is_finite()) {
+                continue;
+            }
+            let z = Vec3([a, b, c]);
+            let (p, in_front) = predict_unchecked(z, k);
+            let m = filter.scaled_innovation_covariance(&p);
+            let v = z - p.f;
+            let (_, solvable) = m.solve_spd_unchecked(v);
+            let (est, valid) = filter.update_unchecked(z);
+            let (w, _) = m.solve_adjugate(v);
+            let finite = (v.dot(w) / filter.r + (z - w).0.iter().sum::<f32>()).is_finite();
+            assert_eq!(valid, in_front & solvable & finite, "{z:?} {est:?}");
+            checked += 1;
+            invalid += usize::from(!valid);
+        }
+        // Both outcomes are exercised.
+        assert!(checked > 100_000 && invalid > 10_000 && checked - invalid > 10_000);
     }
 
     #[test]

@@ -52,10 +52,17 @@ pub fn predict(z: Vec3, k: f32) -> Option<Prediction> {
 /// both denominators `k·c − b` and `k·a − b` are positive.
 #[inline(always)]
 pub fn predict_unchecked(z: Vec3, k: f32) -> (Prediction, bool) {
+    let (p, [den1, den3]) = predict_with_denominators(z, k);
+    (p, (den1 > 0.0) & (den3 > 0.0))
+}
+
+/// [`predict`] with no check: the prediction and the denominators
+/// `[k·c − b, k·a − b]`, for the caller to judge.
+#[inline(always)]
+pub fn predict_with_denominators(z: Vec3, k: f32) -> (Prediction, [f32; 2]) {
     let [a, b, c] = z.0;
     let den1 = k * c - b; // eq. 6 denominator
     let den3 = k * a - b; // eq. 8 denominator
-    let in_front = (den1 > 0.0) & (den3 > 0.0);
     let den2 = a + c; // corrected eq. 7 denominator
                       // One division per denominator; the Jacobian reuses the ratios:
                       // f1 = b·(c/den1), ∂f1/∂b = k·(c/den1)², ∂f1/∂c = −(b/den1)², etc.
@@ -78,7 +85,7 @@ pub fn predict_unchecked(z: Vec3, k: f32) -> (Prediction, bool) {
             f31: -(b3 * b3),
             f32_: k * a3 * a3,
         },
-        in_front,
+        [den1, den3],
     )
 }
 
