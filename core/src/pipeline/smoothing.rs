@@ -171,9 +171,22 @@ pub fn smoothing_pass(
             break; // not reached: `windows` fits all three slices
         };
         // The filter on every window of the block (§2–3).
-        filter_block(filter, points, ok, &mut block, d);
+        filter_block(filter, points, &mut block, d);
         // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
-        third_weights(d, &mut block.third_weight[2..]);
+        // A window whose beams are not all usable gets D = +inf and weight
+        // 0 here (its estimates, finite or 0, then add 0 to every point).
+        let mut ok = ok; // bit 0: the next window
+        for (w, d) in block.third_weight[2..].iter_mut().zip(d.iter_mut()) {
+            if ok & 1 == 0 {
+                *d = f32::INFINITY;
+            }
+            ok >>= 1;
+            *w = if *d < f32::INFINITY {
+                weight(*d) / 3.0
+            } else {
+                0.0
+            };
+        }
         // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
         let Some(points) = ranges.get_mut(start..start + m) else {
             break; // not reached, as above
@@ -233,27 +246,25 @@ fn blend(block: &Block, d: f32, slot: usize) -> f32 {
 }
 
 /// The window filter on `m` consecutive windows, `ranges` holding their
-/// `m + 2` points, `ok` their usable flags (bit `t` for window `t`).
-/// Writes `D` (or `+inf`) and the estimates (or 0) of window `t` into
-/// `d[t]` and slot `t + 2` of the block.
+/// `m + 2` points. Writes `D` (or `+inf`) and the estimates (or 0) of
+/// window `t` into `d[t]` and slot `t + 2` of the block; a window the
+/// filter finds valid has finite estimates (the caller masks windows with
+/// unusable beams).
 ///
 /// Branch-free over the windows: every window is computed, invalid ones are
 /// masked afterwards. The arithmetic per window is exactly that of
 /// [`WindowFilter::update`].
 #[inline]
-fn filter_block(filter: &WindowFilter, ranges: &[f32], ok: u32, block: &mut Block, d: &mut [f32]) {
+fn filter_block(filter: &WindowFilter, ranges: &[f32], block: &mut Block, d: &mut [f32]) {
     let m = d.len().min(ranges.len().saturating_sub(2)).min(BLOCK);
     // Exactly the block's points: `t + 2 < m + 2` below needs no check.
     let Some(ranges) = ranges.get(..m + 2) else {
         return;
     };
     let post = &mut block.posterior;
-    let mut ok = ok; // bit 0: window t
     for t in 0..m {
         let z = Vec3([ranges[t], ranges[t + 1], ranges[t + 2]]);
-        let (est, valid) = filter.update_unchecked(z);
-        let keep = valid & (ok & 1 != 0);
-        ok >>= 1;
+        let (est, keep) = filter.update_unchecked(z);
         d[t] = if keep { est.mahalanobis } else { f32::INFINITY };
         post[0][t + 2] = if keep { est.posterior.0[0] } else { 0.0 };
         post[1][t + 2] = if keep { est.posterior.0[1] } else { 0.0 };
