@@ -419,22 +419,30 @@ fn filter_windows<const K: usize, const GRAZING: bool>(
     d: &mut [f32],
     m: usize,
 ) {
-    let (Some(ranges), Some(d)) = (ranges.get(..m + 2 * K), d.get_mut(..m)) else {
+    let (Some(mids), Some(lasts), Some(d)) = (ranges.get(K..), ranges.get(2 * K..), d.get_mut(..m))
+    else {
         return;
     };
-    let post = &mut block.posterior;
-    for t in 0..m.min(BLOCK) {
-        let z = Vec3([ranges[t], ranges[t + K], ranges[t + 2 * K]]);
+    // Shifted iterators instead of indices: the loop has no bounds check
+    // (the firmware's panic-proof build links only without one).
+    let [post0, post1, post2] = &mut block.posterior;
+    let posts = post0[CARRY..]
+        .iter_mut()
+        .zip(post1[CARRY..].iter_mut())
+        .zip(post2[CARRY..].iter_mut());
+    let windows = ranges.iter().zip(mids).zip(lasts).zip(window_ok);
+    for ((((&a, &b), &c), &ok), (dt, ((p0, p1), p2))) in windows.zip(d.iter_mut().zip(posts)) {
+        let z = Vec3([a, b, c]);
         let (est, valid) = if GRAZING {
             filter.update_grazing_unchecked(z)
         } else {
             filter.update_unchecked(z)
         };
-        let keep = valid & window_ok[t];
-        d[t] = if keep { est.mahalanobis } else { f32::INFINITY };
-        post[0][t + CARRY] = if keep { est.posterior.0[0] } else { 0.0 };
-        post[1][t + CARRY] = if keep { est.posterior.0[1] } else { 0.0 };
-        post[2][t + CARRY] = if keep { est.posterior.0[2] } else { 0.0 };
+        let keep = valid & ok;
+        *dt = if keep { est.mahalanobis } else { f32::INFINITY };
+        *p0 = if keep { est.posterior.0[0] } else { 0.0 };
+        *p1 = if keep { est.posterior.0[1] } else { 0.0 };
+        *p2 = if keep { est.posterior.0[2] } else { 0.0 };
     }
 }
 
