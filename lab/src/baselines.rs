@@ -28,6 +28,7 @@
 use heapless::Vec as HVec;
 use lms_core::frame::MAX_BEAMS;
 use lms_core::maths::Vec3;
+use lms_core::pipeline::bearings::TwoLevelBearings;
 use lms_core::pipeline::corners::intersect;
 use lms_core::pipeline::ekf::WindowFilter;
 use lms_core::pipeline::line_fit::{fit_line, Bearings};
@@ -39,23 +40,32 @@ use lms_core::Segment;
 use lms_core::{Extractor, Frame, Params};
 use lms_core::{MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 
-/// The bearing tables of a frame, computed as the extractor does (`libm`).
+/// The bearing tables of a frame, as the extractor computes them (its
+/// two-level table, filled with `libm`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tables {
     /// `cos φ_j`.
     pub cos: Vec<f32>,
     /// `sin φ_j`.
     pub sin: Vec<f32>,
+    /// The extractor's two-level table of the same bearings.
+    pub core: TwoLevelBearings,
 }
 
 impl Tables {
-    /// The tables of `frame`'s geometry.
+    /// The tables of `frame`'s geometry: the core's bearings, from its
+    /// two-level table (the extractor's own values, bit for bit).
     pub fn for_frame(frame: &Frame) -> Self {
-        let g = frame.geometry();
-        Tables {
-            cos: (0..frame.len()).map(|j| libm::cosf(g.bearing(j))).collect(),
-            sin: (0..frame.len()).map(|j| libm::sinf(g.bearing(j))).collect(),
-        }
+        let core = TwoLevelBearings::of(frame.geometry());
+        let (cos, sin) = (0..frame.len()).map(|j| core.cos_sin(j)).unzip();
+        Tables { cos, sin, core }
+    }
+
+    /// The extractor's own table: fits and merges through it give the
+    /// extractor's bits (its angle sums run in another order than the full
+    /// tables').
+    pub fn core(&self) -> &TwoLevelBearings {
+        &self.core
     }
 
     /// As the core's [`Bearings`].
@@ -100,7 +110,7 @@ pub fn features_from_segments(
     segments: &[Segment],
     params: &Params,
 ) -> (Vec<Line>, Vec<Corner>) {
-    let bearings = tables.bearings();
+    let bearings = tables.core();
     let beams = frame.beams();
     let mut lines: Vec<Line> = Vec::new();
     for k in 0..segments.len() {

@@ -180,7 +180,6 @@ impl Extractor {
             match stride {
                 _ if spec => smoothing_pass(&filter, ok, r, d),
                 2 => smoothing_pass_strided::<2>(&filter, ok, r, d),
-                3 => smoothing_pass_strided::<3>(&filter, ok, r, d),
                 4 => smoothing_pass_strided::<4>(&filter, ok, r, d),
                 _ => smoothing_pass_strided::<1>(&filter, ok, r, d),
             }
@@ -216,17 +215,20 @@ impl Extractor {
 }
 
 /// The window stride (§10 proposal): the number of interleaved mirror
-/// turns (`1°/step`, 1 … [`MAX_STRIDE`]) with `Params::same_turn_windows`,
-/// else 1.
+/// turns (`1°/step`: 2 at 0.5°, 4 at 0.25°, the LMS's interleaved modes)
+/// with `Params::same_turn_windows`, else 1. Other steps have no
+/// interleave to follow (and so no strided pass to carry in flash).
 fn window_stride(params: &Params, geometry: Geometry) -> usize {
     if !params.same_turn_windows {
         return 1;
     }
     let turns = (core::f32::consts::PI / 180.0) / geometry.step + 0.5;
-    if turns >= 1.0 && turns < (MAX_STRIDE + 1) as f32 {
-        turns as usize
-    } else {
-        1
+    if !(1.0..(MAX_STRIDE + 1) as f32).contains(&turns) {
+        return 1;
+    }
+    match turns as usize {
+        k @ (2 | 4) => k,
+        _ => 1,
     }
 }
 

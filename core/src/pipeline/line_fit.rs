@@ -83,9 +83,12 @@ pub struct RawScan<'a, B: BearingTable = Bearings<'a>> {
 }
 
 /// Fit a line to the valid beams of `first..=last` of `ranges` (m), with
-/// range noise `sigma` (m). Beams outside the slices are ignored.
-pub fn fit_line(
-    bearings: Bearings<'_>,
+/// range noise `sigma` (m). Beams outside the slices are ignored. With the
+/// extractor's own table (`&TwoLevelBearings`) the result is the
+/// extractor's bit for bit; with full tables (`Bearings`) it may differ in
+/// the last bits (another order of the angle sums).
+pub fn fit_line<B: BearingTable>(
+    bearings: B,
     ranges: &[f32],
     beams: &[Beam],
     first: u16,

@@ -400,18 +400,15 @@ fn filter_block_strided<const K: usize>(
     for (t, w) in window_ok.iter_mut().enumerate() {
         *w = (ok >> t) & 1 != 0;
     }
-    if filter.grazing_on() {
-        filter_windows::<K, true>(filter, ranges, &window_ok, block, d, m);
-    } else {
-        filter_windows::<K, false>(filter, ranges, &window_ok, block, d, m);
-    }
+    filter_windows::<K>(filter, ranges, &window_ok, block, d, m);
 }
 
-/// The loop of [`filter_block_strided`]; `GRAZING` picks the window's `R`
-/// (ALGORITHM.md §3, or with the grazing term of §10's proposal), so the
-/// default path is exactly the filter of §3.
+/// The loop of [`filter_block_strided`]; the filter's grazing switch picks
+/// the window's `R` (ALGORITHM.md §3, or with the grazing term of §10's
+/// proposal), a branch per window (this pass is off the default path, and
+/// one loop instead of two keeps its flash small).
 #[inline(always)]
-fn filter_windows<const K: usize, const GRAZING: bool>(
+fn filter_windows<const K: usize>(
     filter: &WindowFilter,
     ranges: &[f32],
     window_ok: &[bool; BLOCK],
@@ -430,10 +427,11 @@ fn filter_windows<const K: usize, const GRAZING: bool>(
         .iter_mut()
         .zip(post1[CARRY..].iter_mut())
         .zip(post2[CARRY..].iter_mut());
+    let grazing = filter.grazing_on();
     let windows = ranges.iter().zip(mids).zip(lasts).zip(window_ok);
     for ((((&a, &b), &c), &ok), (dt, ((p0, p1), p2))) in windows.zip(d.iter_mut().zip(posts)) {
         let z = Vec3([a, b, c]);
-        let (est, valid) = if GRAZING {
+        let (est, valid) = if grazing {
             filter.update_grazing_unchecked(z)
         } else {
             filter.update_unchecked(z)
