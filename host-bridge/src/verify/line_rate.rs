@@ -31,6 +31,15 @@ pub(super) const TOLERANCE_PERCENT: u32 = 3;
 /// (it switches rates while searching for the LMS).
 const REREAD: Duration = Duration::from_millis(20);
 
+/// Which end of the sensor line receives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Toward {
+    /// The simulated LMS (bytes from the firmware).
+    Sensor,
+    /// The firmware (bytes from the LMS).
+    Firmware,
+}
+
 /// The model and what it garbled.
 pub(super) struct LineRate {
     /// The firmware's rate (bit/s) as last read, `None` while unset.
@@ -66,36 +75,28 @@ impl LineRate {
         Ok(self.firmware)
     }
 
-    /// Bytes from the firmware on their way to an LMS at `lms_rate`.
-    pub(super) fn carry_to_sensor(
+    /// Bytes between the firmware and an LMS at `lms_rate`, in the
+    /// direction `to`: what the receiver gets, appended to `out`.
+    pub(super) fn carry_line(
         &mut self,
+        to: Toward,
         dut: &mut Dut,
         lms_rate: u32,
         bytes: &[u8],
         out: &mut Vec<u8>,
     ) -> Result<()> {
-        let firmware = self.firmware_rate(dut, true)?;
+        // The firmware sends at the rate it has now: read it afresh then.
+        let firmware = self.firmware_rate(dut, to == Toward::Sensor)?;
         let before = out.len();
-        self.carry(firmware, lms_rate, bytes, out, |fw, lms| (fw, lms));
-        if out[before..] != *bytes {
-            self.garbled_to_sensor += bytes.len() as u64;
+        match to {
+            Toward::Sensor => self.carry(firmware, lms_rate, bytes, out, |fw, lms| (fw, lms)),
+            Toward::Firmware => self.carry(firmware, lms_rate, bytes, out, |fw, lms| (lms, fw)),
         }
-        Ok(())
-    }
-
-    /// Bytes from an LMS at `lms_rate` on their way to the firmware.
-    pub(super) fn carry_to_firmware(
-        &mut self,
-        dut: &mut Dut,
-        lms_rate: u32,
-        bytes: &[u8],
-        out: &mut Vec<u8>,
-    ) -> Result<()> {
-        let firmware = self.firmware_rate(dut, false)?;
-        let before = out.len();
-        self.carry(firmware, lms_rate, bytes, out, |fw, lms| (lms, fw));
         if out[before..] != *bytes {
-            self.garbled_to_firmware += bytes.len() as u64;
+            match to {
+                Toward::Sensor => self.garbled_to_sensor += bytes.len() as u64,
+                Toward::Firmware => self.garbled_to_firmware += bytes.len() as u64,
+            }
         }
         Ok(())
     }

@@ -18,7 +18,7 @@ use lms_core::Params;
 
 use super::checker::Checker;
 use super::dut::{Dut, Lines};
-use super::line_rate::LineRate;
+use super::line_rate::{LineRate, Toward};
 use super::source::{PlaySource, Tag};
 use super::VerifyArgs;
 use crate::serial::Link;
@@ -274,9 +274,13 @@ impl Session {
             let mut heard = std::mem::take(&mut self.rate_scratch);
             heard.clear();
             let lms_rate = self.emu.baud().bits_per_second();
-            let carried =
-                self.line_rate
-                    .carry_to_sensor(&mut self.dut, lms_rate, &buf[..n], &mut heard);
+            let carried = self.line_rate.carry_line(
+                Toward::Sensor,
+                &mut self.dut,
+                lms_rate,
+                &buf[..n],
+                &mut heard,
+            );
             self.emu.receive(self.clock.now_us(), &heard);
             self.rate_scratch = heard;
             carried?;
@@ -355,8 +359,13 @@ impl Session {
             if n > 0 {
                 let mut heard = std::mem::take(&mut self.rate_scratch);
                 heard.clear();
-                self.line_rate
-                    .carry_to_firmware(&mut self.dut, lms_rate, &out[..n], &mut heard)?;
+                self.line_rate.carry_line(
+                    Toward::Firmware,
+                    &mut self.dut,
+                    lms_rate,
+                    &out[..n],
+                    &mut heard,
+                )?;
                 self.sensor
                     .send(&heard)
                     .with_context(|| format!("sensor line {}", self.sensor.name()))?;
