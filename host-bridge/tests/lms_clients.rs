@@ -333,6 +333,22 @@ struct Client {
 }
 
 impl Client {
+    /// A client of `behaviour` at `baud` on `link` (`qemu`: the firmware
+    /// under QEMU is the co-processor).
+    fn new(behaviour: Behaviour, baud: u32, link: &Path, qemu: bool) -> Client {
+        Client {
+            behaviour,
+            port: Port::open(link),
+            baud,
+            extractor: Extractor::new(),
+            assembler: FeatureAssembler::new(),
+            tally: Tally::default(),
+            trail: Vec::new(),
+            began: Instant::now(),
+            qemu,
+        }
+    }
+
     /// The line time of `bytes` at the client's rate, or the chain's.
     fn line(&self, bytes: usize) -> Duration {
         let mut byte_us = 10_000_000 / u64::from(self.baud);
@@ -744,17 +760,7 @@ fn value_modes(c: &mut Client, v: Variant, u: Unit, expected: &[Vec<u16>]) -> Re
 /// One client's whole run on `link` (`qemu`: the firmware under QEMU is
 /// the co-processor).
 fn session(behaviour: Behaviour, baud: u32, link: &Path, qemu: bool) -> Result<Tally, String> {
-    let mut c = Client {
-        behaviour,
-        port: Port::open(link),
-        baud,
-        extractor: Extractor::new(),
-        assembler: FeatureAssembler::new(),
-        tally: Tally::default(),
-        trail: Vec::new(),
-        began: Instant::now(),
-        qemu,
-    };
+    let mut c = Client::new(behaviour, baud, link, qemu);
     // The line settles (a client opening the port sees nothing it did not ask for).
     c.port.pull(Duration::from_millis(50));
     c.port.flush_input();
@@ -977,17 +983,7 @@ fn simulate_powers_up_with_its_stored_settings() {
         .expect("simulate");
     let _sim = Proc(sim);
     await_path(&link, "simulate");
-    let mut c = Client {
-        behaviour: Behaviour::AnyReply,
-        port: Port::open(&link),
-        baud: 9600,
-        extractor: Extractor::new(),
-        assembler: FeatureAssembler::new(),
-        tally: Tally::default(),
-        trail: Vec::new(),
-        began: Instant::now(),
-        qemu: false,
-    };
+    let mut c = Client::new(Behaviour::AnyReply, 9600, &link, false);
     c.port.pull(Duration::from_millis(100));
     c.port.flush_input();
     // A client that sets nothing: B1, F4 and the scans tell the stored
@@ -1044,17 +1040,7 @@ fn requests_the_face_does_not_interpret_are_simulates_to_answer() {
         .expect("coprocessor");
     let _cop = Proc(cop);
     await_path(&client, "coprocessor");
-    let mut c = Client {
-        behaviour: Behaviour::AnyReply,
-        port: Port::open(&client),
-        baud: 9600,
-        extractor: Extractor::new(),
-        assembler: FeatureAssembler::new(),
-        tally: Tally::default(),
-        trail: Vec::new(),
-        began: Instant::now(),
-        qemu: false,
-    };
+    let mut c = Client::new(Behaviour::AnyReply, 9600, &client, false);
     connect(&mut c).unwrap();
     let reached = |what: &str| std::fs::read_to_string(&sim_log).unwrap().contains(what);
     // The face answers `92` itself until the sensor streams; then `36 01`
