@@ -100,15 +100,7 @@ impl WindowFilter {
     /// `(FFᵀ)22 = f21² + f23²`, `(FFᵀ)23 = f21·f31`, `(FFᵀ)33 = f31² + f32²`.
     #[inline]
     pub fn predicted_covariance(&self, p: &Prediction) -> Sym3 {
-        let r = self.r;
-        Sym3 {
-            s11: r * (p.f12 * p.f12 + p.f13 * p.f13) + self.q,
-            s12: r * (p.f13 * p.f23),
-            s13: r * (p.f12 * p.f32_),
-            s22: r * (p.f21 * p.f21 + p.f23 * p.f23) + self.q,
-            s23: r * (p.f21 * p.f31),
-            s33: r * (p.f31 * p.f31 + p.f32_ * p.f32_) + self.q,
-        }
+        self.predicted_covariance_with(p, self.r)
     }
 
     /// [`WindowFilter::predicted_covariance`] with the window's own

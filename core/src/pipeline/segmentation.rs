@@ -32,41 +32,8 @@ pub fn segment<const S: usize, const E: usize>(
     segments: &mut Vec<Segment, S>,
     edges: &mut Vec<u16, E>,
 ) -> SegmentationCounts {
-    segments.clear();
-    edges.clear();
-    let mut counts = SegmentationCounts::default();
-    let mut run_start: Option<usize> = None;
-    let windows = mahalanobis.len().min(u16::MAX as usize - 2);
-    for i in 0..=windows {
-        // `i == windows` closes the last run.
-        let breaks = match mahalanobis.get(i) {
-            Some(&d) => {
-                let breaks = !(d < tau); // NaN breaks too
-                if breaks && d.is_finite() && edges.push((i + 1) as u16).is_err() {
-                    counts.edge_overflow = counts.edge_overflow.saturating_add(1);
-                }
-                breaks
-            }
-            None => true,
-        };
-        match (breaks, run_start) {
-            (false, None) => run_start = Some(i),
-            (true, Some(start)) => {
-                run_start = None;
-                let seg = Segment {
-                    first: start as u16,
-                    last: (i - 1 + 2) as u16,
-                };
-                if seg.points() < min_points as usize {
-                    counts.short_segments = counts.short_segments.saturating_add(1);
-                } else if segments.push(seg).is_err() {
-                    counts.segment_overflow = counts.segment_overflow.saturating_add(1);
-                }
-            }
-            _ => {}
-        }
-    }
-    counts
+    // Stride 1 is §6 exactly: first point `i`, last `k + 2`, edge `i + 1`.
+    segment_strided(mahalanobis, 1, tau, min_points, segments, edges)
 }
 
 /// [`segment`] for windows of stride `stride` (§10 proposal): window `i`
