@@ -138,6 +138,24 @@ impl Bench {
         self.ask(command, &data, us)
     }
 
+    /// Installation mode (`20 00` with the default password, `A0 00`), then
+    /// the configuration read (`74` → `F4`), as a client does before `77`.
+    fn config_in_installation_mode(&mut self) -> lms_core::telegram::Config {
+        let reply = self.request(
+            Request::InstallationMode {
+                password: DEFAULT_PASSWORD,
+            },
+            10_000,
+        );
+        assert_eq!(&reply[4..6], &[0xA0, 0x00]);
+        let reply = self.request(Request::ReadConfig, 10_000);
+        let t = Telegram::new_checked(&reply[..], Direction::SensorToHost).unwrap();
+        let Ok(Reply::Config(c)) = Reply::parse(&t) else {
+            panic!("{reply:02X?}")
+        };
+        c
+    }
+
     /// The host line to 500 kBd (`20 48`), as a client would switch it.
     fn host_500k(&mut self) {
         let reply = self.request(Request::SetBaud(Baud::B500000), 10_000);
@@ -223,18 +241,7 @@ fn the_clients_variant_and_units_are_applied_on_the_sensor() {
     let reply = bench.request(Request::set_variant(Variant::Fov100Res25), 10_000);
     assert_eq!(&reply[4..10], &[0xBB, 0x01, 0x64, 0x00, 0x19, 0x00]);
     // cm: installation mode, read, write the units byte 0.
-    let reply = bench.request(
-        Request::InstallationMode {
-            password: DEFAULT_PASSWORD,
-        },
-        10_000,
-    );
-    assert_eq!(&reply[4..6], &[0xA0, 0x00]);
-    let reply = bench.request(Request::ReadConfig, 10_000);
-    let t = Telegram::new_checked(&reply[..], Direction::SensorToHost).unwrap();
-    let Ok(Reply::Config(mut c)) = Reply::parse(&t) else {
-        panic!("{reply:02X?}")
-    };
+    let mut c = bench.config_in_installation_mode();
     c.set_units_code(0);
     let reply = bench.request(Request::WriteConfig(c), 10_000);
     assert_eq!(&reply[4..6], &[0xF7, 0x01]);
@@ -589,18 +596,7 @@ fn every_byte_of_a_clients_configuration_is_written_to_the_sensor() {
     let mut bench = Bench::new();
     bench.run(2_000_000);
     bench.host_500k();
-    let reply = bench.request(
-        Request::InstallationMode {
-            password: DEFAULT_PASSWORD,
-        },
-        10_000,
-    );
-    assert_eq!(&reply[4..6], &[0xA0, 0x00]);
-    let reply = bench.request(Request::ReadConfig, 10_000);
-    let t = Telegram::new_checked(&reply[..], Direction::SensorToHost).unwrap();
-    let Ok(Reply::Config(mut c)) = Reply::parse(&t) else {
-        panic!("{reply:02X?}")
-    };
+    let mut c = bench.config_in_installation_mode();
     // Units unchanged (mm): only other bytes differ.
     assert_eq!(c.units(), Some(Unit::Millimetre));
     c.set_blanking(0x0123);
