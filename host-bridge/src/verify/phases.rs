@@ -12,6 +12,24 @@ use super::report::Outcome;
 use super::session::{Session, SETTLE};
 use super::{CLOSING, QUIET, TICK};
 
+/// A disruption wanted after `after` scans of the selection back: `true`
+/// once that many are back and it has not happened yet; once it has
+/// (`done`), notes when the first scan of the selection came back after it.
+fn disruption_due(
+    after: Option<usize>,
+    done: &mut Option<super::session::Recovery>,
+    back: usize,
+    now_us: u64,
+) -> bool {
+    if let Some(r) = done.as_mut() {
+        if r.back_us.is_none() && back > r.after {
+            r.back_us = Some(now_us);
+        }
+        return false;
+    }
+    after.is_some_and(|n| back >= n)
+}
+
 /// The scans not back at the end.
 struct Missing {
     /// Of the selection, given up once the host line was quiet.
@@ -94,14 +112,8 @@ impl Session {
     /// `90`, 9600 Bd, values on request); note when the co-processor has
     /// it streaming again and when the next scan comes back.
     fn maybe_power_cycle(&mut self, deadline: Instant) -> Result<()> {
-        let back = self.checker.tally.play_back;
-        if let Some(pc) = self.power_cycle.as_mut() {
-            if pc.back_us.is_none() && back > pc.after {
-                pc.back_us = Some(self.clock.now_us());
-            }
-            return Ok(());
-        }
-        if self.power_cycle_after.is_none_or(|n| back < n) {
+        let (back, now) = (self.checker.tally.play_back, self.clock.now_us());
+        if !disruption_due(self.power_cycle_after, &mut self.power_cycle, back, now) {
             return Ok(());
         }
         self.quiesce_all(deadline)?;
@@ -146,14 +158,8 @@ impl Session {
     /// sent meanwhile that never come back are lost to the reset (written
     /// off, not counted as lost).
     fn maybe_reset_mcu(&mut self, deadline: Instant) -> Result<()> {
-        let back = self.checker.tally.play_back;
-        if let Some(r) = self.mcu_reset.as_mut() {
-            if r.back_us.is_none() && back > r.after {
-                r.back_us = Some(self.clock.now_us());
-            }
-            return Ok(());
-        }
-        if self.reset_mcu_after.is_none_or(|n| back < n) {
+        let (back, now) = (self.checker.tally.play_back, self.clock.now_us());
+        if !disruption_due(self.reset_mcu_after, &mut self.mcu_reset, back, now) {
             return Ok(());
         }
         self.quiesce_all(deadline)?;
@@ -170,10 +176,7 @@ impl Session {
         self.host.set_baud(Baud::B9600)?;
         self.host_rate = Baud::B9600;
         self.host.discard_input()?;
-        self.framer = lms_core::telegram::Framer::new(
-            lms_core::telegram::Direction::SensorToHost,
-            lms_core::telegram::Handshake::Expected,
-        );
+        self.framer = super::session::host_framer();
         self.pending_b0 = None;
         let after = self.counters(deadline)?;
         self.log(format!("counters after the reset: {after:?}"));

@@ -102,6 +102,12 @@ pub(super) struct Recovery {
     pub(super) first_back_us: Option<u64>,
 }
 
+/// The client's framer for the co-processor's host line (replies and
+/// scans, ACK/NAK expected): at the start and after an MCU reset.
+pub(super) fn host_framer() -> Framer {
+    Framer::new(Direction::SensorToHost, Handshake::Expected)
+}
+
 /// How long the host line must be quiet before a warm-up scan not back is
 /// taken as dropped (it then no longer holds the sensor).
 pub(super) const SETTLE: Duration = Duration::from_millis(500);
@@ -227,7 +233,7 @@ impl Session {
             recovering: false,
             host_baud: Baud::B9600,
             quiesce: false,
-            framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
+            framer: host_framer(),
             assembler: FeatureAssembler::new(),
             pending_b0: None,
             replies: VecDeque::new(),
