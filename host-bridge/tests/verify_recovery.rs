@@ -90,15 +90,14 @@ fn firmware_under_qemu_streams_again_after_a_sensor_power_cycle() {
     assert!(garbled_to_firmware(&text) > 0, "{text}");
 }
 
-/// Manual (`cargo test -p host-bridge --test verify_recovery -- --ignored`):
-/// while the firmware reboots, verify's LMS streams at 500 kBd into QEMU's
-/// socket faster than QEMU's USART takes bytes (~10 KB/s), so a slow
-/// recovery leaves seconds of stale scans queued ahead of the firmware; one
-/// CI rehearsal in about five runs then missed the 1 s limit (first scan
-/// back after 7.7 s). Pacing the sensor to QEMU's intake during the reboot
-/// is the open fix (issue 12).
+/// An MCU reset mid-stream (QMP `system_reset`) while the LMS keeps
+/// streaming at 500 kBd: the firmware boots at 9600, hears noise, searches,
+/// and the first scan is back within 1 s on the sensor clock. While the
+/// firmware reboots verify paces its LMS to QEMU's USART intake (~10 KB/s;
+/// a real line never queues): unpaced, seconds of stale scans queued in
+/// QEMU's socket ahead of the search, and one CI rehearsal in about five got
+/// its first scan back only after 7.7 s.
 #[test]
-#[ignore = "manual: the sensor outruns QEMU's UART during the reboot (see the doc comment)"]
 fn firmware_under_qemu_finds_the_sensor_again_after_an_mcu_reset() {
     if !on_path("qemu-system-arm") || !elf().is_file() {
         println!("skipped: qemu-system-arm or the firmware ELF is missing");

@@ -35,14 +35,54 @@ const TICK: Duration = Duration::from_millis(1);
 const QEMU_BYTES_PER_S: f64 = 5_000.0;
 /// The most of the sensor's stream let wait for QEMU (bytes; 0.2 s at
 /// [`QEMU_BYTES_PER_S`]): a stream telegram that finds more is dropped.
-pub(super) const QEMU_QUEUE_BYTES: f64 = 1_000.0;
+pub(crate) const QEMU_QUEUE_BYTES: f64 = 1_000.0;
+
+/// What QEMU's sensor USART has not taken yet of the bytes written into
+/// its socket: an estimate, at [`QEMU_BYTES_PER_S`]. Used by
+/// [`SensorFeed`] here and by `verify`, whose sensor streams into QEMU
+/// while the firmware reboots.
+#[derive(Debug)]
+pub(crate) struct QemuIntake {
+    /// Bytes written that QEMU has not taken yet (estimate) as of `at`.
+    queued: f64,
+    at: Instant,
+}
+
+impl QemuIntake {
+    /// Nothing queued.
+    pub(crate) fn new() -> Self {
+        QemuIntake {
+            queued: 0.0,
+            at: Instant::now(),
+        }
+    }
+
+    /// Bytes still queued ahead of QEMU now (estimate).
+    pub(crate) fn queued(&mut self) -> f64 {
+        let now = Instant::now();
+        let taken = now.duration_since(self.at).as_secs_f64() * QEMU_BYTES_PER_S;
+        self.queued = (self.queued - taken).max(0.0);
+        self.at = now;
+        self.queued
+    }
+
+    /// More than [`QEMU_QUEUE_BYTES`] queued: a sensor should wait (or
+    /// drop a stream telegram) rather than add to it.
+    pub(crate) fn full(&mut self) -> bool {
+        self.queued() > QEMU_QUEUE_BYTES
+    }
+
+    /// `bytes` were written into QEMU's socket.
+    pub(crate) fn add(&mut self, bytes: usize) {
+        self.queued();
+        self.queued += bytes as f64;
+    }
+}
 
 /// The sensor's bytes on their way to QEMU (see the module docs).
 pub(super) struct SensorFeed {
     framer: Framer,
-    /// Bytes passed that QEMU has not taken yet (estimate) as of `at`.
-    queued: f64,
-    at: Instant,
+    intake: QemuIntake,
     /// Stream telegrams dropped.
     pub(super) dropped: u64,
 }
@@ -51,8 +91,7 @@ impl SensorFeed {
     pub(super) fn new() -> Self {
         SensorFeed {
             framer: Framer::new(Direction::SensorToHost, Handshake::Expected),
-            queued: 0.0,
-            at: Instant::now(),
+            intake: QemuIntake::new(),
             dropped: 0,
         }
     }
@@ -61,10 +100,6 @@ impl SensorFeed {
     /// telegram, `ACK` and `NAK`, but a stream telegram only while the
     /// queue is short; bytes that frame nothing are not passed.
     pub(super) fn pass(&mut self, bytes: &[u8], out: &mut Vec<u8>) {
-        let now = Instant::now();
-        let taken = now.duration_since(self.at).as_secs_f64() * QEMU_BYTES_PER_S;
-        self.queued = (self.queued - taken).max(0.0);
-        self.at = now;
         let mut input = bytes;
         loop {
             let fed = self.framer.feed(input);
@@ -73,7 +108,7 @@ impl SensorFeed {
             match fed.event {
                 Some(Event::Telegram(t)) => {
                     let stream = matches!(t.command(), 0xB0 | 0xB6 | 0xB7 | 0xBF);
-                    if stream && self.queued > QEMU_QUEUE_BYTES {
+                    if stream && self.intake.full() {
                         self.dropped += 1;
                     } else {
                         out.extend_from_slice(t.as_bytes());
@@ -83,7 +118,7 @@ impl SensorFeed {
                 Some(Event::Nak) => out.push(lms_core::telegram::NAK),
                 None => return,
             }
-            self.queued += (out.len() - start) as f64;
+            self.intake.add(out.len() - start);
         }
     }
 }

@@ -165,7 +165,9 @@ impl Session {
         self.quiesce_all(deadline)?;
         self.emu.source_mut().disarm();
         self.recovering = true;
+        self.qemu_intake = crate::coprocessor::QemuIntake::new();
         let at = self.clock.now_us();
+        let held_before = self.clock.held();
         self.log("co-processor: MCU reset");
         self.dut.reset_mcu()?;
         self.mcu_reset = Some(super::session::Recovery {
@@ -194,6 +196,7 @@ impl Session {
         self.others_given_up = self.others_given_up.max(self.written_off);
         if let Some(r) = self.mcu_reset.as_mut() {
             r.first_back_us = Some(self.clock.now_us());
+            r.waited_for_qemu = self.clock.held().saturating_sub(held_before);
         }
         self.recovering = false;
         self.emu.source_mut().arm();
@@ -282,12 +285,19 @@ impl Session {
             warmup_dropped,
             play_sent: self.play_sent,
             sensor_restarts: self.sensor_restarts,
-            power_cycle: self
-                .power_cycle_after
-                .map(|_| self.power_cycle.unwrap_or_default()),
-            mcu_reset: self
-                .reset_mcu_after
-                .map(|_| self.mcu_reset.unwrap_or_default()),
+            // One that never happened says after how many scans it was due.
+            power_cycle: self.power_cycle_after.map(|after| {
+                self.power_cycle.unwrap_or(super::session::Recovery {
+                    after,
+                    ..Default::default()
+                })
+            }),
+            mcu_reset: self.reset_mcu_after.map(|after| {
+                self.mcu_reset.unwrap_or(super::session::Recovery {
+                    after,
+                    ..Default::default()
+                })
+            }),
             written_off: self.written_off,
             garbled: (
                 self.line_rate.garbled_to_sensor,

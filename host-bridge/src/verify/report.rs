@@ -188,12 +188,14 @@ fn report_disruptions(o: &Outcome) {
         println!(
             "host-bridge verify: MCU reset after {} scans: sensor streaming again after {}, \
              first scan back after {}, the selection's after {} (sensor clock; the client's \
-             set-up included); {} warm-up scans lost to the reset",
+             set-up included); {} warm-up scans lost to the reset; the sensor waited {:.1} ms \
+             (wall clock) for QEMU's UART meanwhile",
             r.after,
             ms(r.streaming_us, r.on_us),
             ms(r.first_back_us, r.on_us),
             ms(r.back_us, r.on_us),
-            o.written_off
+            o.written_off,
+            r.waited_for_qemu.as_secs_f64() * 1000.0
         );
     }
     if o.warmup_dropped > 0 {

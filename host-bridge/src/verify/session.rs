@@ -21,6 +21,7 @@ use super::dut::{Dut, Lines};
 use super::line_rate::{LineRate, Toward};
 use super::source::{PlaySource, Tag};
 use super::VerifyArgs;
+use crate::coprocessor::QemuIntake;
 use crate::serial::Link;
 
 /// A reply seen on the host line (not a scan, not a feature telegram).
@@ -55,6 +56,11 @@ impl EmuClock {
         if self.held_since.is_none() {
             self.held_since = Some(Instant::now());
         }
+    }
+
+    /// Time held so far (wall clock).
+    pub(super) fn held(&self) -> Duration {
+        self.held + self.held_since.map_or(Duration::ZERO, |t| t.elapsed())
     }
 
     pub(super) fn release(&mut self) {
@@ -100,6 +106,10 @@ pub(super) struct Recovery {
     /// MCU reset: when the first scan of any kind came back after it (the
     /// selection resumes then).
     pub(super) first_back_us: Option<u64>,
+    /// MCU reset: wall time the sensor waited, until that first scan, for
+    /// QEMU's UART to take what it had sent (see `Session::qemu_intake`);
+    /// not on the sensor clock.
+    pub(super) waited_for_qemu: Duration,
 }
 
 /// The client's framer for the co-processor's host line (replies and
@@ -158,6 +168,12 @@ pub(super) struct Session {
     /// The co-processor is recovering from an MCU reset: the sensor runs
     /// (the firmware must find it), with scans outside the selection.
     pub(super) recovering: bool,
+    /// While recovering: what QEMU's sensor USART has not taken yet. The
+    /// sensor waits while it is full, as a real line never queues (QEMU
+    /// takes about 10 KB/s, the LMS streams up to 28 KB/s at 500 kBd):
+    /// unpaced, seconds of stale scans queued ahead of the firmware's
+    /// search and the first scan came back 7.7 s after a reset.
+    pub(super) qemu_intake: QemuIntake,
     /// `--host-baud`, to set up again after an MCU reset.
     pub(super) host_baud: Baud,
     /// Hold the sensor until nothing is in flight (before the power cycle).
@@ -231,6 +247,7 @@ impl Session {
             written_off: 0,
             others_given_up: 0,
             recovering: false,
+            qemu_intake: QemuIntake::new(),
             host_baud: Baud::B9600,
             quiesce: false,
             framer: host_framer(),
@@ -344,6 +361,7 @@ impl Session {
         let hold = self.finished
             || self.quiesce
             || (self.sensor_streaming && !armed && !self.recovering)
+            || (self.recovering && self.qemu_intake.full())
             || (armed && self.play_sent >= self.wanted)
             || (armed && self.max_in_flight > 0 && in_flight >= self.max_in_flight)
             || (armed && self.host_line_free > Instant::now() + HOST_LINE_SLACK);
@@ -375,6 +393,9 @@ impl Session {
                 self.sensor
                     .send(&heard)
                     .with_context(|| format!("sensor line {}", self.sensor.name()))?;
+                if self.recovering {
+                    self.qemu_intake.add(heard.len());
+                }
                 self.rate_scratch = heard;
             }
             while let Some(event) = self.emu.next_event() {
