@@ -75,6 +75,10 @@ pub struct Params {
     /// `h = (c − a)/2` the range step per beam of the window (`= b·γ·tan β`
     /// at incidence `β`), `t = tan` [`GRAZING_MAX_INCIDENCE_DEG`]. `0` is
     /// the independent range noise of §3 (v1, v2).
+    ///
+    /// Only with feature `section10` (host crates; not the firmware):
+    /// otherwise a non-default value fails validation
+    /// ([`ParamError::NotInBuild`]).
     pub grazing_noise: f32,
     /// Same-turn windows (ALGORITHM.md §10 proposal,
     /// `docs/ALGORITHM-v3-section10.md`): in the modes that interleave
@@ -82,12 +86,20 @@ pub struct Params {
     /// `i, i+k, i+2k` of one turn (`k` turns, the filter's angle `k·γ`),
     /// so the offset between turns (platform motion in 13.3 ms) is no
     /// break. `false` is §2–6 (v1, v2); 1° modes are the same either way.
+    ///
+    /// Only with feature `section10` (host crates; not the firmware):
+    /// otherwise a non-default value fails validation
+    /// ([`ParamError::NotInBuild`]).
     pub same_turn_windows: bool,
     /// Range noise of the line fits and their tests (m; §7, split, merge;
     /// ALGORITHM.md §10 proposal): the raw ranges of both mirror turns
     /// scatter more about one line than one turn's about its own (the
     /// offset between turns), while `sigma` stays the noise `D` sees.
     /// `0` uses `sigma` (v1, v2).
+    ///
+    /// Only with feature `section10` (host crates; not the firmware):
+    /// otherwise a non-default value fails validation
+    /// ([`ParamError::NotInBuild`]).
     pub fit_sigma: f32,
 }
 
@@ -103,10 +115,12 @@ impl Default for Params {
 }
 
 impl Params {
-    /// The range noise of the line fits (m): `fit_sigma`, or `sigma` if 0.
+    /// The range noise of the line fits (m): `fit_sigma`, or `sigma` if 0
+    /// (always `sigma` without feature `section10`, where validation keeps
+    /// `fit_sigma` at 0).
     #[inline]
     pub const fn line_sigma(&self) -> f32 {
-        if self.fit_sigma > 0.0 {
+        if cfg!(feature = "section10") && self.fit_sigma > 0.0 {
             self.fit_sigma
         } else {
             self.sigma
@@ -149,6 +163,10 @@ impl Params {
     };
 }
 
+/// Whether this build of the core has the ALGORITHM.md §10 options
+/// (feature `section10`; [`ParamError::NotInBuild`] without it).
+pub const SECTION10_BUILT: bool = cfg!(feature = "section10");
+
 /// Largest accepted number of smoothing passes.
 pub const MAX_ITERATIONS: u16 = 1000;
 
@@ -190,10 +208,25 @@ pub enum ParamError {
     GrazingNoise,
     /// `fit_sigma` must be finite and ≥ 0.
     FitSigma,
+    /// An ALGORITHM.md §10 option (`same_turn_windows`, `grazing_noise`,
+    /// `fit_sigma`; named by `option`) has a non-default value, but this
+    /// build of the core leaves the §10 options out (feature `section10`
+    /// off, as in the firmware).
+    NotInBuild {
+        /// The field of [`Params`].
+        option: &'static str,
+    },
 }
 
 impl fmt::Display for ParamError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let ParamError::NotInBuild { option } = self {
+            return write!(
+                f,
+                "{option} is an ALGORITHM.md §10 option that this build leaves out \
+                 (lms-core without feature `section10`, as in the firmware): leave it at its default"
+            );
+        }
         f.write_str(match self {
             ParamError::Sigma => "sigma must be finite and > 0 (metres)",
             ParamError::ProcessNoise => "q must be finite and >= 0 (m^2)",
@@ -210,6 +243,7 @@ impl fmt::Display for ParamError {
             ParamError::MaxAlphaSd => "max_alpha_sd_deg must be > 0 (degrees; inf for no limit)",
             ParamError::GrazingNoise => "grazing_noise must be finite and >= 0",
             ParamError::FitSigma => "fit_sigma must be finite and >= 0 (metres; 0: sigma)",
+            ParamError::NotInBuild { .. } => "",
         })
     }
 }
@@ -341,6 +375,21 @@ impl Params {
         }
         if !non_neg(self.fit_sigma) {
             return Err(ParamError::FitSigma);
+        }
+        if !cfg!(feature = "section10") {
+            // Never a silent difference: a §10 option this build leaves out.
+            let option = if self.same_turn_windows {
+                Some("same_turn_windows")
+            } else if self.grazing_noise != 0.0 {
+                Some("grazing_noise")
+            } else if self.fit_sigma != 0.0 {
+                Some("fit_sigma")
+            } else {
+                None
+            };
+            if let Some(option) = option {
+                return Err(ParamError::NotInBuild { option });
+            }
         }
         Ok(ValidParams(*self))
     }

@@ -18,7 +18,9 @@
 //! same quantities without the nine products by `sigma²` a window.
 
 use crate::maths::{Sym3, Vec3};
-use crate::pipeline::line_model::{predict_unchecked, predict_with_denominators, Prediction};
+#[cfg(feature = "section10")]
+use crate::pipeline::line_model::predict_unchecked;
+use crate::pipeline::line_model::{predict_with_denominators, Prediction};
 
 /// Result of the filter on one valid window.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,9 +41,11 @@ pub struct WindowFilter {
     /// Process noise `q` (m²).
     pub q: f32,
     /// `ρ²` of the grazing term (`Params::grazing_noise`; 0: off).
+    #[cfg(feature = "section10")]
     pub grazing: f32,
     /// `(t·γ)²`, `t` the tangent of the largest incidence the grazing
     /// term follows (`params::GRAZING_MAX_INCIDENCE_DEG`).
+    #[cfg(feature = "section10")]
     pub grazing_cap: f32,
     /// `1 + q/sigma²`: the diagonal added to `F·Fᵀ` in `S/sigma²`.
     diagonal: f32,
@@ -56,12 +60,15 @@ impl WindowFilter {
             k: 2.0 * libm::cosf(gamma),
             r,
             q,
+            #[cfg(feature = "section10")]
             grazing: 0.0,
+            #[cfg(feature = "section10")]
             grazing_cap: 0.0,
             diagonal: 1.0 + q / r,
         }
     }
 
+    #[cfg(feature = "section10")]
     /// This filter with the grazing-incidence term (ALGORITHM.md §10
     /// proposal): `rho` dimensionless, `max_incidence` (rad) the largest
     /// incidence it follows, `gamma` the beam step (rad).
@@ -74,12 +81,14 @@ impl WindowFilter {
         }
     }
 
+    #[cfg(feature = "section10")]
     /// Whether the grazing term is on.
     #[inline]
     pub fn grazing_on(&self) -> bool {
         self.grazing > 0.0
     }
 
+    #[cfg(feature = "section10")]
     /// The window's measurement variance with the grazing term (m²):
     /// `sigma² + ρ²·min(h², (t·γ·b)²)`, `h = (c − a)/2` the range step per
     /// beam (`b·γ·tan β` on a wall at incidence `β`).
@@ -182,6 +191,7 @@ impl WindowFilter {
         )
     }
 
+    #[cfg(feature = "section10")]
     /// [`WindowFilter::update_unchecked`] with the grazing term: the
     /// window's `R = sigma_w²·I` from [`WindowFilter::grazing_variance`]
     /// (the same operations as `update_unchecked` with `sigma²` replaced).
@@ -190,6 +200,7 @@ impl WindowFilter {
         self.update_with(z, self.grazing_variance(z))
     }
 
+    #[cfg(feature = "section10")]
     /// The filter with `R = r·I` (m²); `x⁺ = z − r·u`.
     #[inline(always)]
     fn update_with(&self, z: Vec3, r: f32) -> (WindowEstimate, bool) {

@@ -9,17 +9,18 @@
 
 use crate::features::{Features, Stats, MAX_WINDOWS};
 use crate::frame::{Frame, Geometry, MAX_BEAMS};
-use crate::params::{Params, ValidParams, GRAZING_MAX_INCIDENCE_DEG};
+#[cfg(feature = "section10")]
+use crate::params::GRAZING_MAX_INCIDENCE_DEG;
+use crate::params::{Params, ValidParams};
 use crate::pipeline::bearings::TwoLevelBearings;
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
 use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{segment, segment_strided};
-use crate::pipeline::smoothing::{
-    smoothing_pass, smoothing_pass_strided, usable, usable_windows, usable_windows_strided,
-    MAX_STRIDE, WINDOW_WORDS,
-};
+use crate::pipeline::smoothing::{smoothing_pass, usable, usable_windows, WINDOW_WORDS};
+#[cfg(feature = "section10")]
+use crate::pipeline::smoothing::{smoothing_pass_strided, usable_windows_strided, MAX_STRIDE};
 use crate::pipeline::split::split_before_reject;
 
 /// All working memory of the pipeline, reused frame after frame.
@@ -154,37 +155,38 @@ impl Extractor {
             *s = r;
         }
         let stride = window_stride(params, frame.geometry());
+        self.mark_usable_windows(frame, params, stride, windows);
+        let filter = window_filter(params, stride as f32 * frame.geometry().step);
+        for pass in 1..=params.iterations {
+            let (ok, r) = (&self.window_ok, &mut self.smoothed[..n]);
+            let d = &mut self.mahalanobis[..windows];
+            run_pass(&filter, stride, ok, r, d);
+            after_pass(pass, &self.mahalanobis[..windows], &self.smoothed[..n]);
+        }
+    }
+
+    /// The usable-window bitset of `frame` for windows of `stride` (§2, §10).
+    fn mark_usable_windows(
+        &mut self,
+        frame: &Frame,
+        params: &Params,
+        stride: usize,
+        windows: usize,
+    ) {
         let (beams, raw) = (frame.beams(), frame.ranges());
         let ok = &mut self.window_ok;
-        if stride == 1 {
-            usable_windows(beams, raw, params.max_range, windows, ok);
-        } else {
+        #[cfg(feature = "section10")]
+        if stride != 1 {
             usable_windows_strided(beams, raw, params.max_range, stride, windows, ok);
             // Windows n − 2k … n − 3 do not exist at stride k.
             let d = &mut self.mahalanobis[..windows];
             for x in d.iter_mut().skip(windows.saturating_sub(2 * stride - 2)) {
                 *x = f32::INFINITY;
             }
+            return;
         }
-        let step = stride as f32 * frame.geometry().step;
-        let mut filter = WindowFilter::new(step, params.sigma, params.q);
-        if params.grazing_noise > 0.0 {
-            let t = GRAZING_MAX_INCIDENCE_DEG * (core::f32::consts::PI / 180.0);
-            filter = filter.with_grazing(params.grazing_noise, t, step);
-        }
-        // §4 as specified unless a §10 option is on.
-        let spec = stride == 1 && !filter.grazing_on();
-        for pass in 1..=params.iterations {
-            let (ok, r) = (&self.window_ok, &mut self.smoothed[..n]);
-            let d = &mut self.mahalanobis[..windows];
-            match stride {
-                _ if spec => smoothing_pass(&filter, ok, r, d),
-                2 => smoothing_pass_strided::<2>(&filter, ok, r, d),
-                4 => smoothing_pass_strided::<4>(&filter, ok, r, d),
-                _ => smoothing_pass_strided::<1>(&filter, ok, r, d),
-            }
-            after_pass(pass, &self.mahalanobis[..windows], &self.smoothed[..n]);
-        }
+        let _ = stride; // always 1 without the §10 options
+        usable_windows(beams, raw, params.max_range, windows, ok);
     }
 
     /// The features of the last run.
@@ -218,6 +220,13 @@ impl Extractor {
 /// turns (`1°/step`: 2 at 0.5°, 4 at 0.25°, the LMS's interleaved modes)
 /// with `Params::same_turn_windows`, else 1. Other steps have no
 /// interleave to follow (and so no strided pass to carry in flash).
+#[cfg(not(feature = "section10"))]
+fn window_stride(_: &Params, _: Geometry) -> usize {
+    1
+}
+
+/// [`window_stride`] with the §10 options built in.
+#[cfg(feature = "section10")]
 fn window_stride(params: &Params, geometry: Geometry) -> usize {
     if !params.same_turn_windows {
         return 1;
@@ -230,6 +239,35 @@ fn window_stride(params: &Params, geometry: Geometry) -> usize {
         k @ (2 | 4) => k,
         _ => 1,
     }
+}
+
+/// The window filter for windows `step` apart (rad): §3, with the §10
+/// grazing term where `params` asks for it.
+fn window_filter(params: &Params, step: f32) -> WindowFilter {
+    let filter = WindowFilter::new(step, params.sigma, params.q);
+    #[cfg(feature = "section10")]
+    if params.grazing_noise > 0.0 {
+        let t = GRAZING_MAX_INCIDENCE_DEG * (core::f32::consts::PI / 180.0);
+        return filter.with_grazing(params.grazing_noise, t, step);
+    }
+    filter
+}
+
+/// One smoothing pass: §4 as specified unless a §10 option is on (a
+/// stride above 1 or the grazing term: the strided passes).
+#[inline(always)]
+fn run_pass(filter: &WindowFilter, stride: usize, ok: &[u32], r: &mut [f32], d: &mut [f32]) {
+    #[cfg(feature = "section10")]
+    if stride != 1 || filter.grazing_on() {
+        match stride {
+            2 => smoothing_pass_strided::<2>(filter, ok, r, d),
+            4 => smoothing_pass_strided::<4>(filter, ok, r, d),
+            _ => smoothing_pass_strided::<1>(filter, ok, r, d),
+        }
+        return;
+    }
+    let _ = stride; // always 1 without the §10 options
+    smoothing_pass(filter, ok, r, d);
 }
 
 /// Beams of `frame` that are valid and below `max_range`, and valid beams

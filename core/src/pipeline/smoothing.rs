@@ -81,6 +81,7 @@ pub fn usable_windows(
     }
 }
 
+#[cfg(feature = "section10")]
 /// [`usable_windows`] for windows of stride `stride` (§10 proposal), into
 /// the same bitset (the first `windows` windows): window
 /// `i` needs every beam of `i..=i + 2·stride` usable, so that a segment
@@ -215,6 +216,7 @@ pub fn smoothing_pass(
     }
 }
 
+#[cfg(feature = "section10")]
 /// The weights `w/3` (eq. 11) of windows with `D` in `d` (0 for `+inf`).
 ///
 /// One function for every pass (§4 and the strided ones of §10's
@@ -272,14 +274,17 @@ fn filter_block(filter: &WindowFilter, ranges: &[f32], block: &mut Block, d: &mu
     }
 }
 
+#[cfg(feature = "section10")]
 /// Largest window stride of [`smoothing_pass_strided`] (the 0.25° modes'
 /// four interleaved mirror turns).
 pub const MAX_STRIDE: usize = 4;
 
+#[cfg(feature = "section10")]
 /// Slots before a block's first window: the windows of the previous block
 /// a point still needs (`2·stride` of them).
 const CARRY: usize = 2 * MAX_STRIDE;
 
+#[cfg(feature = "section10")]
 /// Per-block working storage. Slots `CARRY − 2·K .. CARRY` of
 /// `third_weight` and `posterior` carry the last `2·K` windows of the
 /// previous block.
@@ -288,6 +293,7 @@ struct StridedBlock {
     posterior: [[f32; BLOCK + CARRY]; 3],
 }
 
+#[cfg(feature = "section10")]
 /// [`smoothing_pass`] with windows of stride `K` (ALGORITHM.md §10
 /// proposal, `Params::same_turn_windows`): window `i` is beams
 /// `i, i+K, i+2K` (the filter built for the angle `K·γ`), point `j` is
@@ -360,6 +366,7 @@ pub fn smoothing_pass_strided<const K: usize>(
     }
 }
 
+#[cfg(feature = "section10")]
 /// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2K`):
 /// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − K`,
 /// `j − 2K`, added in that order. Absent or invalid windows have weight 0
@@ -374,6 +381,7 @@ fn blend_strided<const K: usize>(block: &StridedBlock, d: f32, slot: usize) -> f
     (1.0 - weight_sum) * d + estimate_sum
 }
 
+#[cfg(feature = "section10")]
 /// The window filter on `m` consecutive windows of stride `K`, `ranges`
 /// holding their `m + 2K` points. Writes `D` (or `+inf`) and the estimates
 /// (or 0) of window `t` into `d[t]` and slot `t + CARRY` of the block.
@@ -403,6 +411,7 @@ fn filter_block_strided<const K: usize>(
     filter_windows::<K>(filter, ranges, &window_ok, block, d, m);
 }
 
+#[cfg(feature = "section10")]
 /// The loop of [`filter_block_strided`]; the filter's grazing switch picks
 /// the window's `R` (ALGORITHM.md §3, or with the grazing term of §10's
 /// proposal), a branch per window (this pass is off the default path, and
@@ -461,6 +470,7 @@ mod tests {
         r
     }
 
+    #[cfg(feature = "section10")]
     #[test]
     fn stride_two_is_two_independent_sub_scans_bit_for_bit() {
         let n = 41;
@@ -493,6 +503,7 @@ mod tests {
         }
     }
 
+    #[cfg(feature = "section10")]
     #[test]
     fn stride_one_is_the_spec_pass() {
         let n = 41;
@@ -506,6 +517,7 @@ mod tests {
         assert_eq!(da.map(f32::to_bits), db.map(f32::to_bits));
     }
 
+    #[cfg(feature = "section10")]
     #[test]
     fn strided_windows_need_every_beam_of_their_span() {
         use crate::frame::{Frame, Invalid, Variant};

@@ -1,0 +1,73 @@
+//! The ALGORITHM.md §10 options in a build with and without them (feature
+//! `section10` of the core). `cargo test -p feature-bits --test section10`
+//! builds the core without it, as the firmware does; `cargo test
+//! --workspace` with it (the host crates enable it). The defaults give the
+//! same bits either way: CI compares `feature-bits` output with and without
+//! the feature on real logs (`.ci/run`), and the pinned digests hold in
+//! both builds.
+
+use lms_core::params::SECTION10_BUILT;
+use lms_core::{Extractor, Frame, ParamError, Params, Variant};
+
+/// A corridor wall seen at grazing incidence, with a 12 mm offset between
+/// the two interleaved mirror turns: every §10 option changes its result.
+fn grazing_wall() -> Frame {
+    let mut frame = Frame::for_variant(Variant::Fov180Res50);
+    for j in 0..frame.len() {
+        let phi = frame.geometry().bearing(j);
+        let turn = if j % 2 == 0 { 0.0 } else { 0.012 };
+        let c = (f64::from(phi) - 0.6).cos() as f32;
+        frame.set_metres(j, if c > 0.2 { (1.2 + turn) / c } else { 0.0 });
+    }
+    frame
+}
+
+#[test]
+fn each_option_is_refused_by_name_or_changes_the_result() {
+    let options: [(&str, Params); 3] = [
+        (
+            "same_turn_windows",
+            Params {
+                same_turn_windows: true,
+                ..Params::DEFAULT
+            },
+        ),
+        (
+            "grazing_noise",
+            Params {
+                grazing_noise: 0.5,
+                ..Params::DEFAULT
+            },
+        ),
+        (
+            "fit_sigma",
+            Params {
+                fit_sigma: 0.02,
+                ..Params::DEFAULT
+            },
+        ),
+    ];
+    let frame = grazing_wall();
+    let mut ex = Extractor::new();
+    let default = ex.run(&frame, &Params::DEFAULT.validate().unwrap()).clone();
+    let default_d = ex.mahalanobis().to_vec();
+    assert!(!default.lines().is_empty());
+    for (name, params) in options {
+        match (params.validate(), SECTION10_BUILT) {
+            (Ok(valid), true) => {
+                let mut ex = Extractor::new();
+                let got = ex.run(&frame, &valid);
+                let same = got.lines() == default.lines()
+                    && got.segments() == default.segments()
+                    && ex.mahalanobis() == &default_d[..];
+                assert!(!same, "{name} changes nothing on the grazing wall");
+            }
+            (Err(e), false) => {
+                assert_eq!(e, ParamError::NotInBuild { option: name });
+                let text = e.to_string();
+                assert!(text.contains(name) && text.contains("section10"), "{text}");
+            }
+            (result, built) => panic!("{name}: {result:?} with section10 built in: {built}"),
+        }
+    }
+}
