@@ -10,7 +10,7 @@
 //!   336 B instead of 3 208 B of full tables. Beam `j = FINE·k + l` has the
 //!   bearing `A_k + B_l` with `A_k = phi_{FINE·k}` (coarse) and
 //!   `B_l = l·gamma` (fine); both tables are filled once per geometry with
-//!   libm's `cosf`/`sinf`, and a lookup is the angle-sum formulas in f32,
+//!   [`crate::maths::cos_sin`] (f32 only), and a lookup is the angle-sum formulas in f32,
 //!   in this order: `cos = cosA·cosB − sinA·sinB`, `sin = sinA·cosB +
 //!   cosA·sinB` (no FMA, §9). Against an f64 reference the result stays
 //!   within [`TWO_LEVEL_TOLERANCE`] (a unit test checks every beam of every
@@ -21,6 +21,7 @@
 //! 1 200 instructions each, and a scan reads a few thousand bearings.
 
 use crate::frame::{Beam, Geometry, MAX_BEAMS};
+use crate::maths::cos_sin;
 
 /// Beams per coarse step of [`TwoLevelBearings`] (a power of two: the split
 /// of `j` is a shift and a mask).
@@ -33,7 +34,7 @@ pub const COARSE: usize = MAX_BEAMS.div_ceil(FINE);
 /// frame's f32 bearing `first_bearing + j·step` (evaluated in f64), as an
 /// absolute value: 3 units of 2⁻²⁴ (half an ulp of 1). Measured over the
 /// five LMS geometries: full tables of `cosf(phi_j)` at most 1.9 units on
-/// the same reference, the two-level table at most 2.4 (unit test
+/// the same reference, the two-level table at most 2.6 (unit test
 /// `two_level_table_is_within_tolerance_of_f64`, `--nocapture` prints them).
 pub const TWO_LEVEL_TOLERANCE: f64 = 3.0 / 16_777_216.0;
 
@@ -132,16 +133,16 @@ impl TwoLevelBearings {
         t
     }
 
-    /// Fill the table for `geometry`: `COARSE + FINE` calls each of libm's
-    /// `cosf` and `sinf`.
+    /// Fill the table for `geometry`: `COARSE + FINE` calls of
+    /// [`cos_sin`].
     pub fn fill(&mut self, geometry: Geometry) {
         for (k, slot) in self.coarse.iter_mut().enumerate() {
-            let a = geometry.bearing(k * FINE);
-            *slot = [libm::cosf(a), libm::sinf(a)];
+            let (c, s) = cos_sin(geometry.bearing(k * FINE));
+            *slot = [c, s];
         }
         for (l, slot) in self.fine.iter_mut().enumerate() {
-            let b = l as f32 * geometry.step;
-            *slot = [libm::cosf(b), libm::sinf(b)];
+            let (c, s) = cos_sin(l as f32 * geometry.step);
+            *slot = [c, s];
         }
     }
 

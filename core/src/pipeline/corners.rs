@@ -25,7 +25,7 @@
 //! `min_corner_angle_deg` is reported with `well_conditioned = false`.
 
 use crate::features::{Corner, Line};
-use crate::maths::{wrap_angle, Sym2};
+use crate::maths::{cos_sin, wrap_angle, Sym2};
 
 /// Relative floor added to the diagonal of a corner's covariance (1 ppm of
 /// its trace; see the module docs).
@@ -34,8 +34,8 @@ pub const COV_FLOOR: f32 = 1e-6;
 /// Intersect lines number `a` and `b` of a frame. `None` if they are parallel
 /// or the point is not finite; the caller counts such a pair.
 pub fn intersect(a: u8, l1: &Line, b: u8, l2: &Line, min_corner_angle_deg: f32) -> Option<Corner> {
-    let (c1, s1) = (libm::cosf(l1.alpha), libm::sinf(l1.alpha));
-    let (c2, s2) = (libm::cosf(l2.alpha), libm::sinf(l2.alpha));
+    let (c1, s1) = cos_sin(l1.alpha);
+    let (c2, s2) = cos_sin(l2.alpha);
     let det = c1 * s2 - s1 * c2;
     if det == 0.0 {
         return None;

@@ -17,7 +17,7 @@
 //! and `w = M⁻¹·v = sigma²·u`, so `x⁺ = z − w` and `D = vᵀ·w / sigma²`. The
 //! same quantities without the nine products by `sigma²` a window.
 
-use crate::maths::{Sym3, Vec3};
+use crate::maths::{cos_sin, Sym3, Vec3};
 #[cfg(feature = "section10")]
 use crate::pipeline::line_model::predict_unchecked;
 use crate::pipeline::line_model::{predict_with_denominators, Prediction};
@@ -57,7 +57,7 @@ impl WindowFilter {
     pub fn new(gamma: f32, sigma: f32, q: f32) -> Self {
         let r = sigma * sigma;
         WindowFilter {
-            k: 2.0 * libm::cosf(gamma),
+            k: 2.0 * cos_sin(gamma).0,
             r,
             q,
             #[cfg(feature = "section10")]

@@ -17,14 +17,14 @@
 //! the start's normal comes from the scatter matrix by half-angle formulas,
 //! each Gauss–Newton step rotates it by `Δα` with a short Taylor series of
 //! `cos Δα`, `sin Δα` (exact to f32 for `|Δα| ≤ 0.25`; a larger step falls
-//! back to `cosf`/`sinf`), and `α = atan2(sin α, cos α)` once at the end.
-//! So a fit needs no `sinf`/`cosf`, which on the M4F run in software f64
+//! back to [`crate::maths::cos_sin`]), and `α = atan2(sin α, cos α)` once at the end.
+//! So a fit needs no libm `sinf`/`cosf`, which on the M4F run in software f64
 //! (measured: they were about a fifth of the pipeline's instructions on
 //! noisy scans with split before reject).
 
 use crate::features::Line;
 use crate::frame::Beam;
-use crate::maths::{wrap_angle, Sym2};
+use crate::maths::{cos_sin, wrap_angle, Sym2};
 pub use crate::pipeline::bearings::BearingTable;
 
 /// Most Gauss–Newton steps per fit (§7.2).
@@ -342,7 +342,7 @@ const TAYLOR_STEP: f32 = 0.25;
 
 /// The unit normal `(ca, sa)` rotated by `delta` (rad): by the Taylor
 /// series of `cos δ` and `sin δ` to the δ⁶ and δ⁷ terms for
-/// `|δ| ≤` [`TAYLOR_STEP`], else by `cosf`/`sinf` of the new angle.
+/// `|δ| ≤` [`TAYLOR_STEP`], else by [`cos_sin`] of the new angle.
 #[inline]
 fn rotate(ca: f32, sa: f32, delta: f32) -> (f32, f32) {
     if libm::fabsf(delta) <= TAYLOR_STEP {
@@ -351,8 +351,7 @@ fn rotate(ca: f32, sa: f32, delta: f32) -> (f32, f32) {
         let sd = delta * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
         (ca * cd - sa * sd, sa * cd + ca * sd)
     } else {
-        let alpha = wrap_angle(libm::atan2f(sa, ca) + delta);
-        (libm::cosf(alpha), libm::sinf(alpha))
+        cos_sin(wrap_angle(libm::atan2f(sa, ca) + delta))
     }
 }
 
