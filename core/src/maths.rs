@@ -281,7 +281,7 @@ pub fn cos_sin_plus(x: f32, tail: f32) -> (f32, f32) {
     // π/2 = P1 + P2 + P3 (P1, P2 with 12 significant bits each).
     const P1: f32 = 1.570_312_5;
     const P2: f32 = 4.837_513e-4;
-    const P3: f32 = 7.549_790_1e-8;
+    const P3: f32 = 7.549_79e-8;
     const TWO_OVER_PI: f32 = core::f32::consts::FRAC_2_PI;
     let q = x * TWO_OVER_PI;
     // Round to nearest; `as` saturates (NaN gives 0, r stays NaN).
