@@ -68,6 +68,6 @@ pub use features::{
 pub use frame::MAX_BEAMS;
 pub use frame::{Beam, Frame, Geometry, Invalid, Variant};
 pub use params::{DataProfile, DataSurvey, ParamError, Params, RangeMode, ValidParams};
-pub use pipeline::extractor::Extractor;
+pub use pipeline::extractor::{Extractor, Trace};
 pub use pipeline::line_fit::FitError;
 pub use units::Unit;

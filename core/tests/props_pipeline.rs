@@ -29,7 +29,7 @@ use std::f32::consts::PI;
 use lms_core::frame::MAX_BEAMS;
 use lms_core::maths::Sym2;
 use lms_core::telegram::RangeBits;
-use lms_core::{Extractor, Frame, Geometry, Invalid, Params, Variant};
+use lms_core::{Extractor, Frame, Geometry, Invalid, Params, Trace, Variant};
 use lms_core::{MAX_CORNERS, MAX_LINES, MAX_SEGMENTS};
 use proptest::prelude::*;
 
@@ -277,12 +277,17 @@ fn count_runs(d: &[f32], tau: f32, min_points: u16) -> (usize, usize, usize) {
 
 fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
     let mut extractor = Extractor::new();
+    let mut trace = Trace::new();
     let f = extractor
-        .run(frame, &params.validate().expect("valid parameters"))
+        .run_traced(
+            frame,
+            &params.validate().expect("valid parameters"),
+            &mut trace,
+        )
         .clone();
     let n = frame.len();
     let smoothed = extractor.smoothed();
-    let d = extractor.mahalanobis();
+    let d = trace.mahalanobis();
     prop_assert_eq!(smoothed.len(), n);
     prop_assert_eq!(d.len(), n - 2);
 

@@ -3,7 +3,7 @@
 //! are offset (platform motion in 13.3 ms); windows of one turn do not
 //! break on the offset, windows of §2 do. In 1° modes nothing changes.
 
-use lms_core::{Extractor, Frame, Params, Variant};
+use lms_core::{Extractor, Frame, Params, Trace, Variant};
 
 /// A wall `x·cos α + y·sin α = r` seen at 0.5°, the odd beams (the second
 /// turn) from a pose moved `offset` metres towards the wall; a ±`ripple`
@@ -24,8 +24,9 @@ fn interleaved_wall(alpha: f32, r: f32, offset: f32, ripple: f32) -> Frame {
     frame
 }
 
-fn breaking_windows(ex: &Extractor, tau: f32) -> usize {
-    ex.mahalanobis()
+fn breaking_windows(trace: &Trace, tau: f32) -> usize {
+    trace
+        .mahalanobis()
         .iter()
         .filter(|d| d.is_finite() && **d >= tau)
         .count()
@@ -46,10 +47,11 @@ fn a_turn_offset_breaks_spec_windows_but_not_same_turn_windows() {
         ..spec
     };
     let mut ex = Extractor::new();
-    ex.run(&frame, &spec.validate().unwrap());
-    let spec_breaks = breaking_windows(&ex, spec.tau);
-    ex.run(&frame, &turn.validate().unwrap());
-    let turn_breaks = breaking_windows(&ex, turn.tau);
+    let mut trace = Trace::new();
+    ex.run_traced(&frame, &spec.validate().unwrap(), &mut trace);
+    let spec_breaks = breaking_windows(&trace, spec.tau);
+    ex.run_traced(&frame, &turn.validate().unwrap(), &mut trace);
+    let turn_breaks = breaking_windows(&trace, turn.tau);
     assert!(spec_breaks > 50, "§2 windows broke {spec_breaks} times");
     assert_eq!(
         turn_breaks, 0,
@@ -83,17 +85,19 @@ fn one_degree_modes_are_unchanged() {
     .unwrap();
     let mut a = Extractor::new();
     let mut b = Extractor::new();
-    let (fa, fb) = (a.run(&frame, &spec).clone(), b.run(&frame, &turn).clone());
+    let (mut ta, mut tb) = (Trace::new(), Trace::new());
+    let fa = a.run_traced(&frame, &spec, &mut ta).clone();
+    let fb = b.run_traced(&frame, &turn, &mut tb).clone();
     assert_eq!(fa.lines(), fb.lines());
     assert_eq!(fa.corners(), fb.corners());
     assert_eq!(fa.segments(), fb.segments());
     assert_eq!(fa.edges(), fb.edges());
     assert!(!fa.lines().is_empty());
-    let bits = |e: &Extractor| {
+    let bits = |e: &Trace| {
         e.mahalanobis()
             .iter()
             .map(|d| d.to_bits())
             .collect::<Vec<_>>()
     };
-    assert_eq!(bits(&a), bits(&b));
+    assert_eq!(bits(&ta), bits(&tb));
 }

@@ -11,13 +11,13 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use lms_core::Extractor;
+use lms_core::{Extractor, Trace};
 use lms_fuzz::{decode_pipeline, feature_bits};
 
-fn digest(e: &Extractor) -> Vec<u32> {
+fn digest(e: &Extractor, trace: &Trace) -> Vec<u32> {
     let mut v = feature_bits(e.features());
     v.extend(e.smoothed().iter().map(|x| x.to_bits()));
-    v.extend(e.mahalanobis().iter().map(|x| x.to_bits()));
+    v.extend(trace.mahalanobis().iter().map(|x| x.to_bits()));
     v
 }
 
@@ -28,7 +28,8 @@ fuzz_target!(|data: &[u8]| {
     let Ok(valid) = params.validate() else {
         return;
     };
-    let f = extractor.run(frame, &valid);
+    let mut trace = Trace::new();
+    let f = extractor.run_traced(frame, &valid, &mut trace);
     let n = frame.len();
     // Structure.
     let mut prev_last = None;
@@ -66,14 +67,15 @@ fuzz_target!(|data: &[u8]| {
         }
     }
     assert_eq!(extractor.smoothed().len(), n);
-    assert_eq!(extractor.mahalanobis().len(), n - 2);
+    assert_eq!(trace.mahalanobis().len(), n - 2);
     // Deterministic, nothing carried over.
-    let first = digest(&extractor);
+    let first = digest(&extractor, &trace);
     let mut again = Extractor::new();
     again.run(
         &lms_core::Frame::for_variant(lms_core::Variant::Fov100Res25),
         &lms_core::ValidParams::DEFAULT,
     );
-    again.run(frame, &valid);
-    assert_eq!(digest(&again), first, "a previous frame changed the result");
+    let mut trace_again = Trace::new();
+    again.run_traced(frame, &valid, &mut trace_again);
+    assert_eq!(digest(&again, &trace_again), first, "a previous frame changed the result");
 });

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use lms_core::Stats;
-use lms_core::{Extractor, Frame, Params};
+use lms_core::{Extractor, Frame, Params, Trace};
 use serde::{Deserialize, Serialize};
 
 /// One frame's input, ranges and features.
@@ -152,7 +152,7 @@ fn finite(x: f32) -> Option<f32> {
 
 impl FrameRecord {
     /// The record of the extractor's last run on `frame`.
-    pub fn from_run(index: usize, frame: &Frame, ex: &Extractor) -> Self {
+    pub fn from_run(index: usize, frame: &Frame, ex: &Extractor, trace: &Trace) -> Self {
         let beams = frame.beams();
         let valid_or_null = |values: &[f32]| -> Vec<Option<f32>> {
             values
@@ -167,7 +167,7 @@ impl FrameRecord {
             n: frame.len(),
             ranges: valid_or_null(frame.ranges()),
             smoothed: valid_or_null(ex.smoothed()),
-            mahalanobis: ex.mahalanobis().iter().map(|&d| finite(d)).collect(),
+            mahalanobis: trace.mahalanobis().iter().map(|&d| finite(d)).collect(),
             edges: f.edges().to_vec(),
             segments: f.segments().iter().map(|s| [s.first, s.last]).collect(),
             lines: f
@@ -255,14 +255,15 @@ where
         .map_err(|e| anyhow::anyhow!("invalid parameters: {e}"))?;
     let mut out = io::BufWriter::new(out);
     let mut ex = Extractor::new();
+    let mut trace = Trace::new();
     let mut summary = Summary::default();
     let mut line = Vec::with_capacity(16 * 1024);
     for input in frames {
         let input = input?;
         let start = Instant::now();
-        ex.run(&input.frame, &params);
+        ex.run_traced(&input.frame, &params, &mut trace);
         summary.pipeline += start.elapsed();
-        let mut record = FrameRecord::from_run(input.index, &input.frame, &ex);
+        let mut record = FrameRecord::from_run(input.index, &input.frame, &ex, &trace);
         record.pose = input.pose;
         summary.frames += 1;
         summary.lines += record.lines.len();
@@ -333,8 +334,9 @@ mod tests {
         assert!(!text.contains("pose"));
         // Bit-exact round trip against a direct run.
         let mut ex = Extractor::new();
-        ex.run(&frame, &lms_core::ValidParams::DEFAULT);
-        assert_eq!(rec, FrameRecord::from_run(7, &frame, &ex));
+        let mut trace = Trace::new();
+        ex.run_traced(&frame, &lms_core::ValidParams::DEFAULT, &mut trace);
+        assert_eq!(rec, FrameRecord::from_run(7, &frame, &ex, &trace));
     }
 
     /// Issue 13.14: a NaN pose field is written `null` and read back.

@@ -99,7 +99,8 @@ fn main() -> Result<()> {
         for scan in log.scans.iter().step_by(every) {
             let truth = frame_truth(scan, &map, &cfg);
             let mut first = Vec::new();
-            ex.run_observed(&scan.frame, &params, |pass, d, _| {
+            let mut trace = lms_core::Trace::new();
+            ex.run_observed(&scan.frame, &params, &mut trace, |pass, d, _| {
                 if pass == 1 {
                     first = d.to_vec();
                 }
@@ -110,7 +111,7 @@ fn main() -> Result<()> {
             for p in truth.pieces.iter().filter(|p| p.counted) {
                 fate[piece_fate(ex.features().lines(), p)] += 1;
             }
-            let d = ex.mahalanobis();
+            let d = trace.mahalanobis();
             let g = scan.frame.geometry();
             let r = scan.frame.ranges();
             for p in truth.pieces.iter().filter(|p| p.counted) {

@@ -100,6 +100,7 @@ pub fn run(args: &EvaluateArgs, bar: &indicatif::ProgressBar) -> Result<Scale> {
                     let _ = ex.run_observed(
                         &s.frame,
                         &params.validate().expect("sweep parameters"),
+                        &mut lms_core::Trace::new(),
                         |pass, d, _| {
                             if PASSES.contains(&pass) {
                                 captured.push((pass, d.to_vec()));

@@ -31,7 +31,10 @@ fn evaluate_back_end_and_smoothing_replicas_match_the_core_bit_for_bit() {
                     ..Params::V1
                 };
                 let tables = Tables::for_frame(&s.frame);
-                let f = ex.run(&s.frame, &params.validate().unwrap()).clone();
+                let mut trace = lms_core::Trace::new();
+                let f = ex
+                    .run_traced(&s.frame, &params.validate().unwrap(), &mut trace)
+                    .clone();
                 let (lines, corners) = features_from_segments(
                     &s.frame,
                     &tables,
@@ -41,7 +44,7 @@ fn evaluate_back_end_and_smoothing_replicas_match_the_core_bit_for_bit() {
                 );
                 assert_eq!(lines, f.lines().to_vec(), "{family:?} {k}");
                 assert_eq!(corners, f.corners().to_vec(), "{family:?} {k}");
-                let d = ex.mahalanobis().to_vec();
+                let d = trace.mahalanobis().to_vec();
                 let smoothed = ex.smoothed().to_vec();
                 let x = extraction_from_d(&s.frame, &tables, &d, &params);
                 assert_eq!(x.segments, f.segments().to_vec());

@@ -160,7 +160,8 @@ fn a_frame_with_every_beam_invalid_gives_no_features() {
     }
     for frame in [&zeros, &odd, &codes] {
         assert_eq!(frame.valid_count(), 0);
-        ex.run(frame, &params.validate().unwrap());
+        let mut trace = lms_core::Trace::new();
+        ex.run_traced(frame, &params.validate().unwrap(), &mut trace);
         let f = ex.features();
         assert!(
             f.segments().is_empty()
@@ -170,7 +171,7 @@ fn a_frame_with_every_beam_invalid_gives_no_features() {
         );
         assert_eq!(f.stats().valid_beams, 0);
         assert_eq!(f.stats().invalid_windows as usize, frame.len() - 2);
-        assert!(ex.mahalanobis().iter().all(|d| *d == f32::INFINITY));
+        assert!(trace.mahalanobis().iter().all(|d| *d == f32::INFINITY));
         // Invalid beams are never modified.
         assert_eq!(ex.smoothed(), frame.ranges());
     }
@@ -185,10 +186,15 @@ fn three_beams_and_the_largest_frame_run() {
     // 3 points is below min_points (5), so it is dropped and counted.
     let wall = |j: usize| 2.0 / ((-50f32 + 50.0 * j as f32).to_radians()).cos();
     let three = frame_with(3, wall);
-    ex.run(&three, &params.validate().unwrap());
+    let mut trace = lms_core::Trace::new();
+    ex.run_traced(&three, &params.validate().unwrap(), &mut trace);
     let f = ex.features();
-    assert_eq!(ex.mahalanobis().len(), 1);
-    assert!(ex.mahalanobis()[0] < 1.0, "D = {}", ex.mahalanobis()[0]);
+    assert_eq!(trace.mahalanobis().len(), 1);
+    assert!(
+        trace.mahalanobis()[0] < 1.0,
+        "D = {}",
+        trace.mahalanobis()[0]
+    );
     assert!(f.segments().is_empty() && f.lines().is_empty());
     assert_eq!(f.stats().short_segments, 1);
     ex.run(
@@ -207,10 +213,10 @@ fn three_beams_and_the_largest_frame_run() {
     let g = Variant::Fov100Res25.geometry();
     let ranges: Vec<f32> = (0..401).map(|j| 3.0 / g.bearing(j).cos()).collect();
     let big = Frame::from_metres(g, &ranges).unwrap();
-    ex.run(&big, &params.validate().unwrap());
+    ex.run_traced(&big, &params.validate().unwrap(), &mut trace);
     let f = ex.features();
     assert_eq!(ex.smoothed().len(), 401);
-    assert_eq!(ex.mahalanobis().len(), 399);
+    assert_eq!(trace.mahalanobis().len(), 399);
     assert_eq!(f.lines().len(), 1, "{:?}", f.lines());
     assert!((f.lines()[0].r - 3.0).abs() < 1e-3 && f.lines()[0].alpha.abs() < 1e-3);
     assert!(f.corners().is_empty());

@@ -143,10 +143,15 @@ fn compare(case: &Case, worst_by_pass: &mut [WorstAt; 2]) -> Vec<String> {
             ..case.params
         };
         let mut ex = Extractor::new();
-        ex.run(&frame, &params.validate().expect("valid params"));
+        let mut trace = lms_core::Trace::new();
+        ex.run_traced(
+            &frame,
+            &params.validate().expect("valid params"),
+            &mut trace,
+        );
         let (ref_ranges, ref_d) = &ref_passes[passes as usize - 1];
         let core_ranges = ex.smoothed();
-        let core_d = ex.mahalanobis();
+        let core_d = trace.mahalanobis();
         let at = |what: &str, i: usize| format!("{} pass {passes} {what} {i}", case.label);
 
         // Ranges: invalid beams untouched, valid ones within range_tol.

@@ -125,7 +125,8 @@ fn noise_free_edge_points_are_the_true_corners_and_jumps() {
             let truth = scene.cast(&bearings, Pose::IDENTITY);
             let frame = frame_of(variant, &truth, &NoiseModel::NONE, 0);
             for iterations in [1, 30] {
-                ex.run(
+                let mut trace = lms_core::Trace::new();
+                ex.run_traced(
                     &frame,
                     &Params {
                         iterations,
@@ -133,9 +134,10 @@ fn noise_free_edge_points_are_the_true_corners_and_jumps() {
                     }
                     .validate()
                     .unwrap(),
+                    &mut trace,
                 );
                 let edges: Vec<usize> = ex.features().edges().iter().map(|&e| e as usize).collect();
-                let d = ex.mahalanobis();
+                let d = trace.mahalanobis();
                 let true_edges = truth.true_edge_points();
                 let at = format!("{name} {variant:?} {iterations} pass(es): edges {edges:?}, truth {true_edges:?}");
                 assert!(
@@ -193,9 +195,10 @@ fn noisy_edge_points_find_every_corner_and_jump() {
         let (mut off_truth, mut at_nearest) = (0usize, 0usize);
         for seed in 0..SEEDS {
             let frame = frame_of(variant, &truth, &noise, seed);
-            ex.run(&frame, &lms_core::ValidParams::DEFAULT);
+            let mut trace = lms_core::Trace::new();
+            ex.run_traced(&frame, &lms_core::ValidParams::DEFAULT, &mut trace);
             let edges: Vec<usize> = ex.features().edges().iter().map(|&e| e as usize).collect();
-            let d = ex.mahalanobis();
+            let d = trace.mahalanobis();
             let at = format!("{variant:?} seed {seed}: edges {edges:?}, truth {true_edges:?}");
             for &(i, valid) in &jumps {
                 if valid {

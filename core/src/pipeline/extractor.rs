@@ -1,11 +1,14 @@
 //! The one owner of all working buffers: runs the whole pipeline on a frame.
 //!
-//! [`Extractor`] holds the smoothed ranges, `D` of the last pass, the bearing
-//! tables and the output [`Features`] in fixed arrays, so it can live in a
-//! `static` on the MCU. [`Extractor::run`] takes a [`Frame`] and validated
-//! [`Params`] and fills the features; [`Extractor::run_observed`] also hands
-//! `D` and the ranges to a callback after every pass (the scale-space plots of
-//! paper Fig. 10).
+//! [`Extractor`] holds the smoothed ranges, the bearing tables, the
+//! usable-window bitset and the output [`Features`] in fixed arrays, so it
+//! can live in a `static` on the MCU. It keeps no `D`: the last pass hands
+//! `D` of each block of windows to §6 segmentation as it computes it
+//! ([`Segmenter`]). [`Extractor::run`] takes a [`Frame`] and validated
+//! [`Params`] and fills the features; [`Extractor::run_traced`] also keeps
+//! `D` of the last pass in a caller's [`Trace`], and
+//! [`Extractor::run_observed`] hands `D` and the ranges to a callback after
+//! every pass (the scale-space plots of paper Fig. 10).
 
 use crate::features::{Features, Stats, MAX_WINDOWS};
 use crate::frame::{Frame, Geometry, MAX_BEAMS};
@@ -17,8 +20,10 @@ use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
 use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
-use crate::pipeline::segmentation::{segment, segment_strided};
-use crate::pipeline::smoothing::{smoothing_pass, usable, usable_windows, WINDOW_WORDS};
+use crate::pipeline::segmentation::Segmenter;
+use crate::pipeline::smoothing::{
+    smoothing_pass, usable, usable_windows, WindowSink, WINDOW_WORDS,
+};
 #[cfg(feature = "section10")]
 use crate::pipeline::smoothing::{smoothing_pass_strided, usable_windows_strided, MAX_STRIDE};
 use crate::pipeline::split::split_before_reject;
@@ -31,8 +36,38 @@ pub struct Extractor {
     smoothed: [f32; MAX_BEAMS],
     /// Usable windows, a bitset ([`usable_windows`]).
     window_ok: [u32; WINDOW_WORDS],
-    mahalanobis: [f32; MAX_WINDOWS],
     features: Features,
+}
+
+/// `D` per window kept by a caller ([`Extractor::run_traced`],
+/// [`Extractor::run_observed`]): the extractor keeps no `D` of its own
+/// (it segments the last pass's `D` as the pass computes it, §6), so the
+/// plots and tools that show `D` (paper Fig. 10) hold it here.
+#[derive(Clone, Debug)]
+pub struct Trace {
+    d: [f32; MAX_WINDOWS],
+    len: usize,
+}
+
+impl Default for Trace {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Trace {
+    /// An empty trace.
+    pub const fn new() -> Self {
+        Trace {
+            d: [0.0; MAX_WINDOWS],
+            len: 0,
+        }
+    }
+
+    /// `D` of the `n − 2` windows of the last pass traced (`+inf` where invalid).
+    pub fn mahalanobis(&self) -> &[f32] {
+        self.d.get(..self.len).unwrap_or_default()
+    }
 }
 
 impl Default for Extractor {
@@ -50,7 +85,6 @@ impl Extractor {
             bearings: TwoLevelBearings::new(),
             smoothed: [0.0; MAX_BEAMS],
             window_ok: [0; WINDOW_WORDS],
-            mahalanobis: [0.0; MAX_WINDOWS],
             features: Features::EMPTY,
         }
     }
@@ -61,17 +95,49 @@ impl Extractor {
     /// counter (tools/qemu-icount) measures exactly one frame's pipeline.
     #[inline(never)]
     pub fn run(&mut self, frame: &Frame, params: &ValidParams) -> &Features {
-        self.run_observed(frame, params, |_, _, _| {})
+        self.run_with(frame, params, &mut [], |_, _, _| {})
+    }
+
+    /// [`Extractor::run`], keeping `D` of the last pass in `trace`.
+    pub fn run_traced(
+        &mut self,
+        frame: &Frame,
+        params: &ValidParams,
+        trace: &mut Trace,
+    ) -> &Features {
+        self.run_observed(frame, params, trace, |_, _, _| {})
     }
 
     /// Run the pipeline, calling `after_pass(pass, d, ranges)` after every
     /// smoothing pass (`pass` counts from 1; `d` holds `D` of the `n − 2`
-    /// windows of that pass, `+inf` where invalid; `ranges` the smoothed
-    /// ranges after it, metres).
+    /// windows of that pass, `+inf` where invalid, kept in `trace`;
+    /// `ranges` the smoothed ranges after it, metres). `trace` holds `D`
+    /// of the last pass afterwards.
     pub fn run_observed<F>(
         &mut self,
         frame: &Frame,
         params: &ValidParams,
+        trace: &mut Trace,
+        after_pass: F,
+    ) -> &Features
+    where
+        F: FnMut(u16, &[f32], &[f32]),
+    {
+        trace.len = frame
+            .len()
+            .min(MAX_BEAMS)
+            .saturating_sub(2)
+            .min(MAX_WINDOWS);
+        self.run_with(frame, params, &mut trace.d, after_pass)
+    }
+
+    /// The pipeline with `D` of every pass written into `trace` (as much
+    /// of it as fits; `&mut []` keeps none).
+    fn run_with<F>(
+        &mut self,
+        frame: &Frame,
+        params: &ValidParams,
+        trace: &mut [f32],
         mut after_pass: F,
     ) -> &Features
     where
@@ -84,37 +150,33 @@ impl Extractor {
         self.len = n;
         self.prepare_bearings(frame.geometry());
         let windows = n.saturating_sub(2).min(MAX_WINDOWS);
-        self.scale_space(frame, params, n, windows, &mut after_pass);
+        let trace = trace.get_mut(..windows).unwrap_or_default();
 
-        // §6: segmentation on D of the last pass.
+        // §4–6: the passes, and segmentation on D of the last pass.
         let f = &mut self.features;
         f.lines.clear();
         f.corners.clear();
-        let d = &self.mahalanobis[..windows];
         let stride = window_stride(params, frame.geometry());
-        let counts = if stride == 1 {
-            segment(
-                d,
-                params.tau,
-                params.min_points,
-                &mut f.segments,
-                &mut f.edges,
-            )
-        } else {
-            segment_strided(
-                d,
-                stride,
-                params.tau,
-                params.min_points,
-                &mut f.segments,
-                &mut f.edges,
-            )
+        let mut seg = Segmenter::new(
+            stride,
+            params.tau,
+            params.min_points,
+            &mut f.segments,
+            &mut f.edges,
+        );
+        let space = ScaleSpace {
+            smoothed: &mut self.smoothed[..n],
+            window_ok: &mut self.window_ok,
         };
+        space.run(frame, params, stride, trace, &mut seg, &mut after_pass);
+        let counts = seg.finish(windows);
+        let invalid_windows = seg.invalid_windows();
+        let f = &mut self.features;
         let (usable_beams, beyond) = count_usable(frame, params.max_range);
         let mut stats = Stats {
             valid_beams: usable_beams,
             beyond_max_range: beyond,
-            invalid_windows: d.iter().filter(|d| !d.is_finite()).count() as u16,
+            invalid_windows,
             short_segments: counts.short_segments,
             segment_overflow: counts.segment_overflow,
             edge_overflow: counts.edge_overflow,
@@ -139,14 +201,63 @@ impl Extractor {
         &self.features
     }
 
-    /// §4–5: `params.iterations` smoothing passes over the frame's ranges,
-    /// leaving the smoothed ranges and `D` of the last pass in the buffers.
-    fn scale_space<F>(
-        &mut self,
+    /// The features of the last run.
+    pub fn features(&self) -> &Features {
+        &self.features
+    }
+
+    /// Smoothed ranges of the last run (m; invalid beams keep their 0).
+    pub fn smoothed(&self) -> &[f32] {
+        self.smoothed.get(..self.len).unwrap_or_default()
+    }
+
+    /// Fill the bearing table if the geometry changed.
+    fn prepare_bearings(&mut self, geometry: Geometry) {
+        if self.geometry == Some(geometry) {
+            return;
+        }
+        self.bearings.fill(geometry);
+        self.geometry = Some(geometry);
+    }
+}
+
+/// The buffers the smoothing passes work on (§4–5).
+struct ScaleSpace<'a> {
+    /// The frame's ranges, smoothed in place (`n` of them).
+    smoothed: &'a mut [f32],
+    /// Usable windows, a bitset ([`usable_windows`]).
+    window_ok: &'a mut [u32; WINDOW_WORDS],
+}
+
+/// Where a pass's `D` goes: into the caller's trace (if any) and, on the
+/// last pass, into §6 segmentation.
+struct PassSink<'t, 's, 'a, const S: usize, const E: usize> {
+    trace: &'t mut [f32],
+    segmenter: Option<&'s mut Segmenter<'a, S, E>>,
+}
+
+impl<const S: usize, const E: usize> WindowSink for PassSink<'_, '_, '_, S, E> {
+    fn windows(&mut self, first: usize, d: &[f32]) {
+        (&mut *self.trace).windows(first, d);
+        if let Some(seg) = self.segmenter.as_mut() {
+            for (i, &x) in d.iter().enumerate() {
+                seg.window(first + i, x);
+            }
+        }
+    }
+}
+
+impl ScaleSpace<'_> {
+    /// §4–5: `params.iterations` smoothing passes over the frame's ranges
+    /// with windows of `stride`, `D` of each pass into `trace`, the last
+    /// pass's into `seg` (§6), `after_pass` after each.
+    fn run<F, const S: usize, const E: usize>(
+        mut self,
         frame: &Frame,
         params: &Params,
-        n: usize,
-        windows: usize,
+        stride: usize,
+        trace: &mut [f32],
+        seg: &mut Segmenter<'_, S, E>,
         after_pass: &mut F,
     ) where
         F: FnMut(u16, &[f32], &[f32]),
@@ -154,14 +265,25 @@ impl Extractor {
         for (s, &r) in self.smoothed.iter_mut().zip(frame.ranges()) {
             *s = r;
         }
-        let stride = window_stride(params, frame.geometry());
+        let windows = self.smoothed.len().saturating_sub(2);
+        // Windows n − 2k … n − 3 do not exist at stride k (`+inf`).
+        let computed = windows.saturating_sub(2 * stride - 2);
+        for x in trace.iter_mut().skip(computed) {
+            *x = f32::INFINITY;
+        }
         self.mark_usable_windows(frame, params, stride, windows);
         let filter = window_filter(params, stride as f32 * frame.geometry().step);
         for pass in 1..=params.iterations {
-            let (ok, r) = (&self.window_ok, &mut self.smoothed[..n]);
-            let d = &mut self.mahalanobis[..windows];
-            run_pass(&filter, stride, ok, r, d);
-            after_pass(pass, &self.mahalanobis[..windows], &self.smoothed[..n]);
+            let last = pass == params.iterations;
+            let mut sink = PassSink {
+                trace: &mut *trace,
+                segmenter: if last { Some(&mut *seg) } else { None },
+            };
+            run_pass(&filter, stride, self.window_ok, self.smoothed, &mut sink);
+            after_pass(pass, trace, self.smoothed);
+        }
+        for i in computed..windows {
+            seg.window(i, f32::INFINITY);
         }
     }
 
@@ -174,45 +296,14 @@ impl Extractor {
         windows: usize,
     ) {
         let (beams, raw) = (frame.beams(), frame.ranges());
-        let ok = &mut self.window_ok;
+        let ok = &mut *self.window_ok;
         #[cfg(feature = "section10")]
         if stride != 1 {
             usable_windows_strided(beams, raw, params.max_range, stride, windows, ok);
-            // Windows n − 2k … n − 3 do not exist at stride k.
-            let d = &mut self.mahalanobis[..windows];
-            for x in d.iter_mut().skip(windows.saturating_sub(2 * stride - 2)) {
-                *x = f32::INFINITY;
-            }
             return;
         }
         let _ = stride; // always 1 without the §10 options
         usable_windows(beams, raw, params.max_range, windows, ok);
-    }
-
-    /// The features of the last run.
-    pub fn features(&self) -> &Features {
-        &self.features
-    }
-
-    /// Smoothed ranges of the last run (m; invalid beams keep their 0).
-    pub fn smoothed(&self) -> &[f32] {
-        self.smoothed.get(..self.len).unwrap_or_default()
-    }
-
-    /// `D` per window of the last pass of the last run (`+inf` where invalid).
-    pub fn mahalanobis(&self) -> &[f32] {
-        self.mahalanobis
-            .get(..self.len.saturating_sub(2))
-            .unwrap_or_default()
-    }
-
-    /// Fill the bearing table if the geometry changed.
-    fn prepare_bearings(&mut self, geometry: Geometry) {
-        if self.geometry == Some(geometry) {
-            return;
-        }
-        self.bearings.fill(geometry);
-        self.geometry = Some(geometry);
     }
 }
 
@@ -256,7 +347,13 @@ fn window_filter(params: &Params, step: f32) -> WindowFilter {
 /// One smoothing pass: §4 as specified unless a §10 option is on (a
 /// stride above 1 or the grazing term: the strided passes).
 #[inline(always)]
-fn run_pass(filter: &WindowFilter, stride: usize, ok: &[u32], r: &mut [f32], d: &mut [f32]) {
+fn run_pass(
+    filter: &WindowFilter,
+    stride: usize,
+    ok: &[u32],
+    r: &mut [f32],
+    d: &mut dyn WindowSink,
+) {
     #[cfg(feature = "section10")]
     if stride != 1 || filter.grazing_on() {
         match stride {

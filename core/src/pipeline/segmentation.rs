@@ -52,42 +52,95 @@ pub fn segment_strided<const S: usize, const E: usize>(
     segments: &mut Vec<Segment, S>,
     edges: &mut Vec<u16, E>,
 ) -> SegmentationCounts {
-    let stride = stride.clamp(1, 8);
-    segments.clear();
-    edges.clear();
-    let mut counts = SegmentationCounts::default();
-    let mut run_start: Option<usize> = None;
-    let windows = mahalanobis.len().min(u16::MAX as usize - 2 * stride);
-    for i in 0..=windows {
-        // `i == windows` closes the last run.
-        let breaks = match mahalanobis.get(i) {
-            Some(&d) => {
-                let breaks = !(d < tau); // NaN breaks too
-                if breaks && d.is_finite() && edges.push((i + stride) as u16).is_err() {
-                    counts.edge_overflow = counts.edge_overflow.saturating_add(1);
-                }
-                breaks
-            }
-            None => true,
-        };
-        match (breaks, run_start) {
-            (false, None) => run_start = Some(i),
-            (true, Some(start)) => {
-                run_start = None;
-                let seg = Segment {
-                    first: (start + stride - 1) as u16,
-                    last: (i + stride) as u16,
-                };
-                if seg.points() < min_points as usize {
-                    counts.short_segments = counts.short_segments.saturating_add(1);
-                } else if segments.push(seg).is_err() {
-                    counts.segment_overflow = counts.segment_overflow.saturating_add(1);
-                }
-            }
+    let mut seg = Segmenter::new(stride, tau, min_points, segments, edges);
+    let windows = mahalanobis.len().min(u16::MAX as usize - 2 * seg.stride);
+    for (i, &d) in mahalanobis.iter().take(windows).enumerate() {
+        seg.window(i, d);
+    }
+    seg.finish(windows)
+}
+
+/// §6 fed window by window, in order (the extractor feeds it the last
+/// pass's `D` as the pass computes it, so no `D` of the whole scan is
+/// kept): [`segment_strided`] is this over a slice.
+pub struct Segmenter<'a, const S: usize, const E: usize> {
+    stride: usize,
+    tau: f32,
+    min_points: u16,
+    run_start: Option<usize>,
+    counts: SegmentationCounts,
+    invalid: u16,
+    segments: &'a mut Vec<Segment, S>,
+    edges: &'a mut Vec<u16, E>,
+}
+
+impl<'a, const S: usize, const E: usize> Segmenter<'a, S, E> {
+    /// A segmenter for windows of `stride` (clamped to 1..=8) writing into
+    /// `segments` and `edges`, which it clears.
+    pub fn new(
+        stride: usize,
+        tau: f32,
+        min_points: u16,
+        segments: &'a mut Vec<Segment, S>,
+        edges: &'a mut Vec<u16, E>,
+    ) -> Self {
+        segments.clear();
+        edges.clear();
+        Segmenter {
+            stride: stride.clamp(1, 8),
+            tau,
+            min_points,
+            run_start: None,
+            counts: SegmentationCounts::default(),
+            invalid: 0,
+            segments,
+            edges,
+        }
+    }
+
+    /// Window `i` (the next one, `i` counting from 0) has `D = d` (`+inf`
+    /// if invalid; NaN breaks).
+    #[inline]
+    pub fn window(&mut self, i: usize, d: f32) {
+        let breaks = !(d < self.tau); // NaN breaks too
+        if !d.is_finite() {
+            self.invalid = self.invalid.saturating_add(1);
+        } else if breaks && self.edges.push((i + self.stride) as u16).is_err() {
+            self.counts.edge_overflow = self.counts.edge_overflow.saturating_add(1);
+        }
+        match (breaks, self.run_start) {
+            (false, None) => self.run_start = Some(i),
+            (true, Some(start)) => self.close(start, i),
             _ => {}
         }
     }
-    counts
+
+    /// Windows that were not finite so far (invalid windows, §2).
+    pub fn invalid_windows(&self) -> u16 {
+        self.invalid
+    }
+
+    /// Close the last run after `windows` windows; what was dropped.
+    pub fn finish(&mut self, windows: usize) -> SegmentationCounts {
+        if let Some(start) = self.run_start.take() {
+            self.close(start, windows);
+        }
+        self.counts
+    }
+
+    /// The run of windows `start..end` as a segment.
+    fn close(&mut self, start: usize, end: usize) {
+        self.run_start = None;
+        let seg = Segment {
+            first: (start + self.stride - 1) as u16,
+            last: (end + self.stride) as u16,
+        };
+        if seg.points() < self.min_points as usize {
+            self.counts.short_segments = self.counts.short_segments.saturating_add(1);
+        } else if self.segments.push(seg).is_err() {
+            self.counts.segment_overflow = self.counts.segment_overflow.saturating_add(1);
+        }
+    }
 }
 
 #[cfg(test)]

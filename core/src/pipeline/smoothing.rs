@@ -115,6 +115,31 @@ pub fn usable_windows_strided(
     }
 }
 
+/// Where a pass puts `D` of its windows: block by block, in window order,
+/// `d` holding `D` of windows `first..first + d.len()` (`+inf` where
+/// invalid). The extractor segments the last pass's blocks as they come
+/// (§6) and keeps no `D` of its own; a tool keeps them in a buffer (a
+/// `&mut [f32]` is a sink that stores `D` of window `i` at index `i`).
+pub trait WindowSink {
+    /// `D` of windows `first..first + d.len()` of the pass.
+    fn windows(&mut self, first: usize, d: &[f32]);
+}
+
+impl WindowSink for &mut [f32] {
+    fn windows(&mut self, first: usize, d: &[f32]) {
+        if let Some(out) = self.get_mut(first..) {
+            for (x, &y) in out.iter_mut().zip(d) {
+                *x = y;
+            }
+        }
+    }
+}
+
+/// The sink that keeps nothing (every pass but the last).
+impl WindowSink for () {
+    fn windows(&mut self, _: usize, _: &[f32]) {}
+}
+
 /// Windows processed together: the filter runs branch-free over a block
 /// (so a host CPU can vectorise it, with the same per-window IEEE
 /// operations), then the block's points are blended. Stack use is a few
@@ -126,6 +151,8 @@ const BLOCK: usize = 32;
 struct Block {
     third_weight: [f32; BLOCK + 2],
     posterior: [[f32; BLOCK + 2]; 3],
+    /// `D` of the block's windows.
+    d: [f32; BLOCK],
 }
 
 /// Run one Jacobi smoothing pass in place.
@@ -136,8 +163,8 @@ struct Block {
 /// - `ranges`: the ranges of the previous pass (m), replaced by the new ones.
 ///   A point all of whose windows are invalid (in particular an invalid
 ///   beam) gets weight 0 from each and so keeps its value exactly.
-/// - `mahalanobis`: receives `D_i` for the `n − 2` windows (`+inf` for
-///   invalid windows).
+/// - `sink`: receives `D_i` of the `n − 2` windows block by block, in
+///   order (`+inf` for invalid windows).
 ///
 /// Slices shorter than expected are handled by processing only the common
 /// length; nothing panics.
@@ -148,11 +175,9 @@ pub fn smoothing_pass(
     filter: &WindowFilter,
     window_ok: &[u32],
     ranges: &mut [f32],
-    mahalanobis: &mut [f32],
+    sink: &mut dyn WindowSink,
 ) {
-    let windows = (window_ok.len() * BLOCK)
-        .min(mahalanobis.len())
-        .min(ranges.len().saturating_sub(2));
+    let windows = (window_ok.len() * BLOCK).min(ranges.len().saturating_sub(2));
     if windows == 0 {
         return;
     }
@@ -160,23 +185,24 @@ pub fn smoothing_pass(
     let mut block = Block {
         third_weight: [0.0; BLOCK + 2],
         posterior: [[0.0; BLOCK + 2]; 3],
+        d: [0.0; BLOCK],
     };
     let mut start = 0;
     while start < windows {
         let m = BLOCK.min(windows - start);
-        let (Some(points), Some(&ok), Some(d)) = (
+        let (Some(points), Some(&ok)) = (
             ranges.get(start..start + m + 2),
             window_ok.get(start / BLOCK),
-            mahalanobis.get_mut(start..start + m),
         ) else {
-            break; // not reached: `windows` fits all three slices
+            break; // not reached: `windows` fits both slices
         };
         // The filter on every window of the block (§2–3).
-        filter_block(filter, points, &mut block, d);
+        filter_block(filter, points, &mut block, m);
         // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
         // A window whose beams are not all usable gets D = +inf and weight
         // 0 here (its estimates, finite or 0, then add 0 to every point).
         let mut ok = ok; // bit 0: the next window
+        let d = &mut block.d[..m];
         for (w, d) in block.third_weight[2..].iter_mut().zip(d.iter_mut()) {
             if ok & 1 == 0 {
                 *d = f32::INFINITY;
@@ -188,6 +214,7 @@ pub fn smoothing_pass(
                 0.0
             };
         }
+        sink.windows(start, d);
         // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
         let Some(points) = ranges.get_mut(start..start + m) else {
             break; // not reached, as above
@@ -249,7 +276,7 @@ fn blend(block: &Block, d: f32, slot: usize) -> f32 {
 
 /// The window filter on `m` consecutive windows, `ranges` holding their
 /// `m + 2` points. Writes `D` (or `+inf`) and the estimates (or 0) of
-/// window `t` into `d[t]` and slot `t + 2` of the block; a window the
+/// window `t` into `block.d[t]` and slot `t + 2` of the block; a window the
 /// filter finds valid has finite estimates (the caller masks windows with
 /// unusable beams).
 ///
@@ -257,13 +284,14 @@ fn blend(block: &Block, d: f32, slot: usize) -> f32 {
 /// masked afterwards. The arithmetic per window is exactly that of
 /// [`WindowFilter::update`].
 #[inline]
-fn filter_block(filter: &WindowFilter, ranges: &[f32], block: &mut Block, d: &mut [f32]) {
-    let m = d.len().min(ranges.len().saturating_sub(2)).min(BLOCK);
+fn filter_block(filter: &WindowFilter, ranges: &[f32], block: &mut Block, m: usize) {
+    let m = m.min(ranges.len().saturating_sub(2)).min(BLOCK);
     // Exactly the block's points: `t + 2 < m + 2` below needs no check.
     let Some(ranges) = ranges.get(..m + 2) else {
         return;
     };
     let post = &mut block.posterior;
+    let d = &mut block.d;
     for t in 0..m {
         let z = Vec3([ranges[t], ranges[t + 1], ranges[t + 2]]);
         let (est, keep) = filter.update_unchecked(z);
@@ -298,8 +326,8 @@ struct StridedBlock {
 /// proposal, `Params::same_turn_windows`): window `i` is beams
 /// `i, i+K, i+2K` (the filter built for the angle `K·γ`), point `j` is
 /// blended from windows `j, j−K, j−2K` in that order; there are `n − 2K`
-/// windows (`window_ok` and `mahalanobis` entries beyond them are left
-/// alone). `K = 1` is §4 exactly. `K` above [`MAX_STRIDE`] does nothing.
+/// windows (the sink hears of no window beyond them; `window_ok` bits
+/// beyond them are ignored). `K = 1` is §4 exactly. `K` above [`MAX_STRIDE`] does nothing.
 // Never inlined: the §10 options must not change how the default pass
 // is compiled into the extractor.
 #[inline(never)]
@@ -307,14 +335,12 @@ pub fn smoothing_pass_strided<const K: usize>(
     filter: &WindowFilter,
     window_ok: &[u32],
     ranges: &mut [f32],
-    mahalanobis: &mut [f32],
+    sink: &mut dyn WindowSink,
 ) {
     if K == 0 || K > MAX_STRIDE {
         return;
     }
-    let windows = (window_ok.len() * BLOCK)
-        .min(mahalanobis.len())
-        .min(ranges.len().saturating_sub(2 * K));
+    let windows = (window_ok.len() * BLOCK).min(ranges.len().saturating_sub(2 * K));
     if windows == 0 {
         return;
     }
@@ -323,13 +349,14 @@ pub fn smoothing_pass_strided<const K: usize>(
         third_weight: [0.0; BLOCK + CARRY],
         posterior: [[0.0; BLOCK + CARRY]; 3],
     };
+    let mut d_block = [0.0f32; BLOCK];
     let mut start = 0;
     while start < windows {
         let m = BLOCK.min(windows - start);
         let (Some(points), Some(&ok), Some(d)) = (
             ranges.get(start..start + m + 2 * K),
             window_ok.get(start / BLOCK),
-            mahalanobis.get_mut(start..start + m),
+            d_block.get_mut(..m),
         ) else {
             break; // not reached: `windows` fits all three slices
         };
@@ -337,6 +364,7 @@ pub fn smoothing_pass_strided<const K: usize>(
         filter_block_strided::<K>(filter, points, ok, &mut block, d);
         // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
         third_weights(d, &mut block.third_weight[CARRY..]);
+        sink.windows(start, d);
         // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
         let Some(points) = ranges.get_mut(start..start + m) else {
             break; // not reached, as above
@@ -478,7 +506,7 @@ mod tests {
         let mut all = wall(n);
         let ok = [u32::MAX; 2]; // every window usable (the bitset of usable_windows)
         let mut d = [0.0f32; 39];
-        smoothing_pass_strided::<2>(&filter, &ok, &mut all[..n], &mut d);
+        smoothing_pass_strided::<2>(&filter, &ok, &mut all[..n], &mut &mut d[..]);
         // The same pass on the even and on the odd beams alone (stride 1).
         let raw = wall(n);
         for parity in 0..2 {
@@ -488,7 +516,7 @@ mod tests {
                 *x = raw[parity + 2 * k];
             }
             let mut sub_d = [0.0f32; 19];
-            smoothing_pass(&filter, &ok, &mut sub[..m], &mut sub_d[..m - 2]);
+            smoothing_pass(&filter, &ok, &mut sub[..m], &mut &mut sub_d[..m - 2]);
             for k in 0..m {
                 assert_eq!(
                     sub[k].to_bits(),
@@ -511,8 +539,8 @@ mod tests {
         let (mut a, mut b) = (wall(n), wall(n));
         let ok = [u32::MAX; 2];
         let (mut da, mut db) = ([0.0f32; 39], [0.0f32; 39]);
-        smoothing_pass(&filter, &ok, &mut a[..n], &mut da);
-        smoothing_pass_strided::<1>(&filter, &ok, &mut b[..n], &mut db);
+        smoothing_pass(&filter, &ok, &mut a[..n], &mut &mut da[..]);
+        smoothing_pass_strided::<1>(&filter, &ok, &mut b[..n], &mut &mut db[..]);
         assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits));
         assert_eq!(da.map(f32::to_bits), db.map(f32::to_bits));
     }

@@ -288,9 +288,12 @@ fn reach_pipeline(extractor: &mut Extractor, frame: &mut Frame, host: &mut Opaqu
     if let Ok(params) = params.validate() {
         let features = extractor.run(frame, &params);
         black_box(features.lines().len());
+        let mut trace = lms_core::Trace::new();
+        let features = extractor.run_traced(frame, &params, &mut trace);
+        black_box(features.lines().len());
+        black_box(trace.mahalanobis());
     }
     black_box(extractor.smoothed());
-    black_box(extractor.mahalanobis());
     let _ = emit_features(
         black_box(0),
         black_box(0),

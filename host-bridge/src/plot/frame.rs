@@ -2,7 +2,7 @@
 //! ([`FramePlot`]), and what the scan figure drew ([`ScanDrawn`]).
 
 use anyhow::{anyhow, bail, ensure, Result};
-use lms_core::{Extractor, Params};
+use lms_core::{Extractor, Params, Trace};
 
 use crate::extract::{FrameRecord, InputFrame};
 
@@ -54,7 +54,8 @@ impl FramePlot {
         let valid = params
             .validate()
             .map_err(|e| anyhow!("invalid parameters: {e}"))?;
-        ex.run_observed(&input.frame, &valid, |pass, d, _| {
+        let mut trace = Trace::new();
+        ex.run_observed(&input.frame, &valid, &mut trace, |pass, d, _| {
             if passes.contains(&pass) {
                 captured.push(PassD {
                     pass,
@@ -62,7 +63,7 @@ impl FramePlot {
                 });
             }
         });
-        let mut record = FrameRecord::from_run(input.index, &input.frame, &ex);
+        let mut record = FrameRecord::from_run(input.index, &input.frame, &ex, &trace);
         record.pose = input.pose;
         let g = input.frame.geometry();
         Ok(FramePlot {

@@ -17,7 +17,7 @@ use std::io::{self, BufRead, BufReader, Read, Write};
 use std::path::Path;
 
 use lms_core::carmen::{is_flaser, Flaser, UnitVote};
-use lms_core::{Extractor, Frame, Params, Unit, Variant};
+use lms_core::{Extractor, Frame, Params, Trace, Unit, Variant};
 
 /// Open a log, gzip-compressed (by its magic bytes) or plain.
 pub fn open(path: &Path) -> io::Result<Box<dyn BufRead>> {
@@ -80,13 +80,14 @@ pub fn write_log_bits(path: &Path, iterations: u16, out: &mut impl Write) -> io:
     .validate()
     .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e.to_string()))?;
     let mut extractor = Extractor::new();
+    let mut trace = Trace::new();
     let mut frame = Frame::for_variant(Variant::Fov180Res50);
     let mut index = 0usize;
     for_each_flaser(path, |f| {
         f.fill(unit, &mut frame)
             .map_err(|e| bad_line(path, index, e))?;
-        extractor.run(&frame, &params);
-        write_frame_bits(index, &extractor, out)?;
+        extractor.run_traced(&frame, &params, &mut trace);
+        write_frame_bits(index, &extractor, &trace, out)?;
         index += 1;
         Ok(())
     })?;
@@ -97,6 +98,7 @@ pub fn write_log_bits(path: &Path, iterations: u16, out: &mut impl Write) -> io:
 pub fn write_frame_bits(
     index: usize,
     extractor: &Extractor,
+    trace: &Trace,
     out: &mut impl Write,
 ) -> io::Result<()> {
     let f = extractor.features();
@@ -105,7 +107,7 @@ pub fn write_frame_bits(
         write!(out, " {:08x}", x.to_bits())?;
     }
     writeln!(out)?;
-    for x in extractor.mahalanobis() {
+    for x in trace.mahalanobis() {
         write!(out, " {:08x}", x.to_bits())?;
     }
     writeln!(out)?;

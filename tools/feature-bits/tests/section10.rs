@@ -7,7 +7,7 @@
 //! both builds.
 
 use lms_core::params::SECTION10_BUILT;
-use lms_core::{Extractor, Frame, ParamError, Params, Variant};
+use lms_core::{Extractor, Frame, ParamError, Params, Trace, Variant};
 
 /// A corridor wall seen at grazing incidence, with a 12 mm offset between
 /// the two interleaved mirror turns: every §10 option changes its result.
@@ -49,17 +49,20 @@ fn each_option_is_refused_by_name_or_changes_the_result() {
     ];
     let frame = grazing_wall();
     let mut ex = Extractor::new();
-    let default = ex.run(&frame, &Params::DEFAULT.validate().unwrap()).clone();
-    let default_d = ex.mahalanobis().to_vec();
+    let mut trace = Trace::new();
+    let default = ex
+        .run_traced(&frame, &Params::DEFAULT.validate().unwrap(), &mut trace)
+        .clone();
+    let default_d = trace.mahalanobis().to_vec();
     assert!(!default.lines().is_empty());
     for (name, params) in options {
         match (params.validate(), SECTION10_BUILT) {
             (Ok(valid), true) => {
                 let mut ex = Extractor::new();
-                let got = ex.run(&frame, &valid);
+                let got = ex.run_traced(&frame, &valid, &mut trace);
                 let same = got.lines() == default.lines()
                     && got.segments() == default.segments()
-                    && ex.mahalanobis() == &default_d[..];
+                    && trace.mahalanobis() == &default_d[..];
                 assert!(!same, "{name} changes nothing on the grazing wall");
             }
             (Err(e), false) => {
