@@ -6,6 +6,8 @@
 //! fixed-capacity storage ([`MAX_SEGMENTS`], [`MAX_LINES`], [`MAX_CORNERS`]);
 //! everything that is not kept is counted in [`Stats`].
 
+use core::fmt;
+
 use heapless::Vec;
 
 use crate::frame::MAX_BEAMS;
@@ -112,7 +114,7 @@ pub struct Features {
     /// Segments that passed `min_points`, in scan order.
     pub(crate) segments: Vec<Segment, MAX_SEGMENTS>,
     /// Edge points: middle beams of breaking valid windows, ascending.
-    pub(crate) edges: Vec<u16, MAX_BEAMS>,
+    pub(crate) edges: Edges,
     /// Accepted lines, in scan order.
     pub(crate) lines: Vec<Line, MAX_LINES>,
     /// Corners between consecutive lines, in scan order.
@@ -125,7 +127,7 @@ impl Features {
     /// No features, all counters zero (`const`, for statics).
     pub const EMPTY: Features = Features {
         segments: Vec::new(),
-        edges: Vec::new(),
+        edges: Edges::EMPTY,
         lines: Vec::new(),
         corners: Vec::new(),
         stats: Stats::ZERO,
@@ -139,7 +141,7 @@ impl Features {
 
     /// Edge points (beam indices), ascending (at most [`MAX_BEAMS`]).
     #[inline]
-    pub fn edges(&self) -> &[u16] {
+    pub fn edges(&self) -> &Edges {
         &self.edges
     }
 
@@ -178,7 +180,8 @@ impl Features {
         self.segments.push(segment)
     }
 
-    /// Append an edge point; hands it back if [`MAX_BEAMS`] are held.
+    /// Append an edge point; hands it back unless it is below [`MAX_BEAMS`]
+    /// and above every edge point held (edge points are ascending).
     pub fn push_edge(&mut self, beam: u16) -> Result<(), u16> {
         self.edges.push(beam)
     }
@@ -191,6 +194,122 @@ impl Features {
     /// Append a corner; hands it back if [`MAX_CORNERS`] are held.
     pub fn push_corner(&mut self, corner: Corner) -> Result<(), Corner> {
         self.corners.push(corner)
+    }
+}
+
+/// Words of [`Edges`]: one bit per beam of [`MAX_BEAMS`].
+const EDGE_WORDS: usize = MAX_BEAMS.div_ceil(32);
+
+/// The edge points of a frame (beam indices below [`MAX_BEAMS`]), a bitset
+/// read in ascending order ([`Edges::iter`]): 56 B instead of a list of up
+/// to 401 `u16` (806 B).
+#[derive(Clone, Copy, PartialEq, Eq, Default)]
+pub struct Edges {
+    /// Beam `j` is bit `j % 32` of word `j / 32`.
+    words: [u32; EDGE_WORDS],
+    /// How many bits are set.
+    count: u16,
+    /// The smallest beam a push accepts (one above the last pushed).
+    next: u16,
+}
+
+impl Edges {
+    /// No edge points (`const`, for statics).
+    pub const EMPTY: Edges = Edges {
+        words: [0; EDGE_WORDS],
+        count: 0,
+        next: 0,
+    };
+
+    /// How many edge points.
+    #[inline]
+    pub fn len(&self) -> usize {
+        usize::from(self.count)
+    }
+
+    /// Whether there are none.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Whether beam `beam` is an edge point.
+    pub fn contains(&self, beam: u16) -> bool {
+        let j = usize::from(beam);
+        self.words
+            .get(j / 32)
+            .is_some_and(|w| (w >> (j % 32)) & 1 != 0)
+    }
+
+    /// The edge points, ascending.
+    pub fn iter(&self) -> EdgeIter<'_> {
+        EdgeIter {
+            words: &self.words,
+            word: 0,
+            bits: self.words[0],
+        }
+    }
+
+    /// Remove every edge point.
+    pub fn clear(&mut self) {
+        // Word by word, only the non-zero ones: a plain fill made the
+        // compiler pull in an 8-byte-aligned memclr (174 B of flash) for
+        // this one call.
+        for w in self.words.iter_mut().filter(|w| **w != 0) {
+            *w = 0;
+        }
+        self.count = 0;
+        self.next = 0;
+    }
+
+    /// Append edge point `beam`; hands it back unless it is below
+    /// [`MAX_BEAMS`] and above every edge point held.
+    pub fn push(&mut self, beam: u16) -> Result<(), u16> {
+        let j = usize::from(beam);
+        match self.words.get_mut(j / 32) {
+            Some(w) if beam >= self.next && j < MAX_BEAMS => {
+                *w |= 1 << (j % 32);
+                self.count += 1; // at most MAX_BEAMS: `next` only grows
+                self.next = beam + 1; // beam < MAX_BEAMS, no overflow
+                Ok(())
+            }
+            _ => Err(beam),
+        }
+    }
+}
+
+impl fmt::Debug for Edges {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
+}
+
+impl<'a> IntoIterator for &'a Edges {
+    type Item = u16;
+    type IntoIter = EdgeIter<'a>;
+    fn into_iter(self) -> EdgeIter<'a> {
+        self.iter()
+    }
+}
+
+/// The edge points of an [`Edges`], ascending.
+#[derive(Clone, Debug)]
+pub struct EdgeIter<'a> {
+    words: &'a [u32; EDGE_WORDS],
+    word: usize,
+    bits: u32,
+}
+
+impl Iterator for EdgeIter<'_> {
+    type Item = u16;
+    fn next(&mut self) -> Option<u16> {
+        while self.bits == 0 {
+            self.word += 1;
+            self.bits = *self.words.get(self.word)?;
+        }
+        let bit = self.bits.trailing_zeros() as usize;
+        self.bits &= self.bits - 1;
+        Some((self.word * 32 + bit) as u16)
     }
 }
 
@@ -292,5 +411,35 @@ impl Corner {
             self.cov.c,
             self.angle_deg,
         ]
+    }
+}
+
+#[cfg(test)]
+mod edge_tests {
+    use super::*;
+
+    #[test]
+    fn edges_are_an_ascending_bitset() {
+        let mut e = Edges::EMPTY;
+        assert!(e.is_empty() && e.iter().next().is_none());
+        for beam in [0u16, 31, 32, 63, 200, 400] {
+            assert_eq!(e.push(beam), Ok(()));
+        }
+        // Not ascending, a repeat, or beyond MAX_BEAMS: handed back, nothing stored.
+        assert_eq!(e.push(300), Err(300));
+        assert_eq!(e.push(400), Err(400));
+        let mut f = Edges::EMPTY;
+        assert_eq!(f.push(MAX_BEAMS as u16), Err(MAX_BEAMS as u16));
+        assert!(f.is_empty());
+        assert_eq!(e.len(), 6);
+        assert_eq!(
+            e.iter().collect::<std::vec::Vec<_>>(),
+            [0, 31, 32, 63, 200, 400]
+        );
+        assert!(e.contains(63) && !e.contains(64) && !e.contains(1000));
+        assert_eq!(format!("{e:?}"), "[0, 31, 32, 63, 200, 400]");
+        e.clear();
+        assert_eq!(e, Edges::EMPTY);
+        assert_eq!(e.push(5), Ok(()));
     }
 }

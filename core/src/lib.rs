@@ -63,7 +63,8 @@ pub mod unstable {
 
 pub use features::Line;
 pub use features::{
-    Corner, Features, Segment, Stats, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS, MAX_WINDOWS,
+    Corner, EdgeIter, Edges, Features, Segment, Stats, MAX_CORNERS, MAX_LINES, MAX_SEGMENTS,
+    MAX_WINDOWS,
 };
 pub use frame::MAX_BEAMS;
 pub use frame::{Beam, Frame, Geometry, Invalid, Variant};

@@ -41,6 +41,9 @@ fn coprocessor_parts_sizes() {
     let outputs = size_of::<Features>() + 4 * lms_core::MAX_BEAMS;
     assert!(size_of::<Extractor>() <= outputs + bearings + 52 + 32);
     assert!(size_of::<lms_core::Trace>() >= 4 * (lms_core::MAX_BEAMS - 2));
+    // The edge points are a bitset of 401 bits and two counts (56 B; they
+    // were a list of up to 401 u16, 806 B).
+    assert!(size_of::<lms_core::Edges>() <= 56);
     // One copy of a scan in the sensor link: the client reads replies and
     // scans in place in its framer (it held a second 818-byte copy).
     assert!(size_of::<Client>() < size_of::<Framer>() + 256);
@@ -72,6 +75,7 @@ fn coprocessor_parts_sizes() {
     // ALGORITHM.md §10 proposals (grazing_noise, same_turn_windows,
     // fit_sigma); 16 656 B with the extractor's two-level bearing table
     // and window bitset (3 216 B less); 15 056 B without the extractor's
-    // `D` buffer (segmented as the last pass computes it).
-    assert!(size_of::<CoProcessor>() <= 15_056);
+    // `D` buffer (segmented as the last pass computes it); 14 296 B with
+    // the edge points as a bitset (760 B less).
+    assert!(size_of::<CoProcessor>() <= 14_296);
 }

@@ -348,7 +348,9 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
         f.edges().len() + usize::from(f.stats().edge_overflow),
         edges
     );
-    prop_assert!(f.edges().windows(2).all(|w| w[0] < w[1]));
+    let listed: Vec<u16> = f.edges().iter().collect();
+    prop_assert_eq!(listed.len(), f.edges().len());
+    prop_assert!(listed.windows(2).all(|w| w[0] < w[1]));
     let usable_count = (0..n).filter(|&j| usable(j)).count();
     prop_assert_eq!(usize::from(f.stats().valid_beams), usable_count);
     prop_assert_eq!(

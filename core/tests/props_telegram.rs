@@ -282,7 +282,7 @@ proptest! {
         counter in any::<u32>(),
         beams in any::<u16>(),
         segments in prop::collection::vec((any::<u16>(), any::<u16>()), 0..=64),
-        edges in prop::collection::vec(any::<u16>(), 0..=401),
+        edges in prop::collection::btree_set(0u16..401, 0..=401),
         lines in prop::collection::vec((any::<[u32; 10]>(), any::<[u16; 3]>()), 0..=64),
         corners in prop::collection::vec((any::<[u32; 6]>(), any::<[u8; 3]>()), 0..=63),
         stats in any::<[u16; 12]>(),

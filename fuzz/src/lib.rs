@@ -306,7 +306,7 @@ pub fn encode_features(out: &mut Output, counter: u32, beams: u16, f: &Features)
     for s in f.segments() {
         out.u16(s.first).u16(s.last);
     }
-    for &e in f.edges() {
+    for e in f.edges() {
         out.u16(e);
     }
     for l in f.lines() {
@@ -332,7 +332,7 @@ pub fn feature_bits(f: &Features) -> Vec<u32> {
         v.extend([u32::from(s.first), u32::from(s.last)]);
     }
     v.push(u32::MAX);
-    v.extend(f.edges().iter().map(|&e| u32::from(e)));
+    v.extend(f.edges().iter().map(u32::from));
     v.push(u32::MAX);
     for l in f.lines() {
         v.extend(

@@ -168,7 +168,7 @@ impl FrameRecord {
             ranges: valid_or_null(frame.ranges()),
             smoothed: valid_or_null(ex.smoothed()),
             mahalanobis: trace.mahalanobis().iter().map(|&d| finite(d)).collect(),
-            edges: f.edges().to_vec(),
+            edges: f.edges().iter().collect::<Vec<u16>>(),
             segments: f.segments().iter().map(|s| [s.first, s.last]).collect(),
             lines: f
                 .lines()

@@ -139,7 +139,7 @@ fn real_log_round_trips_bit_exactly() {
         assert!(nulls > 0, "frame {index} has invalid windows");
 
         let f = ex.features();
-        let edges: Vec<u64> = f.edges().iter().map(|&e| e as u64).collect();
+        let edges: Vec<u64> = f.edges().iter().map(|e| e as u64).collect();
         let got: Vec<u64> = rec["edges"]
             .as_array()
             .unwrap()

@@ -245,7 +245,7 @@ fn compare(case: &Case, worst_by_pass: &mut [WorstAt; 2]) -> Vec<String> {
                 .map(|s| (s.first as usize, s.last as usize))
                 .collect();
             let ref_segs: Vec<(usize, usize)> = segs.iter().map(|s| (s.first, s.last)).collect();
-            let core_edges: Vec<usize> = f.edges().iter().map(|&e| e as usize).collect();
+            let core_edges: Vec<usize> = f.edges().iter().map(|e| e as usize).collect();
             if core_segs != ref_segs {
                 failures.push(format!(
                     "{} pass {passes}: segments core {core_segs:?} ref {ref_segs:?}",

@@ -80,7 +80,7 @@ fn exact_scans(truth: &TrueScan, expected: &[u16], params: &Params, seeds: u64) 
         let readings = truth.noisy(&NoiseModel::gaussian(SIGMA), &mut seeded_rng(seed));
         let frame = Frame::from_metres(geometry, &to_f32_metres(&readings, 0.0)).unwrap();
         let features = extractor.run(&frame, &params.validate().unwrap());
-        let edges: Vec<u16> = features.edges().to_vec();
+        let edges: Vec<u16> = features.edges().iter().collect::<Vec<u16>>();
         exact += u64::from(edges == expected);
         false_edges += edges.iter().filter(|e| !expected.contains(e)).count();
     }
@@ -109,7 +109,7 @@ fn noise_free_edge_points_lines_and_corners_are_exact() {
     let frame = Frame::from_metres(Variant::Fov180Res50.geometry(), &ranges).unwrap();
     let mut extractor = Extractor::new();
     let features = extractor.run(&frame, &lms_core::ValidParams::DEFAULT);
-    let edges: Vec<u16> = features.edges().to_vec();
+    let edges: Vec<u16> = features.edges().iter().collect::<Vec<u16>>();
     assert_eq!(edges, expected);
     // Six lines: right wall, front wall (right of the box), two box faces,
     // front wall (left of the box), left wall; three well-conditioned

@@ -136,7 +136,7 @@ fn noise_free_edge_points_are_the_true_corners_and_jumps() {
                     .unwrap(),
                     &mut trace,
                 );
-                let edges: Vec<usize> = ex.features().edges().iter().map(|&e| e as usize).collect();
+                let edges: Vec<usize> = ex.features().edges().iter().map(|e| e as usize).collect();
                 let d = trace.mahalanobis();
                 let true_edges = truth.true_edge_points();
                 let at = format!("{name} {variant:?} {iterations} pass(es): edges {edges:?}, truth {true_edges:?}");
@@ -197,7 +197,7 @@ fn noisy_edge_points_find_every_corner_and_jump() {
             let frame = frame_of(variant, &truth, &noise, seed);
             let mut trace = lms_core::Trace::new();
             ex.run_traced(&frame, &lms_core::ValidParams::DEFAULT, &mut trace);
-            let edges: Vec<usize> = ex.features().edges().iter().map(|&e| e as usize).collect();
+            let edges: Vec<usize> = ex.features().edges().iter().map(|e| e as usize).collect();
             let d = trace.mahalanobis();
             let at = format!("{variant:?} seed {seed}: edges {edges:?}, truth {true_edges:?}");
             for &(i, valid) in &jumps {
@@ -389,7 +389,7 @@ fn the_line_model_keeps_a_corner_that_a_gaussian_mask_moves() {
         ex.run(frame, &lms_core::ValidParams::DEFAULT);
         let edges = ex.features().edges();
         assert!(
-            edges.contains(&(j as u16)) || edges.contains(&(j as u16 + 1)),
+            edges.contains(j as u16) || edges.contains(j as u16 + 1),
             "no edge at the vertex {:.2}: {edges:?}",
             vertex.beam
         );

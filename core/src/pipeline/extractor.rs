@@ -20,7 +20,7 @@ use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
 use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
-use crate::pipeline::segmentation::Segmenter;
+use crate::pipeline::segmentation::{EdgeList, Segmenter};
 use crate::pipeline::smoothing::{
     smoothing_pass, usable, usable_windows, WindowSink, WINDOW_WORDS,
 };
@@ -231,12 +231,12 @@ struct ScaleSpace<'a> {
 
 /// Where a pass's `D` goes: into the caller's trace (if any) and, on the
 /// last pass, into §6 segmentation.
-struct PassSink<'t, 's, 'a, const S: usize, const E: usize> {
+struct PassSink<'t, 's, 'a, const S: usize, L: EdgeList> {
     trace: &'t mut [f32],
-    segmenter: Option<&'s mut Segmenter<'a, S, E>>,
+    segmenter: Option<&'s mut Segmenter<'a, S, L>>,
 }
 
-impl<const S: usize, const E: usize> WindowSink for PassSink<'_, '_, '_, S, E> {
+impl<const S: usize, L: EdgeList> WindowSink for PassSink<'_, '_, '_, S, L> {
     fn windows(&mut self, first: usize, d: &[f32]) {
         (&mut *self.trace).windows(first, d);
         if let Some(seg) = self.segmenter.as_mut() {
@@ -251,13 +251,13 @@ impl ScaleSpace<'_> {
     /// §4–5: `params.iterations` smoothing passes over the frame's ranges
     /// with windows of `stride`, `D` of each pass into `trace`, the last
     /// pass's into `seg` (§6), `after_pass` after each.
-    fn run<F, const S: usize, const E: usize>(
+    fn run<F, const S: usize, L: EdgeList>(
         mut self,
         frame: &Frame,
         params: &Params,
         stride: usize,
         trace: &mut [f32],
-        seg: &mut Segmenter<'_, S, E>,
+        seg: &mut Segmenter<'_, S, L>,
         after_pass: &mut F,
     ) where
         F: FnMut(u16, &[f32], &[f32]),

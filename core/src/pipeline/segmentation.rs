@@ -7,7 +7,34 @@
 
 use heapless::Vec;
 
-use crate::features::Segment;
+use crate::features::{Edges, Segment};
+
+/// Where segmentation puts edge points (ascending beam indices): the
+/// features' bitset [`Edges`] or a list.
+pub trait EdgeList {
+    /// Remove every edge point.
+    fn clear(&mut self);
+    /// Append `beam`; hands it back if it cannot be stored.
+    fn push(&mut self, beam: u16) -> Result<(), u16>;
+}
+
+impl EdgeList for Edges {
+    fn clear(&mut self) {
+        Edges::clear(self);
+    }
+    fn push(&mut self, beam: u16) -> Result<(), u16> {
+        Edges::push(self, beam)
+    }
+}
+
+impl<const E: usize> EdgeList for Vec<u16, E> {
+    fn clear(&mut self) {
+        Vec::clear(self);
+    }
+    fn push(&mut self, beam: u16) -> Result<(), u16> {
+        Vec::push(self, beam)
+    }
+}
 
 /// What segmentation dropped or could not store.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -25,12 +52,12 @@ pub struct SegmentationCounts {
 ///
 /// `mahalanobis[i]` is `D` of window `i` (`+inf` if invalid; NaN is treated
 /// as breaking). Outputs are cleared first; overflow is counted, never a panic.
-pub fn segment<const S: usize, const E: usize>(
+pub fn segment<const S: usize, L: EdgeList>(
     mahalanobis: &[f32],
     tau: f32,
     min_points: u16,
     segments: &mut Vec<Segment, S>,
-    edges: &mut Vec<u16, E>,
+    edges: &mut L,
 ) -> SegmentationCounts {
     // Stride 1 is §6 exactly: first point `i`, last `k + 2`, edge `i + 1`.
     segment_strided(mahalanobis, 1, tau, min_points, segments, edges)
@@ -44,13 +71,13 @@ pub fn segment<const S: usize, const E: usize>(
 /// is its middle beam. `stride = 1` is §6.
 // Never inlined: the §10 option must not grow the extractor's stack frame.
 #[inline(never)]
-pub fn segment_strided<const S: usize, const E: usize>(
+pub fn segment_strided<const S: usize, L: EdgeList>(
     mahalanobis: &[f32],
     stride: usize,
     tau: f32,
     min_points: u16,
     segments: &mut Vec<Segment, S>,
-    edges: &mut Vec<u16, E>,
+    edges: &mut L,
 ) -> SegmentationCounts {
     let mut seg = Segmenter::new(stride, tau, min_points, segments, edges);
     let windows = mahalanobis.len().min(u16::MAX as usize - 2 * seg.stride);
@@ -63,7 +90,7 @@ pub fn segment_strided<const S: usize, const E: usize>(
 /// §6 fed window by window, in order (the extractor feeds it the last
 /// pass's `D` as the pass computes it, so no `D` of the whole scan is
 /// kept): [`segment_strided`] is this over a slice.
-pub struct Segmenter<'a, const S: usize, const E: usize> {
+pub struct Segmenter<'a, const S: usize, L: EdgeList> {
     stride: usize,
     tau: f32,
     min_points: u16,
@@ -71,10 +98,10 @@ pub struct Segmenter<'a, const S: usize, const E: usize> {
     counts: SegmentationCounts,
     invalid: u16,
     segments: &'a mut Vec<Segment, S>,
-    edges: &'a mut Vec<u16, E>,
+    edges: &'a mut L,
 }
 
-impl<'a, const S: usize, const E: usize> Segmenter<'a, S, E> {
+impl<'a, const S: usize, L: EdgeList> Segmenter<'a, S, L> {
     /// A segmenter for windows of `stride` (clamped to 1..=8) writing into
     /// `segments` and `edges`, which it clears.
     pub fn new(
@@ -82,7 +109,7 @@ impl<'a, const S: usize, const E: usize> Segmenter<'a, S, E> {
         tau: f32,
         min_points: u16,
         segments: &'a mut Vec<Segment, S>,
-        edges: &'a mut Vec<u16, E>,
+        edges: &'a mut L,
     ) -> Self {
         segments.clear();
         edges.clear();

@@ -271,7 +271,7 @@ where
     let edges = &features.edges;
     out.telegram(CMD_EDGES, 6 + 2 * edges.len(), |w| {
         w.u16(edges.len() as u16);
-        for &e in edges {
+        for e in edges {
             w.u16(e);
         }
     })?;
@@ -569,7 +569,9 @@ impl FeatureAssembler {
             CMD_EDGES => read_records(&mut r, malformed, |r| {
                 let n = r.u16()?;
                 Some((usize::from(n), |r: &mut Reader<'_>| {
-                    Some(f.edges.push(r.u16()?).is_ok())
+                    // Edge points are ascending beams below MAX_BEAMS: any
+                    // other is a malformed D3 (the bitset cannot hold it).
+                    f.edges.push(r.u16()?).ok().map(|()| true)
                 }))
             })?,
             CMD_LINES => read_records(&mut r, malformed, |r| {

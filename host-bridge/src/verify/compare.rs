@@ -147,7 +147,9 @@ pub fn differences(got: &Features, want: &Features) -> Vec<Difference> {
             ]
         },
     );
-    diff_list(&mut out, "edge", "edges", got.edges(), want.edges(), |&e| {
+    let (got_edges, want_edges): (Vec<u16>, Vec<u16>) =
+        (got.edges().iter().collect(), want.edges().iter().collect());
+    diff_list(&mut out, "edge", "edges", &got_edges, &want_edges, |&e| {
         [("beam", Value::Int(e.into()))]
     });
     diff_list(
