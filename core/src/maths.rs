@@ -233,13 +233,37 @@ impl Sym2 {
     }
 }
 
-/// Wrap an angle in radians into (−π, π].
+/// Wrap an angle in radians into (−π, π] (`π` the f32 constant; a
+/// non-finite angle is returned as it is).
+///
+/// The result is the one value in (−π, π] that differs from `a` by an
+/// integer multiple of `2π` (f32), computed exactly: `|a|` is reduced by
+/// `2π·2^e`, largest `e` first (each subtraction exact by Sterbenz's
+/// lemma, as in `fmod`), then moved into (−π, π] by one more `2π` (exact:
+/// both operands and the result are multiples of 2⁻²² below 8). So it is
+/// bit for bit what `remainderf(a, 2π)` and the same move give, without
+/// libm's `remainderf` (368 B of flash on the M4F).
 pub fn wrap_angle(a: f32) -> f32 {
     use core::f32::consts::PI;
+    const TWO_PI: f32 = 2.0 * PI;
     if !a.is_finite() {
         return a;
     }
-    let mut w = libm::remainderf(a, 2.0 * PI);
+    let mut r = if a < 0.0 { -a } else { a };
+    if r >= TWO_PI {
+        // m = 2π·2^e ≤ r < 2m (2m overflows to +inf only beyond f32::MAX / 2).
+        let mut m = TWO_PI;
+        while m * 2.0 <= r {
+            m *= 2.0;
+        }
+        while m >= TWO_PI {
+            if r >= m {
+                r -= m; // r < 2m: exact
+            }
+            m *= 0.5;
+        }
+    }
+    let mut w = if a < 0.0 { -r } else { r };
     if w <= -PI {
         w += 2.0 * PI;
     } else if w > PI {
@@ -316,6 +340,57 @@ pub fn cos_sin_plus(x: f32, tail: f32) -> (f32, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn wrap_angle_is_remainderf_bit_for_bit() {
+        use core::f32::consts::PI;
+        let by_remainder = |a: f32| {
+            let mut w = libm::remainderf(a, 2.0 * PI);
+            if w <= -PI {
+                w += 2.0 * PI;
+            } else if w > PI {
+                w -= 2.0 * PI;
+            }
+            w
+        };
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut checked = 0;
+        for _ in 0..400_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            // Every exponent (random bits), and angles near the multiples of π.
+            let a = if state & 1 == 0 {
+                f32::from_bits((state >> 32) as u32)
+            } else {
+                let k = ((state >> 8) % 41) as f32 - 20.0;
+                k * PI + ((state >> 16) % 2001) as f32 * 1e-6 - 1e-3
+            };
+            if !a.is_finite() {
+                continue;
+            }
+            let (w, want) = (wrap_angle(a), by_remainder(a));
+            assert_eq!(w.to_bits(), want.to_bits(), "{a:e}: {w} vs {want}");
+            assert!(w > -PI && w <= PI);
+            checked += 1;
+        }
+        assert!(checked > 300_000);
+        for a in [
+            PI,
+            -PI,
+            2.0 * PI,
+            -2.0 * PI,
+            3.0 * PI,
+            f32::MAX,
+            -f32::MAX,
+            0.0,
+            -0.0,
+        ] {
+            assert_eq!(wrap_angle(a).to_bits(), by_remainder(a).to_bits(), "{a:e}");
+        }
+        assert!(wrap_angle(f32::NAN).is_nan());
+        assert_eq!(wrap_angle(f32::INFINITY), f32::INFINITY);
+    }
 
     #[test]
     fn cos_sin_is_within_tolerance_of_f64() {
