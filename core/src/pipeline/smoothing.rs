@@ -66,16 +66,38 @@ pub fn usable_windows(
     windows: usize,
     window_ok: &mut [u32],
 ) {
+    usable_spans(beams, ranges, max_range, 1, windows, window_ok);
+}
+
+/// Window `i` of stride `stride` is set iff every beam of
+/// `i..=i + 2·stride` is usable (the first `windows` windows, as many as
+/// `window_ok` holds); every other bit is cleared. One pass over the beams
+/// with the length of the current run of usable beams.
+fn usable_spans(
+    beams: &[Beam],
+    ranges: &[f32],
+    max_range: f32,
+    stride: usize,
+    windows: usize,
+    window_ok: &mut [u32],
+) {
+    let windows = windows.min(window_ok.len() * BLOCK);
+    for w in window_ok.iter_mut() {
+        *w = 0;
+    }
     let ok = |j: usize| match (beams.get(j), ranges.get(j)) {
         (Some(&b), Some(&d)) => usable(b, d, max_range),
         _ => false,
     };
-    for (w, word) in window_ok.iter_mut().enumerate() {
-        *word = 0;
-        for t in 0..BLOCK {
-            let i = w * BLOCK + t;
-            if i < windows && ok(i) && ok(i + 1) && ok(i + 2) {
-                *word |= 1 << t;
+    // Beams from the last unusable one: a window is usable when the run of
+    // usable beams ending at its last beam is 2·stride + 1 long.
+    let span = 2 * stride + 1;
+    let mut run = 0usize;
+    for j in 0..windows + 2 * stride {
+        run = if ok(j) { run + 1 } else { 0 };
+        if let Some(i) = j.checked_sub(2 * stride) {
+            if let Some(w) = window_ok.get_mut(i / BLOCK) {
+                *w |= u32::from(run >= span) << (i % BLOCK);
             }
         }
     }
@@ -95,24 +117,7 @@ pub fn usable_windows_strided(
     windows: usize,
     window_ok: &mut [u32],
 ) {
-    let windows = windows.min(window_ok.len() * BLOCK);
-    window_ok.fill(0);
-    let ok = |j: usize| match (beams.get(j), ranges.get(j)) {
-        (Some(&b), Some(&d)) => usable(b, d, max_range),
-        _ => false,
-    };
-    // Beams from the last unusable one: a window is usable when the run of
-    // usable beams ending at its last beam is 2·stride + 1 long.
-    let span = 2 * stride + 1;
-    let mut run = 0usize;
-    for j in 0..windows + 2 * stride {
-        run = if ok(j) { run + 1 } else { 0 };
-        if let Some(i) = j.checked_sub(2 * stride) {
-            if let Some(w) = window_ok.get_mut(i / BLOCK) {
-                *w |= u32::from(run >= span) << (i % BLOCK);
-            }
-        }
-    }
+    usable_spans(beams, ranges, max_range, stride, windows, window_ok);
 }
 
 /// Where a pass puts `D` of its windows: block by block, in window order,
