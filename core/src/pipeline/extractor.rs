@@ -420,17 +420,26 @@ fn fit_lines<B: BearingTable>(
             stats.line_overflow = stats.line_overflow.saturating_add(1);
         }
     }
-    let before = f.lines.len();
-    f.lines.retain(|l| l.length() >= params.min_length);
-    stats.rejected_short = (before - f.lines.len()) as u16;
-    // Too uncertain to be useful (beyond ALGORITHM.md): σ_α above the limit.
+    // Too short, then (beyond ALGORITHM.md) too uncertain to be useful:
+    // σ_α above the limit. One pass; a line counts for the first it fails.
     let max_var = {
         let sd = params.max_alpha_sd_deg * (core::f32::consts::PI / 180.0);
         sd * sd
     };
-    let before = f.lines.len();
-    f.lines.retain(|l| l.cov.a <= max_var);
-    stats.rejected_wide = (before - f.lines.len()) as u16;
+    let (mut short, mut wide) = (0u16, 0u16);
+    f.lines.retain(|l| {
+        if !(l.length() >= params.min_length) {
+            short += 1;
+            false
+        } else if !(l.cov.a <= max_var) {
+            wide += 1;
+            false
+        } else {
+            true
+        }
+    });
+    stats.rejected_short = short;
+    stats.rejected_wide = wide;
 }
 
 /// §8: a corner for each pair of consecutive lines whose facing endpoints are
