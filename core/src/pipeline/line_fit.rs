@@ -24,7 +24,7 @@
 
 use crate::features::Line;
 use crate::frame::Beam;
-use crate::maths::{cos_sin, wrap_angle, Sym2};
+use crate::maths::{atan2, cos_sin, wrap_angle, Sym2};
 pub use crate::pipeline::bearings::BearingTable;
 
 /// Most Gauss–Newton steps per fit (§7.2).
@@ -118,7 +118,7 @@ pub fn fit_piece<B: BearingTable>(
     // 2. Gauss–Newton in the range direction.
     let Normal { ca, sa, r } = span.gauss_newton(start)?.facing_sensor();
     // atan2 gives [−π, π]; α is in (−π, π].
-    let alpha = match libm::atan2f(sa, ca) {
+    let alpha = match atan2(sa, ca) {
         a if a <= -core::f32::consts::PI => core::f32::consts::PI,
         a => a,
     };
@@ -351,7 +351,7 @@ fn rotate(ca: f32, sa: f32, delta: f32) -> (f32, f32) {
         let sd = delta * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
         (ca * cd - sa * sd, sa * cd + ca * sd)
     } else {
-        cos_sin(wrap_angle(libm::atan2f(sa, ca) + delta))
+        cos_sin(wrap_angle(atan2(sa, ca) + delta))
     }
 }
 

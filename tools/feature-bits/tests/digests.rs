@@ -4,12 +4,14 @@
 //! change of any bit of any smoothed range, `D`, edge, segment, line,
 //! corner or counter of any frame fails this test.
 //!
-//! Re-pinned when the core's sines and cosines moved from libm's
-//! `cosf`/`sinf` (f64 inside) to `maths::cos_sin` (f32 only, 6.5 KB less
-//! flash on the M4F): smoothed ranges, `D`, edges, segments and counters
-//! kept every bit; about 40 % of the lines moved, on CSAIL by at most
-//! 5.8e-6 rad in α and 2.1e-5 m in r, corners by at most 1.2 mm (Örebro:
-//! 0.16 m on an ill-conditioned pair of nearly parallel lines).
+//! Re-pinned when the core's sines, cosines and `atan2` moved from libm's
+//! `cosf`/`sinf`/`atan2f` (f64 inside, or 600 B) to `maths::cos_sin` and
+//! `maths::atan2` (f32 only, 7.2 KB less flash on the M4F): smoothed
+//! ranges, `D`, edges, segments and counters kept every bit; about half of
+//! the lines moved, on CSAIL by at most 5.8e-6 rad in α and 2.1e-5 m in r
+//! (Örebro 1.6e-6 rad, 3.3e-6 m); well-conditioned corners by at most
+//! 1.3 µm; ill-conditioned ones (flag cleared) by up to 0.16 m, at 179 m
+//! with σ of kilometres (`atan2` alone: α by one ulp, 2.4e-7 rad).
 //!
 //! To re-pin after an intended change of results (say why in the commit):
 //! `cargo run --release -p feature-bits -- LOG` and FNV-1a-64 its output
@@ -21,13 +23,13 @@ use feature_bits::{write_log_bits, Fnv64};
 
 /// (log stem, FNV-1a-64 of the feature bits, frames).
 const PINNED: [(&str, u64, usize); 7] = [
-    ("acapulco-corrected", 0xab3d72c570bee1b0, 861),
-    ("belgioioso-corrected", 0x2979d75e4619c788, 395),
-    ("csail-corrected", 0x3a29abc7db3ba8f1, 406),
-    ("freiburg-101-corrected", 0xbc514f11a384a20a, 292),
-    ("freiburg-campus-corrected", 0x9c257f45a274accd, 2008),
-    ("intel-corrected", 0x6de387f3e36e2f98, 910),
-    ("orebro-corrected", 0x6341f537a7352ae9, 237),
+    ("acapulco-corrected", 0x6ebae6f9863f5531, 861),
+    ("belgioioso-corrected", 0xe74b61b71ab4085f, 395),
+    ("csail-corrected", 0x2aef7e7d56bac119, 406),
+    ("freiburg-101-corrected", 0x3b7aa069123bdcae, 292),
+    ("freiburg-campus-corrected", 0x51eb7aa6a4d3eef4, 2008),
+    ("intel-corrected", 0x0f87d6a25a9acae5, 910),
+    ("orebro-corrected", 0xb82e116bd3e06034, 237),
 ];
 
 fn log(stem: &str) -> PathBuf {
