@@ -340,19 +340,20 @@ impl Normal {
 /// [`rotate`]; its truncation error is below `0.25⁸/8! ≈ 4e-10`.
 const TAYLOR_STEP: f32 = 0.25;
 
-/// The unit normal `(ca, sa)` rotated by `delta` (rad): by the Taylor
-/// series of `cos δ` and `sin δ` to the δ⁶ and δ⁷ terms for
-/// `|δ| ≤` [`TAYLOR_STEP`], else by [`cos_sin`] of the new angle.
+/// The unit normal `(ca, sa)` rotated by `delta` (rad), with `cos δ`,
+/// `sin δ` from their Taylor series to the δ⁶ and δ⁷ terms for
+/// `|δ| ≤` [`TAYLOR_STEP`], else from [`cos_sin`].
 #[inline]
 fn rotate(ca: f32, sa: f32, delta: f32) -> (f32, f32) {
-    if libm::fabsf(delta) <= TAYLOR_STEP {
+    let (cd, sd) = if libm::fabsf(delta) <= TAYLOR_STEP {
         let d2 = delta * delta;
         let cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
         let sd = delta * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
-        (ca * cd - sa * sd, sa * cd + ca * sd)
+        (cd, sd)
     } else {
-        cos_sin(wrap_angle(atan2(sa, ca) + delta))
-    }
+        cos_sin(delta)
+    };
+    (ca * cd - sa * sd, sa * cd + ca * sd)
 }
 
 /// The Mahalanobis distance between two lines' parameters,
