@@ -288,9 +288,12 @@ pub const ATAN2_TOLERANCE: f64 = 6.0 / 16_777_216.0;
 /// `tan(π/8)`, `atan t = π/4 + atan((t − 1)/(t + 1))`; then the Taylor
 /// series of `atan u` to `u¹⁷` for `|u| ≤ tan(π/8)` (truncation below
 /// 3·10⁻⁹), and the octant put back (`π/2 − a`, `π − a`, the sign of `y`).
-/// Fixed order, no FMA (§9).
+/// Fixed order, no FMA (§9). With the `libm-trig` feature: libm's `atan2f`.
 pub fn atan2(y: f32, x: f32) -> f32 {
     use core::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+    if cfg!(feature = "libm-trig") {
+        return libm::atan2f(y, x); // ALGORITHM.md §9 as written
+    }
     /// tan(π/8).
     const TAN_PI_8: f32 = 0.414_213_57;
     // π, π/2, π/4 minus their f32 values (the f32 values are above).
@@ -355,7 +358,11 @@ pub const COS_SIN_TOLERANCE: f64 = 1.0 / 16_777_216.0;
 /// and `cos r` to `r¹²` (truncation below 10⁻¹¹ for `|r| ≤ π/4`), the tail
 /// `t` added to first order, and the quadrant from `k mod 4`. Fixed order,
 /// no FMA (§9). Within [`COS_SIN_TOLERANCE`] for `|x| ≤` [`COS_SIN_MAX_ARG`].
+/// With the `libm-trig` feature: libm's `cosf`/`sinf` (§9's wording).
 pub fn cos_sin(x: f32) -> (f32, f32) {
+    if cfg!(feature = "libm-trig") {
+        return (libm::cosf(x), libm::sinf(x)); // ALGORITHM.md §9 as written
+    }
     // π/2 = P1 + P2 + P3 (P1, P2 with 12 significant bits each).
     const P1: f32 = 1.570_312_5;
     const P2: f32 = 4.837_513e-4;
