@@ -175,7 +175,7 @@ fn commands(wire: &[u8]) -> (Vec<u8>, usize) {
         match fed.event {
             Some(Event::Ack) => acks += 1,
             Some(Event::Telegram(t)) => codes.push(t.command()),
-            Some(Event::Nak) => panic!("no NAK expected"),
+            Some(Event::Nak | Event::Long { .. }) => panic!("no NAK expected"),
             None if input.is_empty() => break,
             None => {}
         }
@@ -371,7 +371,9 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
                     checked += 1;
                 }
             }
-            Some(Event::Nak) => panic!("the co-processor never NAKs the client's replies"),
+            Some(Event::Nak | Event::Long { .. }) => {
+                panic!("the co-processor never NAKs the client's replies")
+            }
             None if input.is_empty() => break,
             None => {}
         }

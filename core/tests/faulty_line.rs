@@ -369,6 +369,7 @@ fn split(framer: &mut Framer, bytes: &[u8], mut each: impl FnMut(Option<&[u8]>))
             Some(Event::Telegram(t)) => each(Some(t.as_bytes())),
             Some(Event::Ack) => each(Some(&[ACK][..])),
             Some(Event::Nak) => each(Some(&[NAK][..])),
+            Some(Event::Long { .. }) => unreachable!("a full-size framer holds every telegram"),
             None => break,
         }
     }

@@ -84,6 +84,7 @@ fn run_framer(framer: &mut Framer, chunks: &[&[u8]]) -> (Vec<Vec<u8>>, usize) {
             match fed.event {
                 Some(Event::Telegram(t)) => telegrams.push(t.as_bytes().to_vec()),
                 Some(Event::Ack | Event::Nak) => handshakes += 1,
+                Some(Event::Long { .. }) => panic!("a full-size framer holds every telegram"),
                 None => break,
             }
         }

@@ -33,6 +33,7 @@ fn feed_chunk(framer: &mut Framer, chunk: &[u8], seen: &mut Vec<Seen>) {
             }
             Some(Event::Ack) => seen.push(Seen::Ack),
             Some(Event::Nak) => seen.push(Seen::Nak),
+            Some(Event::Long { .. }) => panic!("a full-size framer holds every telegram"),
             None => {
                 assert!(input.is_empty(), "no event but input left");
                 break;

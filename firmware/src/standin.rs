@@ -77,7 +77,7 @@ impl Forwarder {
                 input = fed.remaining;
                 match fed.event {
                     Some(Event::Telegram(_)) => outcome.scans += 1,
-                    Some(Event::Ack | Event::Nak) => {}
+                    Some(Event::Ack | Event::Nak | Event::Long { .. }) => {}
                     None if input.is_empty() => break,
                     None => {}
                 }

@@ -183,6 +183,7 @@ pub fn drain(framer: &mut Framer, chunk: &[u8], out: &mut Vec<Ev>) {
             Some(Event::Telegram(t)) => out.push(Ev::Telegram(t.as_bytes().to_vec())),
             Some(Event::Ack) => out.push(Ev::Ack),
             Some(Event::Nak) => out.push(Ev::Nak),
+            Some(Event::Long { .. }) => panic!("a full-size framer holds every telegram"),
             None => {
                 assert!(input.is_empty(), "no event but input left");
                 return;

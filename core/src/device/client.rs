@@ -460,6 +460,8 @@ impl Client {
                 Some(Event::Ack) => self.x.on_ack(now_us),
                 Some(Event::Nak) => self.x.on_nak(),
                 Some(Event::Telegram(t)) => self.x.on_telegram(&t, now_us),
+                // Not from a framer that holds every telegram (this one).
+                Some(Event::Long { .. }) => None,
             };
             if outcome.is_some() {
                 return (outcome, input);

@@ -116,6 +116,8 @@ impl SensorFeed {
                 }
                 Some(Event::Ack) => out.push(lms_core::telegram::ACK),
                 Some(Event::Nak) => out.push(lms_core::telegram::NAK),
+                // Not from a full-size framer.
+                Some(Event::Long { .. }) => {}
                 None => return,
             }
             self.intake.add(out.len() - start);

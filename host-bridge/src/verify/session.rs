@@ -459,7 +459,8 @@ impl Session {
             let fed = self.framer.feed(input);
             input = fed.remaining;
             match fed.event {
-                Some(Event::Ack) => {}
+                // (`Long`: not from a full-size framer.)
+                Some(Event::Ack | Event::Long { .. }) => {}
                 Some(Event::Nak) => self.naks += 1,
                 Some(Event::Telegram(t)) => match t.command() {
                     0xB0 => {

@@ -145,6 +145,15 @@ pub const BITS_PER_BYTE: u64 = 10;
 /// scan times exact in integers.
 const TURN_US_TIMES_3: u64 = 40_000;
 
+/// Bytes of the request framer's buffer: the longest request an LMS 2xx
+/// interprets, `77` with its 34-byte configuration (41 B), behind a false
+/// start's 4-byte header, with room to spare. A longer request is
+/// answered like any malformed one (`ACK`, `92`; `NAK` for a bad
+/// checksum): its checksum is checked as it passes and only its header is
+/// kept ([`Framer::with_capacity`], [`crate::telegram::Event::Long`]); it
+/// reaches neither [`ScanSource::extra_command`] nor [`ScanSource::relay`].
+pub const REQUEST_CAPACITY: usize = 64;
+
 /// Requests (and NAKs) waiting for the line.
 pub const PENDING_CAPACITY: usize = 8;
 /// Events held until [`Emulator::next_event`] takes them.
@@ -195,7 +204,7 @@ pub struct Emulator<S, const TX: usize = TX_CAPACITY> {
     mode: OperatingMode,
     variant: Variant,
     config: Config,
-    framer: Framer,
+    framer: Framer<REQUEST_CAPACITY>,
     /// When bytes last arrived (µs).
     last_rx_us: u64,
     /// Between a `10` and the `90`: input ignored.
@@ -264,7 +273,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             mode: OperatingMode::OnRequest,
             variant: settings.variant,
             config: settings.config,
-            framer: Framer::new(Direction::HostToSensor, Handshake::Ignored),
+            framer: Framer::with_capacity(Direction::HostToSensor, Handshake::Ignored),
             last_rx_us: 0,
             resetting: false,
             restart_at_us: None,

@@ -2,6 +2,7 @@
 
 use super::transmit::ReplyKind;
 use super::*;
+use crate::telegram::Telegram;
 
 /// A received telegram, copied out of the framer.
 #[derive(Clone, Copy, Debug)]
@@ -35,6 +36,73 @@ fn detach(request: Request<'_>) -> Request<'static> {
     }
 }
 
+/// A received request and what answers it.
+struct Classified {
+    incoming: Incoming,
+    data_len: usize,
+    /// The source's reply to a command the sensor does not know.
+    extra: Option<(u8, usize)>,
+    /// A value mode the sensor model answers itself.
+    value_mode: Option<ValueMode>,
+    /// The sensor behind the face answers it (co-processor).
+    relay: bool,
+}
+
+impl Classified {
+    /// A request of `len` (`LEN`) bytes too long to be kept: unknown.
+    fn unknown(address: u8, command: u8, len: u16) -> Self {
+        Classified {
+            incoming: Incoming {
+                address,
+                request: Request::Unknown { command, data: &[] },
+            },
+            data_len: usize::from(len).saturating_sub(1),
+            extra: None,
+            value_mode: None,
+            relay: false,
+        }
+    }
+}
+
+/// What `t` asks and who answers it: the sensor model, the source
+/// (`extra_command`, its reply data into `extra`) or the sensor behind the
+/// face (`relay`).
+fn classify<S: ScanSource>(
+    t: &Telegram<&[u8]>,
+    settings: &Settings,
+    source: &mut S,
+    extra: &mut [u8; EXTRA_REPLY_CAPACITY],
+) -> Option<Classified> {
+    let request = Request::parse(t).ok()?;
+    let ours = t.address() == settings.address;
+    let mut classified = Classified {
+        incoming: Incoming {
+            address: t.address(),
+            request: detach(request),
+        },
+        data_len: t.data().len(),
+        extra: None,
+        value_mode: None,
+        relay: false,
+    };
+    if let Request::Unknown { command, data } = request {
+        // A command the sensor does not know may be the source's.
+        if ours {
+            classified.extra = source
+                .extra_command(command, data, extra)
+                .filter(|&(_, len)| len <= EXTRA_REPLY_CAPACITY);
+        }
+        // A value mode (`20 26`/`27`/`28`), answered by the sensor model
+        // itself (not on the co-processor's face).
+        if !settings.external_scans {
+            classified.value_mode = ValueMode::parse(command, data);
+        }
+    }
+    // A request the sensor behind the face answers (co-processor).
+    classified.relay = settings.external_scans && ours && source.relay(t.command(), t.data());
+    Some(classified)
+}
+
 impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
     /// Feed the framer until it has nothing more, answering what it finds.
     pub(super) fn feed(&mut self, now_us: u64, bytes: &[u8]) {
@@ -49,59 +117,28 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             let fed = self.framer.feed(input);
             input = fed.remaining;
             let naks = fed.crc_errors;
-            let incoming = match fed.event {
-                Some(FramerEvent::Telegram(t)) => Request::parse(&t).ok().map(|r| Incoming {
-                    address: t.address(),
-                    request: detach(r),
-                }),
+            let done = fed.event.is_none();
+            let request = match fed.event {
+                Some(FramerEvent::Telegram(t)) => {
+                    classify(&t, &self.settings, &mut self.source, &mut self.extra)
+                }
+                // Longer than the request buffer: no request the sensor
+                // interprets is (`92`, as for any unknown or malformed one).
+                Some(FramerEvent::Long {
+                    address,
+                    command,
+                    len,
+                }) => Some(Classified::unknown(address, command, len)),
                 Some(FramerEvent::Ack | FramerEvent::Nak) | None => None,
             };
-            let data_len = match fed.event {
-                Some(FramerEvent::Telegram(t)) => t.data().len(),
-                _ => 0,
-            };
-            // A command the sensor does not know may be the source's.
-            let extra = match fed.event {
-                Some(FramerEvent::Telegram(t)) if t.address() == self.settings.address => {
-                    match Request::parse(&t) {
-                        Ok(Request::Unknown { command, data }) => self
-                            .source
-                            .extra_command(command, data, &mut self.extra)
-                            .filter(|&(_, len)| len <= EXTRA_REPLY_CAPACITY),
-                        _ => None,
-                    }
-                }
-                _ => None,
-            };
-            // A value mode (`20 26`/`27`/`28`), answered by the sensor model
-            // itself (not on the co-processor's face).
-            let value_mode = match fed.event {
-                Some(FramerEvent::Telegram(t)) if !self.settings.external_scans => {
-                    match Request::parse(&t) {
-                        Ok(Request::Unknown { command, data }) => ValueMode::parse(command, data),
-                        _ => None,
-                    }
-                }
-                _ => None,
-            };
-            // A request the sensor behind the face answers (co-processor).
-            let relay = match fed.event {
-                Some(FramerEvent::Telegram(t))
-                    if self.settings.external_scans && t.address() == self.settings.address =>
-                {
-                    self.source.relay(t.command(), t.data())
-                }
-                _ => false,
-            };
-            let done = fed.event.is_none();
             for _ in 0..naks {
                 self.stats.naks = self.stats.naks.wrapping_add(1);
                 self.queue(now_us, Outgoing::Nak);
                 self.event(Event::BadChecksum);
             }
-            match incoming {
-                Some(incoming) if relay => self.relay(now_us, incoming.request.command()),
-                Some(incoming) => self.handle(now_us, incoming, data_len, extra, value_mode),
+            match request {
+                Some(r) if r.relay => self.relay(now_us, r.incoming.request.command()),
+                Some(r) => self.handle(now_us, r.incoming, r.data_len, r.extra, r.value_mode),
                 None => {}
             }
             if self.resetting {

@@ -502,6 +502,56 @@ fn emulator_false_stx_given_up_after_idle() {
 }
 
 #[test]
+fn emulator_over_long_requests_are_answered_counted_and_resynchronised() {
+    // Longer than the request buffer (REQUEST_CAPACITY): a `77` with 60
+    // data bytes (malformed: ACK, 92) and an unknown 200-byte command.
+    let mut e = lms();
+    let long_77 = request(&[&[0x77][..], &[0x11; 60][..]].concat());
+    let long_unknown = request(&[&[0x68][..], &[0x33; 199][..]].concat());
+    assert!(long_77.len() > REQUEST_CAPACITY);
+    e.receive(2_000_000, &long_77);
+    e.receive(2_000_001, &long_unknown);
+    let mut expected = acked(&REPLY_92);
+    expected.extend(acked(&REPLY_92));
+    assert_eq!(drain(&mut e, 3_000_000), expected);
+    assert_eq!(
+        events(&mut e),
+        [
+            Event::Request(Handled::Unknown {
+                command: 0x77,
+                data_len: 60
+            }),
+            Event::Request(Handled::Unknown {
+                command: 0x68,
+                data_len: 199
+            }),
+        ]
+    );
+    assert_eq!(e.stats().requests, 2);
+    // Corrupted beyond what the buffer keeps: NAK, counted; the status
+    // request right behind it (same chunk) is answered.
+    let mut bad = long_unknown.clone();
+    bad[150] ^= 0x40;
+    e.receive(3_000_000, &[&bad[..], &STATUS[..]].concat());
+    let parts = split(&drain(&mut e, 4_000_000));
+    assert_eq!(parts[0], [NAK]);
+    assert_eq!(parts[1], [ACK]);
+    assert_eq!(parts[2][4], 0xB1);
+    assert_eq!(events(&mut e)[0], Event::BadChecksum);
+    assert_eq!(e.stats().naks, 1);
+    assert_eq!(e.framer_stats().crc_errors, 1);
+    assert_eq!(e.framer_stats().bytes_skipped as usize, bad.len());
+    // Byte by byte: the same answers.
+    let mut e = lms();
+    for (k, b) in long_77.iter().chain(&STATUS).enumerate() {
+        e.receive(2_000_000 + k as u64, core::slice::from_ref(b));
+    }
+    let parts = split(&drain(&mut e, 3_000_000));
+    assert_eq!(parts.len(), 4);
+    assert_eq!((parts[1][4], parts[3][4]), (0x92, 0xB1));
+}
+
+#[test]
 fn emulator_other_address_ignored_and_short_scans_padded() {
     let mut e = lms();
     let mut other = request(&[0x31]);
