@@ -83,6 +83,13 @@ impl embedded_io::Write for Port {
     }
 }
 
+/// An in-memory port keeps whatever it is given: no limit known.
+impl crate::device::coprocessor::WriteRoom for Port {
+    fn write_room(&mut self) -> Result<usize, Infallible> {
+        Ok(usize::MAX)
+    }
+}
+
 /// xorshift64*: a small deterministic generator (the seed must not be 0).
 #[derive(Clone, Debug)]
 pub struct Rng(pub u64);

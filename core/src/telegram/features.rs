@@ -251,10 +251,30 @@ pub fn emit_features<E, F>(
 where
     F: FnMut(&[u8]) -> Result<(), E>,
 {
+    emit_features_from(0, scan_counter, beams, params, features, address, send)
+}
+
+/// [`emit_features`] from the telegram with index `first` on (0 is the
+/// first `D4`): the telegrams before it are counted but neither built nor
+/// sent, so that a sender that stopped (its `send` failed at telegram `k`)
+/// resumes with `first = k`. Returns the scan's number of telegrams.
+pub fn emit_features_from<E, F>(
+    first: u32,
+    scan_counter: u32,
+    beams: u16,
+    params: &EchoedParams,
+    features: &Features,
+    address: u8,
+    send: F,
+) -> Result<u32, E>
+where
+    F: FnMut(&[u8]) -> Result<(), E>,
+{
     let mut out = Sender {
         buf: [0u8; MAX_TELEGRAM_LEN],
         address: REPLY_ADDRESS_BIT | address,
         scan_counter,
+        first,
         sent: 0,
         send,
     };
@@ -302,6 +322,8 @@ struct Sender<F> {
     buf: [u8; MAX_TELEGRAM_LEN],
     address: u8,
     scan_counter: u32,
+    /// Telegrams before this index are skipped.
+    first: u32,
     sent: u32,
     send: F,
 }
@@ -325,6 +347,10 @@ impl<F> Sender<F> {
     where
         F: FnMut(&[u8]) -> Result<(), E>,
     {
+        if self.sent < self.first {
+            self.sent = self.sent.wrapping_add(1);
+            return Ok(());
+        }
         let counter = self.scan_counter;
         let n = emit_telegram_with(
             &mut self.buf,
@@ -851,6 +877,39 @@ mod tests {
         }
         assert_eq!(got.lines.len(), 20);
         assert_eq!(got.corners.as_slice(), f.corners.as_slice());
+    }
+
+    #[test]
+    fn a_stopped_emission_resumes_where_it_stopped() {
+        let f = sample();
+        let params = EchoedParams::from(&Params::default());
+        let mut whole: std::vec::Vec<std::vec::Vec<u8>> = std::vec::Vec::new();
+        emit_features(7, 361, &params, &f, 0, |t| {
+            whole.push(t.to_vec());
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+        // A sender that takes two telegrams per call, then stops.
+        let mut pieces: std::vec::Vec<std::vec::Vec<u8>> = std::vec::Vec::new();
+        let mut first = 0;
+        for _ in 0..whole.len() {
+            let mut taken = 0;
+            let r = emit_features_from(first, 7, 361, &params, &f, 0, |t| {
+                if taken == 2 {
+                    return Err(());
+                }
+                pieces.push(t.to_vec());
+                taken += 1;
+                Ok(())
+            });
+            first += taken;
+            if r.is_ok() {
+                assert_eq!(r, Ok(6));
+                break;
+            }
+        }
+        assert_eq!(pieces, whole);
+        assert_eq!(first, 6);
     }
 
     #[test]

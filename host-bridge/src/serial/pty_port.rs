@@ -91,3 +91,11 @@ impl embedded_io::Write for PtyPort {
         Ok(())
     }
 }
+
+/// A pseudo-terminal buffers what it is given (and `write` waits while the
+/// other end's queue is full, as before): no limit known.
+impl lms_core::device::coprocessor::WriteRoom for PtyPort {
+    fn write_room(&mut self) -> io::Result<usize> {
+        Ok(usize::MAX)
+    }
+}

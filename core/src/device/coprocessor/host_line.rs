@@ -10,8 +10,32 @@
 //! after the sensor delivered it, and the backlog never exceeds one scan
 //! group); otherwise the scan is dropped whole and counted.
 
+use embedded_io::Write;
+
 use crate::device::emulator::line_time_us;
-use crate::telegram::Baud;
+use crate::telegram::{Baud, MAX_TELEGRAM_LEN};
+
+/// Room a host port must have when nothing waits in it (bytes): an `ACK`
+/// and the largest telegram (a 401-beam `B0` is 813 B, the largest feature
+/// telegram 749 B), so that every frame fits whole once the line is idle.
+pub const HOST_TX_MIN_ROOM: usize = 1 + MAX_TELEGRAM_LEN;
+
+/// A host port that says how many bytes it takes now without waiting, so
+/// that the co-processor never blocks on the host line
+/// ([`CoProcessor::poll`](super::CoProcessor::poll)): a scan's `B0` is
+/// written only if it fits whole, its feature telegrams one at a time as
+/// room frees, the face's replies as far as they fit.
+///
+/// `embedded-io`'s `WriteReady` says only that one byte fits; a UART's
+/// transmit queue knows its free space.
+pub trait WriteRoom: Write {
+    /// Bytes a `write_all` of at most this many queues now without waiting
+    /// for the line; at least [`HOST_TX_MIN_ROOM`] when nothing waits.
+    /// `usize::MAX` for a port that buffers what it is given and does not
+    /// say how much (a pseudo-terminal, an in-memory port): it is written
+    /// to as before, whole.
+    fn write_room(&mut self) -> Result<usize, Self::Error>;
+}
 
 /// When the host line will be idle (µs, the co-processor's clock).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

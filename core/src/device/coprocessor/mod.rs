@@ -26,6 +26,15 @@
 //!   line's time at the client's rate; a scan (with its features, if on) is
 //!   sent whole only if the line is free within one scan period, else it is
 //!   dropped and counted ([`Counters::host_scans_dropped`]).
+//! - The host line never blocks the loop ([`WriteRoom`]): a scan's `B0` is
+//!   written before the pipeline runs and only if the host port has room
+//!   for it whole; its feature telegrams follow one at a time as room
+//!   frees (a *pump*, [`CoProcessor::features_pending`]), and the face's
+//!   replies wait behind them (the wire order a blocking write gave). A
+//!   scan that arrives while the features of the last one, or a frame of
+//!   the face, are still going out is not taken (the features and the
+//!   `30 01` scan stay those of the last one): counted in
+//!   `host_scans_dropped` if the client streams.
 //!
 //! [`CoProcessor::poll`] is generic over `embedded-io` serial ports, so the
 //! firmware (UARTs) and the host build (pseudo-terminals) run the same code;
@@ -43,7 +52,7 @@ use crate::features::Features;
 use crate::params::ValidParams;
 use crate::pipeline::extractor::Extractor;
 use crate::telegram::features::{
-    emit_features, Counters, EchoedParams, CMD_FEATURES, REQ_COUNTERS, REQ_FEATURES,
+    emit_features_from, Counters, EchoedParams, CMD_FEATURES, REQ_COUNTERS, REQ_FEATURES,
 };
 use crate::telegram::{
     Baud, Config, Direction, MeasuredView, RangeBits, Telegram, MAX_TELEGRAM_LEN, MAX_VALUES,
@@ -51,7 +60,7 @@ use crate::telegram::{
 use crate::Unit;
 use crate::{Frame, Variant};
 
-pub use host_line::HostLine;
+pub use host_line::{HostLine, WriteRoom, HOST_TX_MIN_ROOM};
 pub use sensor_link::{LinkEvent, SensorLink, SensorSetup, Step};
 
 /// Bytes read from a port per call.
@@ -290,6 +299,17 @@ pub struct CoProcessor {
     values_stream: bool,
     /// The sensor is to go back to `B0`s (`20 24`, forwarded by itself).
     restore_stream: bool,
+    /// Feature telegrams of the latest scan still to go to the host.
+    pump: Pump,
+}
+
+/// The feature telegrams of the latest scan still to go to the host: from
+/// index `next` on (of [`emit_features_from`]), each when the host port
+/// has room for it whole. All zero: none.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Pump {
+    active: bool,
+    next: u32,
 }
 
 impl CoProcessor {
@@ -325,6 +345,10 @@ impl CoProcessor {
             values_samples: 0,
             values_stream: false,
             restore_stream: false,
+            pump: Pump {
+                active: false,
+                next: 0,
+            },
         }
     }
 
@@ -375,6 +399,12 @@ impl CoProcessor {
         self.host.source().features_on
     }
 
+    /// `true` while feature telegrams of the latest scan wait for room on
+    /// the host port (the face's replies and the next scan wait too).
+    pub fn features_pending(&self) -> bool {
+        self.pump.active
+    }
+
     /// Count bytes the board lost before they reached [`CoProcessor::poll`]
     /// (receive queue overflow), when it does not know how many: one scan
     /// dropped. Prefer [`note_sensor_lost`](CoProcessor::note_sensor_lost).
@@ -402,8 +432,10 @@ impl CoProcessor {
 
     /// Move bytes both ways, process every complete scan, answer the host.
     /// Call it as often as the board can; it never blocks on reading (it
-    /// reads only what `read_ready` says is there) and writes with
-    /// `write_all`.
+    /// reads only what `read_ready` says is there) nor on the host line (it
+    /// writes only what [`WriteRoom::write_room`] says fits; the rest waits
+    /// for the next poll). The sensor port gets only the short bring-up
+    /// requests (`write_all`).
     pub fn poll<S, H>(
         &mut self,
         sensor: &mut S,
@@ -412,7 +444,7 @@ impl CoProcessor {
     ) -> Result<PollOutcome, PollError<S::Error, H::Error>>
     where
         S: Read + ReadReady + Write,
-        H: Read + ReadReady + Write,
+        H: Read + ReadReady + WriteRoom,
     {
         let mut outcome = PollOutcome::default();
         if !self.configured {
@@ -485,18 +517,24 @@ impl CoProcessor {
         Ok(outcome)
     }
 
-    /// Hand the host everything the emulator has queued, and act on its events.
-    fn drain_host<H: Write, E>(
+    /// Hand the host what the emulator has queued, as far as the host port
+    /// has room (none while feature telegrams wait: they go first), and act
+    /// on its events.
+    fn drain_host<H: WriteRoom, E>(
         &mut self,
         host: &mut H,
         now_us: u64,
         outcome: &mut PollOutcome,
     ) -> Result<(), PollError<E, H::Error>> {
+        self.pump(host, now_us)?;
         let mut buf = [0u8; CHUNK];
-        loop {
-            // `transmit` stops after the last byte before a baud switch.
+        while !self.pump.active {
+            // `transmit` stops after the last byte before a baud switch,
+            // and when `out` is full (the rest of a frame waits in the face).
+            let room = host.write_room().map_err(PollError::Host)?;
             let rate = self.host.baud();
-            let n = self.host.transmit(now_us, &mut buf);
+            let out = buf.get_mut(..room.min(CHUNK)).unwrap_or_default();
+            let n = self.host.transmit(now_us, out);
             let Some(bytes) = buf.get(..n).filter(|b| !b.is_empty()) else {
                 break;
             };
@@ -504,38 +542,46 @@ impl CoProcessor {
             self.host_line.occupy(now_us, bytes.len(), rate);
         }
         while let Some(event) = self.host.next_event() {
-            match event {
-                HostEvent::BaudSwitched { to, .. } => outcome.host_baud = Some(to),
-                HostEvent::BadChecksum => {
-                    self.counters.host_crc_errors = self.counters.host_crc_errors.wrapping_add(1);
-                }
-                // The B0 of a `30 01` has gone out: its features follow.
-                HostEvent::Request(Handled::OneScan)
-                    if self.have_features && self.features_on() =>
-                {
-                    let n = self.send_features(host)?;
-                    self.host_line.occupy(now_us, n, self.host.baud());
-                }
-                HostEvent::Request(Handled::SetVariant { accepted: true, .. }) => {
-                    self.leave_values();
-                    self.follow_client(false);
-                }
-                HostEvent::Request(Handled::WriteConfig { accepted: true }) => {
-                    self.leave_values();
-                    let differs = self.link.write_config(*self.host.config());
-                    self.follow_client(differs);
-                }
-                HostEvent::Request(Handled::Reset) => {
-                    self.leave_values();
-                    self.host.source_mut().features_on = false;
-                }
-                HostEvent::Request(
-                    Handled::Continuous | Handled::OnRequest | Handled::InstallationMode { .. },
-                ) => self.leave_values(),
-                _ => {}
-            }
+            self.on_host_event(event, outcome);
         }
-        Ok(())
+        // The features of a `30 01` whose `B0` has just gone out.
+        self.pump(host, now_us)
+    }
+
+    /// Act on an event of the host face.
+    fn on_host_event(&mut self, event: HostEvent, outcome: &mut PollOutcome) {
+        match event {
+            HostEvent::BaudSwitched { to, .. } => outcome.host_baud = Some(to),
+            HostEvent::BadChecksum => {
+                self.counters.host_crc_errors = self.counters.host_crc_errors.wrapping_add(1);
+            }
+            // The B0 of a `30 01` has gone out whole: its features follow.
+            HostEvent::ScanSent {
+                continuous: false, ..
+            } if self.have_features && self.features_on() => {
+                self.pump = Pump {
+                    active: true,
+                    next: 0,
+                };
+            }
+            HostEvent::Request(Handled::SetVariant { accepted: true, .. }) => {
+                self.leave_values();
+                self.follow_client(false);
+            }
+            HostEvent::Request(Handled::WriteConfig { accepted: true }) => {
+                self.leave_values();
+                let differs = self.link.write_config(*self.host.config());
+                self.follow_client(differs);
+            }
+            HostEvent::Request(Handled::Reset) => {
+                self.leave_values();
+                self.host.source_mut().features_on = false;
+            }
+            HostEvent::Request(
+                Handled::Continuous | Handled::OnRequest | Handled::InstallationMode { .. },
+            ) => self.leave_values(),
+            _ => {}
+        }
     }
 
     /// The sensor streams: the face reports its configuration (F4).
@@ -638,13 +684,12 @@ impl CoProcessor {
 
     /// One intact `B0` from the sensor: decode, run the pipeline, pass the
     /// scan and its features to a streaming host.
-    fn process_scan<H: Write, E>(
+    fn process_scan<H: WriteRoom, E>(
         &mut self,
         host: &mut H,
         now_us: u64,
     ) -> Result<(), PollError<E, H::Error>> {
         self.counters.scans_in = self.counters.scans_in.wrapping_add(1);
-        self.scan_counter = self.counters.scans_in;
         if self.link.scan_bytes().get(4) != Some(&crate::telegram::measured::MEASURED_COMMAND) {
             return self.pass_values(host, now_us);
         }
@@ -668,6 +713,15 @@ impl CoProcessor {
             self.counters.scans_other_setting = self.counters.scans_other_setting.wrapping_add(1);
             return Ok(());
         }
+        if self.host_busy() {
+            // The last scan's features or the face's `B0` of it are still
+            // going out: they stay that scan's (this one is not taken).
+            if self.host.streaming() && !self.values_stream {
+                self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
+            }
+            return Ok(());
+        }
+        self.scan_counter = self.counters.scans_in;
         // The host's `30 01` and `31` see this scan.
         let face_variant = self.host.variant();
         let latest = self.host.source_mut();
@@ -678,19 +732,33 @@ impl CoProcessor {
             latest.count += 1;
         }
         self.beams = self.frame.len() as u16;
+        // The `B0` first: it leaves while the pipeline runs.
+        let passed =
+            self.host.streaming() && !self.values_stream && self.pass_scan(host, now_us)?;
         self.extractor.run(&self.frame, &self.params);
         self.have_features = true;
-        if self.host.streaming() && !self.values_stream {
-            self.pass_scan(host, now_us)?;
+        if passed && self.features_on() {
+            self.pump = Pump {
+                active: true,
+                next: 0,
+            };
+            self.pump(host, now_us)?;
         }
         Ok(())
+    }
+
+    /// `true` while the host line still carries the latest scan: its
+    /// feature telegrams wait for room, or the face has handed out part of
+    /// a frame (its `30 01` `B0` reads the latest scan word by word).
+    fn host_busy(&self) -> bool {
+        self.pump.active || self.host.frame_in_progress()
     }
 
     /// A value mode's telegram (`B6`/`B7`/`BF`) from the sensor: to the
     /// client that asked for it, as is and whole if the host line is free
     /// within its period (else dropped and counted); no features (the
     /// pipeline takes single whole scans, `B0`).
-    fn pass_values<H: Write, E>(
+    fn pass_values<H: WriteRoom, E>(
         &mut self,
         host: &mut H,
         now_us: u64,
@@ -702,7 +770,8 @@ impl CoProcessor {
         }
         let period = crate::device::emulator::scan_period_us(self.host.variant())
             .saturating_mul(u64::from(self.values_samples.max(1)));
-        if !self.host_line.free_within(now_us, period) {
+        let fits = self.fits_now(host, now_us, period, self.link.scan_bytes().len())?;
+        if !fits {
             self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
             return Ok(());
         }
@@ -713,57 +782,90 @@ impl CoProcessor {
         Ok(())
     }
 
-    /// The scan's `B0` (and its features, if on) to a streaming host, whole,
-    /// if the host line is free within one scan period; else dropped and
-    /// counted.
-    fn pass_scan<H: Write, E>(
+    /// `true` if a stream telegram of `len` bytes may go to the host now:
+    /// the host line is free within `period` (the budget), nothing of the
+    /// latest scan or of the face is half out, and the port has room for
+    /// it whole. (Never inside or ahead of a reply: `drain_host` stops
+    /// only when the face has nothing ready or the port is full.)
+    fn fits_now<H: WriteRoom, E>(
+        &mut self,
+        host: &mut H,
+        now_us: u64,
+        period: u64,
+        len: usize,
+    ) -> Result<bool, PollError<E, H::Error>> {
+        if !self.host_line.free_within(now_us, period) || self.host_busy() {
+            return Ok(false);
+        }
+        Ok(host.write_room().map_err(PollError::Host)? >= len)
+    }
+
+    /// The scan's `B0` to a streaming host, whole, if it may go now
+    /// ([`Self::fits_now`] within one scan period; its features follow
+    /// through the pump); else dropped and counted. Returns `true` if sent.
+    fn pass_scan<H: WriteRoom, E>(
+        &mut self,
+        host: &mut H,
+        now_us: u64,
+    ) -> Result<bool, PollError<E, H::Error>> {
+        let rate = self.host.baud();
+        let period = crate::device::emulator::scan_period_us(self.host.variant());
+        let len = self.link.scan_bytes().len();
+        if !self.fits_now(host, now_us, period, len)? {
+            self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
+            return Ok(false);
+        }
+        host.write_all(self.link.scan_bytes())
+            .map_err(PollError::Host)?;
+        self.counters.scans_out = self.counters.scans_out.wrapping_add(1);
+        self.host_line.occupy(now_us, len, rate);
+        Ok(true)
+    }
+
+    /// The pump: the latest scan's feature telegrams that wait, to the
+    /// host, each if the port has room for it whole (none while the face
+    /// has a frame half out: its `B0` comes first).
+    fn pump<H: WriteRoom, E>(
         &mut self,
         host: &mut H,
         now_us: u64,
     ) -> Result<(), PollError<E, H::Error>> {
-        let rate = self.host.baud();
-        let period = crate::device::emulator::scan_period_us(self.host.variant());
-        if !self.host_line.free_within(now_us, period) {
-            self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
+        if !self.pump.active || self.host.frame_in_progress() {
             return Ok(());
         }
-        // Never inside a reply: the emulator hands out whole frames at
-        // once in external-scan mode, and `drain_host` emptied it.
-        host.write_all(self.link.scan_bytes())
-            .map_err(PollError::Host)?;
-        self.counters.scans_out = self.counters.scans_out.wrapping_add(1);
-        let mut bytes = self.link.scan_bytes().len();
-        if self.features_on() {
-            bytes += self.send_features(host)?;
-        }
-        self.host_line.occupy(now_us, bytes, rate);
-        Ok(())
-    }
-
-    /// The feature telegrams of the latest scan to the host; returns the
-    /// bytes sent.
-    fn send_features<H: Write, E>(
-        &mut self,
-        host: &mut H,
-    ) -> Result<usize, PollError<E, H::Error>> {
+        let mut room = host.write_room().map_err(PollError::Host)?;
         let echoed = EchoedParams::from(self.params.get());
-        let mut bytes = 0usize;
-        let sent = emit_features(
+        let (first, mut sent, mut bytes) = (self.pump.next, 0u32, 0usize);
+        let result = emit_features_from(
+            first,
             self.scan_counter,
             self.beams,
             &echoed,
             self.extractor.features(),
             0,
             |t| {
-                bytes += t.len();
-                host.write_all(t)
+                // `None`: no room now (the next poll goes on from here).
+                if t.len() > room {
+                    return Err(None);
+                }
+                host.write_all(t).map_err(Some)?;
+                room = room.saturating_sub(t.len());
+                (sent, bytes) = (sent.wrapping_add(1), bytes.saturating_add(t.len()));
+                Ok(())
             },
-        )
-        .map_err(PollError::Host)?;
-        self.counters.feature_scans_out = self.counters.feature_scans_out.wrapping_add(1);
+        );
+        self.host_line.occupy(now_us, bytes, self.host.baud());
         self.counters.feature_telegrams_out =
             self.counters.feature_telegrams_out.wrapping_add(sent);
-        Ok(bytes)
+        match result {
+            Ok(_) => {
+                self.pump = Pump::default();
+                self.counters.feature_scans_out = self.counters.feature_scans_out.wrapping_add(1);
+            }
+            Err(None) => self.pump.next = first.wrapping_add(sent),
+            Err(Some(e)) => return Err(PollError::Host(e)),
+        }
+        Ok(())
     }
 
     /// Copy the framer counters into [`Counters`] and the host-visible copy.

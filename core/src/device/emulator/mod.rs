@@ -422,6 +422,13 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
         self.tx_len == 0 && self.pending.is_empty()
     }
 
+    /// `true` while a frame has been handed out in part: the rest must
+    /// follow before anything else goes on the line (a caller whose port
+    /// took only part of it).
+    pub fn frame_in_progress(&self) -> bool {
+        self.tx_len != 0
+    }
+
     /// The settings given to [`new`](Emulator::new).
     pub fn settings(&self) -> &Settings {
         &self.settings
