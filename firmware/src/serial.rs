@@ -487,6 +487,15 @@ impl<U: Deref<Target = RegisterBlock>> WriteReady for Serial<U> {
     }
 }
 
+impl<U: Deref<Target = RegisterBlock>> lms_core::device::coprocessor::WriteRoom for Serial<U> {
+    /// The transmit queue's free slots: a `write_all` of at most this many
+    /// returns at once (the co-processor writes no more, so the loop never
+    /// waits on the host line).
+    fn write_room(&mut self) -> Result<usize, Infallible> {
+        Ok(self.tx.capacity().saturating_sub(self.tx.len()))
+    }
+}
+
 /// The next received byte of a port, if one is there (the console).
 pub fn try_read<U: Deref<Target = RegisterBlock>>(port: &mut Serial<U>) -> Option<u8> {
     let byte = port.rx.dequeue()?;

@@ -95,6 +95,15 @@ impl Write for OpaquePort {
     }
 }
 
+impl lms_core::device::coprocessor::WriteRoom for OpaquePort {
+    fn write_room(&mut self) -> Result<usize, PortError> {
+        if black_box(false) {
+            return Err(PortError::Other);
+        }
+        Ok(black_box(usize::MAX))
+    }
+}
+
 /// Any `f32`, including NaN, infinities, zero, negatives and subnormals.
 fn any_f32() -> f32 {
     f32::from_bits(black_box(0))
