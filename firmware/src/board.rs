@@ -45,22 +45,38 @@ pub const CONTROL_BAUD: u32 = 115_200;
 /// reply; a longer burst is held back by the receive backpressure
 /// ([`crate::serial`]), not lost.
 pub const HOST_RX_SLOTS: usize = 64;
-/// Slots of the host transmit queue: a 361-beam `B0` and its features are
-/// about 1.15 KB; the write of a scan returns once all but this much is
-/// queued, so the rest leaves while the next scan is computed. At 500 kBd
-/// on both lines the host line is busy 23 ms of each 26.7 ms period, so
-/// computation (≤ 18 ms) and transmission must overlap by ≥ 14 ms, ≥ 0.7 KB
-/// of queue.
-pub const HOST_TX_SLOTS: usize = 1024;
-/// Slots of the sensor receive queue (holds one less byte, 2047): the
-/// bytes a continuous 500 kBd stream (50 B/ms) brings while the loop does
-/// not read, at most a pipeline run at the 3.0 M-instruction budget
-/// (17.9 ms at 168 MHz, ≤ 893 B) plus a host write that finds the host
-/// transmit queue full (1.15 KB at 500 kBd, ≤ 23 ms, ≤ 1150 B): 2043 B.
+/// Slots of the host transmit queue (holds one less byte, 831): the
+/// co-processor never writes more than the queue has room for
+/// ([`lms_core::device::coprocessor::WriteRoom`]), so the loop never waits
+/// on the host line. It must hold an `ACK` and the largest telegram whole
+/// ([`HOST_TX_MIN_ROOM`], 819 B: a 401-beam `B0`, a `30 01` reply; the
+/// largest feature telegram is 749 B). More does not buy throughput: the
+/// `B0` goes in before the pipeline runs and the features follow as room
+/// frees, so a scan's `B0` + features of `T` bytes are all queued once the
+/// line has carried `T − 831` of them; by the next scan (26.7 ms, 1333 B
+/// at 500 kBd) that holds for every `T` up to 2.1 KB, more than the line
+/// carries in a period (the host-line budget drops scans beyond that).
+///
+/// [`HOST_TX_MIN_ROOM`]: lms_core::device::coprocessor::HOST_TX_MIN_ROOM
+pub const HOST_TX_SLOTS: usize = 832;
+// The queue holds `HOST_TX_SLOTS - 1` bytes.
+const _: () = assert!(HOST_TX_SLOTS > lms_core::device::coprocessor::HOST_TX_MIN_ROOM);
+/// Slots of the sensor receive queue (holds one less byte, 1023): what a
+/// 500 kBd stream brings while the loop does not read it. The host write
+/// never waits, so the longest such time is one pipeline run: at most the
+/// 3.0 M-instruction budget, 22.3 ms at 168 MHz if flash with 5 wait states
+/// costs 25 % (CPI 1.25; the ART prefetch and 1 KiB cache keep the loops
+/// near CPI 1), 26.8 ms at CPI 1.5. Less than a scan period (26.7 ms at
+/// 0.5°), so at most one `B0` and a little arrive meanwhile: 732 B at
+/// 0.5°, 744–750 B at 1° (two 372-byte `B0`s 13.3 ms apart), 813 B for
+/// 401 beams (53.3 ms apart); 1023 leaves 210 B (4.2 ms) to spare. Until
+/// 2026-12 it was 2048: the blocking host write (≤ 1150 B more) had to fit.
 /// A full queue holds the line (backpressure, [`crate::serial`]): under
 /// QEMU nothing is lost; on a board the overrun is counted (`ORE`, the
-/// `D5` counters' lost sensor bytes).
-pub const SENSOR_RX_SLOTS: usize = 2048;
+/// `D5` counters' lost sensor bytes). A console report (~0.7 KB at
+/// 115 200 Bd through its 64-slot queue, ~61 ms) still waits: asked for
+/// during a 500 kBd stream on a board it can overrun this queue (counted).
+pub const SENSOR_RX_SLOTS: usize = 1024;
 /// Slots of the sensor transmit queue: one bring-up request (≤ 42 bytes).
 pub const SENSOR_TX_SLOTS: usize = 64;
 /// Slots of the console receive queue (one-byte commands).
