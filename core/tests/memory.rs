@@ -6,7 +6,7 @@
 
 use lms_core::device::client::Client;
 use lms_core::device::coprocessor::{CoProcessor, LatestScan, SensorLink};
-use lms_core::device::emulator::{Emulator, MIN_TX_CAPACITY, TX_CAPACITY};
+use lms_core::device::emulator::{Emulator, MIN_TX_CAPACITY, REQUEST_CAPACITY, TX_CAPACITY};
 use lms_core::telegram::Framer;
 use lms_core::{Beam, Extractor, Features, Frame};
 use std::mem::size_of;
@@ -24,6 +24,7 @@ fn coprocessor_parts_sizes() {
         ("  Extractor", size_of::<Extractor>()),
         ("    Features", size_of::<Features>()),
         ("  the LMS face", size_of::<Face>()),
+        ("    request framer", size_of::<Framer<REQUEST_CAPACITY>>()),
         ("    LatestScan", size_of::<LatestScan>()),
         ("  Frame", size_of::<Frame>()),
     ];
@@ -57,7 +58,13 @@ fn coprocessor_parts_sizes() {
     // through a 161-byte buffer (it held an 819-byte one).
     assert_eq!((MIN_TX_CAPACITY, TX_CAPACITY), (161, 819));
     assert!(size_of::<Emulator<LatestScan>>() >= size_of::<Face>() + 819 - 161);
-    assert!(size_of::<Face>() < size_of::<LatestScan>() + size_of::<Framer>() + 161 + 1_400);
+    // Its request framer keeps 64 bytes of a request (it held 818): a
+    // longer one's CRC is checked as it passes.
+    assert_eq!(REQUEST_CAPACITY, 64);
+    assert!(size_of::<Framer<REQUEST_CAPACITY>>() <= REQUEST_CAPACITY + 80);
+    assert!(size_of::<Framer>() <= lms_core::telegram::MAX_TELEGRAM_LEN + 80);
+    let request_framer = size_of::<Framer<REQUEST_CAPACITY>>();
+    assert!(size_of::<Face>() < size_of::<LatestScan>() + request_framer + 161 + 1_400);
     // The whole co-processor (x86-64 layout; on the MCU a little smaller):
     // 22 704 B before the copy went, 21 896 B after; 21 944 B with the
     // drop-in host face (three more D5 counters, twice; the host line's
@@ -76,6 +83,8 @@ fn coprocessor_parts_sizes() {
     // fit_sigma); 16 656 B with the extractor's two-level bearing table
     // and window bitset (3 216 B less); 15 056 B without the extractor's
     // `D` buffer (segmented as the last pass computes it); 14 296 B with
-    // the edge points as a bitset (760 B less).
-    assert!(size_of::<CoProcessor>() <= 14_296);
+    // the edge points as a bitset (760 B less); 13 576 B with the face's
+    // request framer at 64 B (744 B less; +16 B in each framer for a long
+    // request's CRC, +8 B for the host line's feature pump).
+    assert!(size_of::<CoProcessor>() <= 13_576);
 }

@@ -40,7 +40,7 @@
 //!   is spent before the host side streams;
 //! * while `--max-in-flight` scans (the warm-up scan included) are out and
 //!   not back (default with `--qemu`: as many 732-byte `B0`s as fit the
-//!   firmware's 2047-byte sensor receive queue, 2; QEMU moves only ~10 KB/s
+//!   firmware's 1023-byte sensor receive queue, 1; QEMU moves only ~10 KB/s
 //!   into a UART, a third of the 500 kBd line rate, so all of them may be
 //!   waiting in that queue; off otherwise);
 //! * after the last scan of the selection has gone out, or at `--timeout`.

@@ -71,14 +71,15 @@ impl EmuClock {
 }
 
 /// Bytes the firmware's sensor receive queue holds: `SENSOR_RX_SLOTS` − 1
-/// in `firmware/src/board.rs` (a `heapless::spsc` queue of 2048 slots;
+/// in `firmware/src/board.rs` (a `heapless::spsc` queue of 1024 slots;
 /// checked against that file by `tests/verify_qemu.rs`). A full queue holds
 /// QEMU's UART (receive backpressure), so more in flight waits, not lost.
-pub(super) const FIRMWARE_SENSOR_QUEUE: usize = 2047;
+pub(super) const FIRMWARE_SENSOR_QUEUE: usize = 1023;
 
 /// Scans out at once with `--qemu` (the default of `--max-in-flight`): as
 /// many whole 361-value `B0`s (732 bytes) as fit the firmware's sensor
-/// receive queue, 2047 / 732 = 2 (1464 bytes). QEMU drains a UART at about
+/// receive queue, 1023 / 742 = 1 (2 until the queue was halved to 1024
+/// slots, 2026-12). QEMU drains a UART at about
 /// 10 KB/s, a third of the line rate, so the scans not back yet may all be
 /// waiting in that queue; 8 in flight (5856 bytes) overflowed the 4095-byte
 /// queue before it held the line (receive backpressure) and lost 2–6 of 100
@@ -347,12 +348,16 @@ impl Session {
         // co-processor's host-line budget may drop it (a reply at 9600 Bd
         // takes more than a scan period): once the host line has been quiet
         // for [`SETTLE`] with only warm-up scans out, they are given up on,
-        // so that they do not hold the sensor for good.
+        // so that they do not hold the sensor for good. Not while a `B0`
+        // awaits its features: the co-processor sends the `B0` before it
+        // runs the pipeline, which takes long on a loaded QEMU, and a scan
+        // it gets before the features are out is not taken.
         let tally = &self.checker.tally;
         let play_out = self.play_sent.saturating_sub(tally.play_back);
         let others_out = (self.sent - self.play_sent).saturating_sub(tally.other_back);
         if play_out == 0
             && others_out > self.others_given_up
+            && self.pending_b0.is_none()
             && self.last_host_rx.elapsed() >= SETTLE
         {
             self.others_given_up = others_out;
