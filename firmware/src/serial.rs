@@ -10,7 +10,9 @@
 //! [`Read`] / [`ReadReady`] / [`Write`]: a write returns as soon as its
 //! bytes are queued, and the line sends them while the loop computes.
 //! Only a write that finds the transmit queue full waits, asleep in `WFI`
-//! until the interrupt has made room. Nothing here blocks in the
+//! until the interrupt has made room: the console's report and the
+//! sensor's short requests; the co-processor writes to the host port only
+//! what its free space (`WriteRoom`) says fits, so it never waits there. Nothing here blocks in the
 //! interrupt and nothing is lost silently. Receive has backpressure: when
 //! the queue is full the interrupt leaves the byte in the data register and
 //! switches `RXNEIE` off; the loop's next read makes room and switches it
@@ -492,8 +494,16 @@ impl<U: Deref<Target = RegisterBlock>> lms_core::device::coprocessor::WriteRoom 
     /// returns at once (the co-processor writes no more, so the loop never
     /// waits on the host line).
     fn write_room(&mut self) -> Result<usize, Infallible> {
-        Ok(self.tx.capacity().saturating_sub(self.tx.len()))
+        Ok(tx_room(&self.tx))
     }
+}
+
+/// Free slots of a transmit queue. Not inlined, so that heapless's
+/// `% capacity` in `len` (unreachable: the capacity is a non-zero
+/// constant) is listed by `panic-sites.sh` as the firmware's.
+#[inline(never)]
+fn tx_room(tx: &Producer<'static, u8>) -> usize {
+    tx.capacity().saturating_sub(tx.len())
 }
 
 /// The next received byte of a port, if one is there (the console).
