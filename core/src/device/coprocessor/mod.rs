@@ -704,6 +704,9 @@ impl CoProcessor {
         now_us: u64,
     ) -> Result<(), PollError<E, H::Error>> {
         self.counters.scans_in = self.counters.scans_in.wrapping_add(1);
+        // What of the last scan's features fits now goes first (the line
+        // has been sending since the last poll): then this scan may be taken.
+        self.pump(host)?;
         if self.link.scan_bytes().get(4) != Some(&crate::telegram::measured::MEASURED_COMMAND) {
             return self.pass_values(host, now_us);
         }
