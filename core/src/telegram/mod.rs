@@ -60,7 +60,8 @@
 //!                 assert_eq!(t.status(), Some(0x10));
 //!                 seen += 1;
 //!             }
-//!             Some(Event::Nak) => unreachable!(),
+//!             // A full-size framer never reports a telegram too long to keep.
+//!             Some(Event::Nak | Event::Long { .. }) => unreachable!(),
 //!             None => break,
 //!         }
 //!     }
