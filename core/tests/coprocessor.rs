@@ -88,21 +88,12 @@ impl Bench {
     /// polled once a step: a long step hands it several telegrams at once).
     fn run_in_steps(&mut self, us: u64, step: u64) {
         let end = self.now + us;
-        let mut buf = [0u8; 4096];
         while self.now < end {
             self.now += step;
-            // Co-processor → sensor.
-            let to_sensor = std::mem::take(&mut self.sensor.tx);
-            self.lms.receive(self.now, &to_sensor);
-            loop {
-                let n = self.lms.transmit(self.now, &mut buf);
-                if n == 0 {
-                    break;
-                }
-                self.sensor.rx.extend(&buf[..n]);
-                self.sensor_wire.extend(&buf[..n]);
-            }
-            while self.lms.next_event().is_some() {}
+            let wire = &mut self.sensor_wire;
+            common::lms_step(&mut self.lms, &mut self.sensor, self.now, |b| {
+                wire.extend(b)
+            });
             self.cop
                 .poll(&mut self.sensor, &mut self.host, self.now)
                 .unwrap();

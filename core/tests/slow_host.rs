@@ -169,19 +169,9 @@ impl Bench {
     fn run(&mut self, us: u64) {
         const STEP: u64 = 1_000;
         let end = self.now + us;
-        let mut buf = [0u8; 4096];
         while self.now < end {
             self.now += STEP;
-            let to_sensor = std::mem::take(&mut self.sensor.tx);
-            self.lms.receive(self.now, &to_sensor);
-            loop {
-                let n = self.lms.transmit(self.now, &mut buf);
-                if n == 0 {
-                    break;
-                }
-                self.sensor.rx.extend(&buf[..n]);
-            }
-            while self.lms.next_event().is_some() {}
+            common::lms_step(&mut self.lms, &mut self.sensor, self.now, |_| {});
             self.host.pass(STEP, self.cop.host_face().baud());
             self.cop
                 .poll(&mut self.sensor, &mut self.host, self.now)

@@ -19,3 +19,27 @@ pub fn room_distance_m(phi: f64) -> f64 {
     }
     d
 }
+
+/// One step of the simulated LMS on the co-processor's sensor port at
+/// `now_us`: it hears what the co-processor wrote since the last step,
+/// sends what it has due (into `port.rx`, and to `sent`), and its events
+/// are dropped.
+pub fn lms_step<S: lms_core::device::emulator::ScanSource>(
+    lms: &mut lms_core::device::emulator::Emulator<S>,
+    port: &mut lms_core::test_support::Port,
+    now_us: u64,
+    mut sent: impl FnMut(&[u8]),
+) {
+    let mut buf = [0u8; 4096];
+    let to_sensor = std::mem::take(&mut port.tx);
+    lms.receive(now_us, &to_sensor);
+    loop {
+        let n = lms.transmit(now_us, &mut buf);
+        if n == 0 {
+            break;
+        }
+        port.rx.extend(&buf[..n]);
+        sent(&buf[..n]);
+    }
+    while lms.next_event().is_some() {}
+}
