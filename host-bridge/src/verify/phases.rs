@@ -30,6 +30,20 @@ fn disruption_due(
     after.is_some_and(|n| back >= n)
 }
 
+/// A disruption's outcome if it was asked for (`after`): what happened, or,
+/// if it never happened, one that says after how many scans it was due.
+fn asked_recovery(
+    after: Option<usize>,
+    done: Option<super::session::Recovery>,
+) -> Option<super::session::Recovery> {
+    after.map(|after| {
+        done.unwrap_or(super::session::Recovery {
+            after,
+            ..Default::default()
+        })
+    })
+}
+
 /// The scans not back at the end.
 struct Missing {
     /// Of the selection, given up once the host line was quiet.
@@ -285,19 +299,8 @@ impl Session {
             warmup_dropped,
             play_sent: self.play_sent,
             sensor_restarts: self.sensor_restarts,
-            // One that never happened says after how many scans it was due.
-            power_cycle: self.power_cycle_after.map(|after| {
-                self.power_cycle.unwrap_or(super::session::Recovery {
-                    after,
-                    ..Default::default()
-                })
-            }),
-            mcu_reset: self.reset_mcu_after.map(|after| {
-                self.mcu_reset.unwrap_or(super::session::Recovery {
-                    after,
-                    ..Default::default()
-                })
-            }),
+            power_cycle: asked_recovery(self.power_cycle_after, self.power_cycle),
+            mcu_reset: asked_recovery(self.reset_mcu_after, self.mcu_reset),
             written_off: self.written_off,
             garbled: (
                 self.line_rate.garbled_to_sensor,
