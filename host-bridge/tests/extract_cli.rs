@@ -370,3 +370,30 @@ fn extract_json_of_every_shared_log_is_pinned() {
         wrong.join("\n")
     );
 }
+
+/// `extract LOG`'s parameters without flags (`defaults::for_log`) are the
+/// ones `feature-bits` derives from its own survey of the log
+/// (`per_data_params`), whose no_std feature bits are pinned in
+/// tools/feature-bits/tests/digests.rs: the pinned bits are what a user
+/// gets with no flags.
+#[test]
+fn per_data_defaults_match_the_pinned_feature_bits() {
+    for stem in [
+        "acapulco-corrected",
+        "belgioioso-corrected",
+        "csail-corrected",
+        "freiburg-101-corrected",
+        "freiburg-campus-corrected",
+        "intel-corrected",
+        "orebro-corrected",
+    ] {
+        let path = data(&format!("{stem}.log.gz"));
+        let args = host_bridge::options::ParamArgs::default();
+        let (ours, _) =
+            host_bridge::defaults::for_log(&path, host_bridge::options::UnitArg::Auto, &args)
+                .unwrap()
+                .unwrap();
+        let theirs = feature_bits::per_data_params(&path).unwrap();
+        assert_eq!(ours, theirs, "{stem}");
+    }
+}

@@ -17,7 +17,7 @@ use std::io::{self, BufRead, BufReader, Read, Write};
 use std::path::Path;
 
 use lms_core::carmen::{is_flaser, Flaser, UnitVote};
-use lms_core::{Extractor, Frame, Params, Trace, Unit, Variant};
+use lms_core::{DataSurvey, Extractor, Frame, Params, Trace, Unit, Variant};
 
 /// Open a log, gzip-compressed (by its magic bytes) or plain.
 pub fn open(path: &Path) -> io::Result<Box<dyn BufRead>> {
@@ -72,13 +72,41 @@ pub fn log_unit(path: &Path) -> io::Result<Unit> {
 /// Write the bits of every frame of the log at `path` after `iterations`
 /// smoothing passes to `out`; returns the number of frames.
 pub fn write_log_bits(path: &Path, iterations: u16, out: &mut impl Write) -> io::Result<usize> {
-    let unit = log_unit(path)?;
     let params = Params {
         iterations,
         ..Params::default()
-    }
-    .validate()
-    .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e.to_string()))?;
+    };
+    write_log_bits_with(path, &params, out)
+}
+
+/// The parameters `host-bridge extract LOG` uses with no flags (issue 14,
+/// item 4): the whole log surveyed ([`DataSurvey`]), σ and `max_range`
+/// from its [`lms_core::DataProfile`], everything else the defaults.
+pub fn per_data_params(path: &Path) -> io::Result<Params> {
+    let unit = log_unit(path)?;
+    let mut survey = DataSurvey::new(unit);
+    let mut frame = Frame::for_variant(Variant::Fov180Res50);
+    let mut index = 0usize;
+    for_each_flaser(path, |f| {
+        f.fill(unit, &mut frame)
+            .map_err(|e| bad_line(path, index, e))?;
+        survey.add(&frame);
+        index += 1;
+        Ok(())
+    })?;
+    Ok(survey.profile().params())
+}
+
+/// As [`write_log_bits`], with the given parameters (validated first).
+pub fn write_log_bits_with(
+    path: &Path,
+    params: &Params,
+    out: &mut impl Write,
+) -> io::Result<usize> {
+    let unit = log_unit(path)?;
+    let params = params
+        .validate()
+        .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e.to_string()))?;
     let mut extractor = Extractor::new();
     let mut trace = Trace::new();
     let mut frame = Frame::for_variant(Variant::Fov180Res50);

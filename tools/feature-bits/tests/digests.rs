@@ -19,7 +19,7 @@
 
 use std::path::{Path, PathBuf};
 
-use feature_bits::{write_log_bits, Fnv64};
+use feature_bits::{per_data_params, write_log_bits, write_log_bits_with, Fnv64};
 
 /// (log stem, FNV-1a-64 of the feature bits, frames).
 #[cfg(not(feature = "libm-trig"))]
@@ -86,4 +86,58 @@ fn a_changed_bit_changes_the_digest() {
     write_log_bits(&path, 31, &mut b).unwrap();
     assert_ne!(a.0, b.0);
     assert_eq!(a.0, PINNED[6].1);
+}
+
+/// With the parameters `host-bridge extract LOG` uses when no flag is given
+/// (issue 14, item 4: σ and `max_range` from the survey of the log,
+/// [`per_data_params`]), 30 passes: (log stem, σ (m), `max_range` (m),
+/// FNV-1a-64 of the feature bits). σ is 1 cm on the cm logs, 30 mm on
+/// Acapulco's 5 cm steps and 5 mm on Örebro (mm); `max_range` is the unit's
+/// and mode's largest true range, and 50 m on Acapulco, below its ~51 m fill
+/// values. (Örebro has no range beyond its limit: its digest is the one at
+/// `Params::default`.) `host-bridge`'s `per_data_defaults` test checks that its
+/// `defaults::for_log` gives these same parameters.
+#[cfg(not(feature = "libm-trig"))]
+const PINNED_PER_DATA: [(&str, f32, f32, u64); 7] = [
+    ("acapulco-corrected", 0.030000001, 50.0, 0xbb10e8ac21ee7a2d),
+    ("belgioioso-corrected", 0.01, 81.83, 0x537d9d69c2ff323b),
+    ("csail-corrected", 0.01, 81.83, 0xd99b305f2acf4ee8),
+    ("freiburg-101-corrected", 0.01, 81.83, 0x7ef20b88b6223797),
+    ("freiburg-campus-corrected", 0.01, 81.83, 0xbe0ab76a3c025330),
+    ("intel-corrected", 0.01, 81.83, 0x5d105f0e8dcf1438),
+    ("orebro-corrected", 0.005, 32.759, 0xb82e116bd3e06034),
+];
+
+#[cfg(not(feature = "libm-trig"))]
+#[test]
+fn feature_bits_at_the_per_data_defaults_are_pinned() {
+    let mut wrong = Vec::new();
+    for (stem, sigma, max_range, digest) in PINNED_PER_DATA {
+        let path = log(stem);
+        let params = per_data_params(&path).unwrap();
+        let mut d = Fnv64::default();
+        write_log_bits_with(&path, &params, &mut d).unwrap();
+        println!(
+            "(\"{stem}\", {:?}, {:?}, 0x{:016x}),",
+            params.sigma, params.max_range, d.0
+        );
+        if (params.sigma, params.max_range, d.0) != (sigma, max_range, digest) {
+            wrong.push(format!(
+                "{stem}: σ {} m, max_range {} m, 0x{:016x}; pinned {sigma}, {max_range}, 0x{digest:016x}",
+                params.sigma, params.max_range, d.0
+            ));
+        }
+        // Only σ and the range limit come from the data.
+        let defaults = lms_core::Params {
+            sigma: params.sigma,
+            max_range: params.max_range,
+            ..lms_core::Params::default()
+        };
+        assert_eq!(params, defaults, "{stem}");
+    }
+    assert!(
+        wrong.is_empty(),
+        "per-data results changed:\n{}",
+        wrong.join("\n")
+    );
 }
