@@ -83,18 +83,32 @@ pub fn write_log_bits(path: &Path, iterations: u16, out: &mut impl Write) -> io:
 /// item 4): the whole log surveyed ([`DataSurvey`]), σ and `max_range`
 /// from its [`lms_core::DataProfile`], everything else the defaults.
 pub fn per_data_params(path: &Path) -> io::Result<Params> {
+    let mut survey = DataSurvey::new(log_unit(path)?);
+    for_each_frame(path, |_, frame| {
+        survey.add(frame);
+        Ok(())
+    })?;
+    Ok(survey.profile().params())
+}
+
+/// Call `each` with the index and the frame of every scan of the log at
+/// `path`, filled in the log's unit ([`log_unit`]); returns the number of
+/// frames.
+fn for_each_frame(
+    path: &Path,
+    mut each: impl FnMut(usize, &Frame) -> io::Result<()>,
+) -> io::Result<usize> {
     let unit = log_unit(path)?;
-    let mut survey = DataSurvey::new(unit);
     let mut frame = Frame::for_variant(Variant::Fov180Res50);
     let mut index = 0usize;
     for_each_flaser(path, |f| {
         f.fill(unit, &mut frame)
             .map_err(|e| bad_line(path, index, e))?;
-        survey.add(&frame);
+        each(index, &frame)?;
         index += 1;
         Ok(())
     })?;
-    Ok(survey.profile().params())
+    Ok(index)
 }
 
 /// As [`write_log_bits`], with the given parameters (validated first).
@@ -103,23 +117,15 @@ pub fn write_log_bits_with(
     params: &Params,
     out: &mut impl Write,
 ) -> io::Result<usize> {
-    let unit = log_unit(path)?;
     let params = params
         .validate()
         .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e.to_string()))?;
     let mut extractor = Extractor::new();
     let mut trace = Trace::new();
-    let mut frame = Frame::for_variant(Variant::Fov180Res50);
-    let mut index = 0usize;
-    for_each_flaser(path, |f| {
-        f.fill(unit, &mut frame)
-            .map_err(|e| bad_line(path, index, e))?;
-        extractor.run_traced(&frame, &params, &mut trace);
-        write_frame_bits(index, &extractor, &trace, out)?;
-        index += 1;
-        Ok(())
-    })?;
-    Ok(index)
+    for_each_frame(path, |index, frame| {
+        extractor.run_traced(frame, &params, &mut trace);
+        write_frame_bits(index, &extractor, &trace, out)
+    })
 }
 
 /// The bits of the extractor's last run as frame `index`.

@@ -95,8 +95,9 @@ fn a_changed_bit_changes_the_digest() {
 /// Acapulco's 5 cm steps and 5 mm on Örebro (mm); `max_range` is the unit's
 /// and mode's largest true range, and 50 m on Acapulco, below its ~51 m fill
 /// values. (Örebro has no range beyond its limit: its digest is the one at
-/// `Params::default`.) `host-bridge`'s `per_data_defaults` test checks that its
-/// `defaults::for_log` gives these same parameters.
+/// `Params::default`.) `host-bridge`'s
+/// `extract_cli::per_data_defaults_match_the_pinned_feature_bits` checks
+/// that its `defaults::for_log` gives these same parameters.
 #[cfg(not(feature = "libm-trig"))]
 const PINNED_PER_DATA: [(&str, f32, f32, u64); 7] = [
     ("acapulco-corrected", 0.030000001, 50.0, 0xbb10e8ac21ee7a2d),
