@@ -104,6 +104,8 @@ pub enum RealKind {
     SplitMerge(f32),
     /// The least-squares fit to each true piece's own beams.
     Oracle,
+    /// The core on each mirror turn, lines fused ([`crate::turns`]).
+    PerTurn,
 }
 
 /// One method of the real-scan evaluation.
@@ -141,6 +143,8 @@ impl RealMethod {
 pub const NO_FLAGS: &str = "defaults, no flags (v2, per data)";
 /// Name of v1's no-flags method.
 pub const V1_NO_FLAGS: &str = "v1 defaults, no flags (σ 5 mm)";
+/// Name of the per-turn prototype at the no-flag parameters.
+pub const PER_TURN: &str = "per turn, fused (lab prototype), no flags";
 /// Name of the oracle.
 pub const ORACLE: &str = "oracle (LS fit to the true beams)";
 
@@ -202,6 +206,7 @@ pub fn methods() -> Vec<RealMethod> {
             fit_sigma: 2.0 * p.sigma,
             ..p
         }),
+        m(PER_TURN, PerTurn, NoFlags, own),
         m(ORACLE, Oracle, NoFlags, own),
     ]
 }
@@ -225,6 +230,8 @@ pub struct RealTally {
     pub lines_matched: usize,
     /// Lines on no map wall.
     pub lines_no_wall: usize,
+    /// Of those, matched to no piece.
+    pub lines_no_wall_false: usize,
     /// Unmatched lines with half their range on a piece (fragments, off lines).
     pub lines_on_piece: usize,
     /// Counted pieces with two or more candidate lines.
@@ -297,6 +304,7 @@ impl RealTally {
         self.lines += o.lines;
         self.lines_matched += o.lines_matched;
         self.lines_no_wall += o.lines_no_wall;
+        self.lines_no_wall_false += o.lines_no_wall_false;
         self.lines_on_piece += o.lines_on_piece;
         self.fragmented += o.fragmented;
         self.wall_beams += o.wall_beams;
@@ -329,8 +337,10 @@ impl RealTally {
             true_pos_1m: ratio(self.matched_1m, self.pieces_1m),
             false_pos: ratio(self.lines - self.lines_matched, self.lines),
             no_wall: ratio(self.lines_no_wall, self.lines),
+            // A matched line may be "on no wall" too (its piece's beams are
+            // mostly off the map line): count only unmatched ones here.
             false_pos_on_walls: ratio(
-                self.lines - self.lines_matched - self.lines_no_wall,
+                self.lines - self.lines_matched - self.lines_no_wall_false,
                 self.lines - self.lines_no_wall,
             ),
             coverage: ratio(self.covered_beams, self.wall_beams),
@@ -385,8 +395,9 @@ fn candidate(l: &ScoredLine, p: &crate::maptruth::Piece) -> Option<(f64, f64)> {
     if overlap(l.first, l.last, p.first, p.last) < GATE_OVERLAP {
         return None;
     }
-    let da = lms_scene::wrap_angle(l.alpha - p.alpha);
-    let dr = l.r - p.r;
+    let (alpha, r) = p.reference();
+    let da = lms_scene::wrap_angle(l.alpha - alpha);
+    let dr = l.r - r;
     (da.abs() < GATE_ALPHA_DEG.to_radians() && dr.abs() < GATE_R).then_some((da, dr))
 }
 
@@ -435,6 +446,7 @@ pub fn score_frame(
             .count();
         if 2 * on < in_range.len().max(1) {
             t.lines_no_wall += 1;
+            t.lines_no_wall_false += usize::from(!used[i]);
         } else if !used[i]
             && truth
                 .pieces
@@ -479,32 +491,16 @@ pub fn score_frame(
 
 /// The oracle's lines: a TLS fit to each counted piece's on-wall hits in
 /// the sensor frame.
-pub fn oracle_lines(scan: &Scan, truth: &FrameTruth) -> Vec<ScoredLine> {
-    let g = scan.frame.geometry();
-    let r = scan.frame.ranges();
+pub fn oracle_lines(truth: &FrameTruth) -> Vec<ScoredLine> {
     truth
         .pieces
         .iter()
         .filter(|p| p.counted)
-        .map(|p| {
-            let pts: Vec<[f64; 2]> = (p.first..=p.last)
-                .filter(|&j| truth.on_wall[j] == Some(p.line))
-                .map(|j| {
-                    let (d, phi) = (f64::from(r[j]), f64::from(g.bearing(j)));
-                    [d * phi.cos(), d * phi.sin()]
-                })
-                .collect();
-            let (mut a, mut rho) = crate::maptruth::tls(&pts);
-            if rho < 0.0 {
-                rho = -rho;
-                a += std::f64::consts::PI;
-            }
-            ScoredLine {
-                alpha: lms_scene::wrap_angle(a),
-                r: rho,
-                first: p.first,
-                last: p.last,
-            }
+        .map(|p| ScoredLine {
+            alpha: p.own_alpha,
+            r: p.own_r,
+            first: p.first,
+            last: p.last,
         })
         .collect()
 }
@@ -524,7 +520,8 @@ pub fn extract(
     let x: Extraction = match m.kind {
         RealKind::Core => run_core(ex, &scan.frame, &p),
         RealKind::SplitMerge(k) => baselines::split_and_merge(&scan.frame, tables, &p, k),
-        RealKind::Oracle => return oracle_lines(scan, truth),
+        RealKind::Oracle => return oracle_lines(truth),
+        RealKind::PerTurn => crate::turns::per_turn(ex, &scan.frame, &p),
     };
     x.lines.iter().map(ScoredLine::from).collect()
 }
@@ -544,6 +541,9 @@ pub struct LogTruth {
     pub lines: usize,
     /// Counted pieces per frame.
     pub pieces_per_frame: f64,
+    /// Of the pieces long enough to count, the share the frame verifies
+    /// ([`TruthConfig::verify`]; the old oracle's TruePos).
+    pub verified_share: f64,
     /// Per method (order of `methods`).
     pub tallies: Vec<RealTally>,
     /// Figure file, if drawn.
@@ -568,6 +568,7 @@ pub fn run_log(
     let mut tallies = vec![RealTally::default(); methods.len()];
     let mut prev: Vec<Option<(MatchedWalls, HashSet<usize>)>> = vec![None; methods.len()];
     let mut counted_per_frame = Vec::new();
+    let (mut long_enough, mut verified) = (0usize, 0usize);
     let scans: Vec<&Scan> = log.scans.iter().step_by(every.max(1)).collect();
     for scan in &scans {
         let truth = frame_truth(scan, &map, cfg);
@@ -578,6 +579,12 @@ pub fn run_log(
             .map(|p| p.line)
             .collect();
         counted_per_frame.push(counted.len());
+        for p in &truth.pieces {
+            if p.beams >= cfg.min_beams && p.length >= cfg.min_piece {
+                long_enough += 1;
+                verified += usize::from(p.verified);
+            }
+        }
         let tables = Tables::for_frame(&scan.frame);
         let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
         for (k, m) in methods.iter().enumerate() {
@@ -618,6 +625,7 @@ pub fn run_log(
         pieces_per_frame: tallies
             .first()
             .map_or(f64::NAN, |t| ratio(t.pieces, t.frames)),
+        verified_share: ratio(verified, long_enough),
         tallies,
         figure,
     })
@@ -657,11 +665,14 @@ pub fn markdown(logs: &[LogTruth], every: usize) -> String {
         md,
         "## 5. Real scans against map-derived truth\n\n{} of each log; true lines from the \
          log's SLAM map (`lab/src/maptruth.rs`: walls of the accumulated map, ray-cast into \
-         each frame; pieces with ≥ 10 beams on a wall are counted). Matching one-to-one, \
+         each frame; pieces with ≥ 10 beams on a wall, ≥ 0.3 m, whose own hits' fit agrees with \
+         the map line within the gates below are counted; an unverified piece is matched \
+         against its own fit and not counted). Matching one-to-one, \
          |Δα| < 3°, |Δr| < 0.1 m, ≥ 50 % of the line's beams on the piece \
          (`lab/src/realtruth.rs`). *No flags* is `host-bridge extract LOG` without options. \
-         The oracle fits each true piece's own beams: its TruePos is the ceiling of this \
-         truth, its σ the truth's own error.\n",
+         The oracle fits each true piece's own beams: its TruePos is 1 by construction of \
+         the verified truth, its σ the truth's own error; *verified* is the share of the \
+         long-enough pieces the frame confirms (the unverified truth's ceiling).\n",
         if every == 1 {
             "Every frame".to_string()
         } else {
@@ -670,17 +681,18 @@ pub fn markdown(logs: &[LogTruth], every: usize) -> String {
     );
     let _ = writeln!(
         md,
-        "| log | frames | map walls | counted pieces / frame |\n|:---|---:|---:|---:|"
+        "| log | frames | map walls | counted pieces / frame | verified |\n|:---|---:|---:|---:|---:|"
     );
     for l in logs {
         let _ = writeln!(
             md,
-            "| {} ({}) | {} | {} | {} |",
+            "| {} ({}) | {} | {} | {} | {} |",
             l.name,
             l.unit,
             l.frames,
             l.walls,
-            f(l.pieces_per_frame, 1)
+            f(l.pieces_per_frame, 1),
+            f(l.verified_share, 3)
         );
     }
     let _ = writeln!(md, "\n### All logs pooled\n");

@@ -36,7 +36,7 @@ pub type Triple = (f64, f64, f64);
 
 /// The triples of one frame's counted pieces (see the module docs).
 pub fn triples(scan: &Scan, truth: &FrameTruth) -> Vec<Triple> {
-    let lines = crate::realtruth::oracle_lines(scan, truth);
+    let lines = crate::realtruth::oracle_lines(truth);
     let g = scan.frame.geometry();
     let r = scan.frame.ranges();
     let mut out = Vec::new();

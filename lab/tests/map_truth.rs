@@ -115,7 +115,7 @@ fn the_map_of_a_known_room_holds_its_walls_and_each_frames_lines() {
         // The oracle matches every counted piece of a noise-free frame.
         let mut tally = RealTally::default();
         let valid = vec![true; scan.frame.len()];
-        score_frame(&ft, &oracle_lines(scan, &ft), &valid, &mut tally);
+        score_frame(&ft, &oracle_lines(&ft), &valid, &mut tally);
         assert_eq!(tally.matched, tally.pieces);
     }
     eprintln!("{found} of {expected} true lines found as counted pieces");
@@ -133,6 +133,9 @@ fn piece(first: usize, last: usize, alpha: f64, r: f64) -> Piece {
         last,
         beams: last - first + 1,
         length: 2.0,
+        own_alpha: alpha,
+        own_r: r,
+        verified: true,
         counted: true,
     }
 }
@@ -188,7 +191,11 @@ fn on_a_real_log_the_truth_is_found_by_an_extractor_that_knows_the_walls() {
         .join("../../shared/data/carmen/orebro-corrected.log.gz");
     let all = methods();
     let oracle: Vec<_> = all.iter().copied().filter(|m| m.name == ORACLE).collect();
-    let r = run_log(&path, &oracle, 4, &TruthConfig::default(), None).unwrap();
+    let unverified = TruthConfig {
+        verify: false,
+        ..TruthConfig::default()
+    };
+    let r = run_log(&path, &oracle, 4, &unverified, None).unwrap();
     let s = r.tallies[0].summary();
     eprintln!(
         "orebro, every 4th frame: {} walls, {:.1} pieces/frame, oracle TruePos {:.3}",
@@ -196,9 +203,57 @@ fn on_a_real_log_the_truth_is_found_by_an_extractor_that_knows_the_walls() {
     );
     assert!(r.walls > 40, "{} map walls", r.walls);
     assert!(r.pieces_per_frame > 2.0);
-    // The oracle's misses are the truth's own error (pose, map, short pieces).
+    // The oracle's misses are where the map and the frame disagree (pose,
+    // curved walls, clutter against a wall, short pieces) ...
     assert!(s.true_pos > 0.8 && s.true_pos < 1.0, "{}", s.true_pos);
     assert!(s.coverage > 0.85);
+    // ... which the verified truth leaves uncounted: the oracle finds all of
+    // it, and fewer pieces are counted.
+    let v = run_log(&path, &oracle, 4, &TruthConfig::default(), None).unwrap();
+    let sv = v.tallies[0].summary();
+    assert_eq!(sv.true_pos, 1.0);
+    assert_eq!(sv.false_pos, 0.0);
+    assert!(v.pieces_per_frame < r.pieces_per_frame);
+    assert!(v.pieces_per_frame > 0.75 * r.pieces_per_frame);
+}
+
+#[test]
+fn an_unverified_piece_is_not_counted_and_its_own_fit_is_not_false() {
+    let mut on_wall = vec![None; 100];
+    for w in on_wall.iter_mut().take(40).skip(10) {
+        *w = Some(10);
+    }
+    // The map says α = 0.3; the frame's hits say α = 0.4 (5.7° off).
+    let p = Piece {
+        own_alpha: 0.4,
+        own_r: 2.0,
+        verified: false,
+        counted: false,
+        ..piece(10, 39, 0.3, 2.0)
+    };
+    let truth = FrameTruth {
+        on_wall,
+        pieces: vec![p],
+    };
+    let valid = vec![true; 100];
+    let on_map = ScoredLine {
+        alpha: 0.3,
+        r: 2.0,
+        first: 10,
+        last: 39,
+    };
+    let on_frame = ScoredLine {
+        alpha: 0.4,
+        r: 2.0,
+        first: 10,
+        last: 39,
+    };
+    let mut t = RealTally::default();
+    score_frame(&truth, &[on_frame], &valid, &mut t);
+    assert_eq!((t.pieces, t.lines, t.lines_matched), (0, 1, 1));
+    let mut t = RealTally::default();
+    score_frame(&truth, &[on_map], &valid, &mut t);
+    assert_eq!((t.pieces, t.lines, t.lines_matched), (0, 1, 0));
 }
 
 #[test]

@@ -1,0 +1,99 @@
+//! The usefulness gate (issue 14, item 6) swept on the real logs' map
+//! truth: `Params::max_alpha_sd_deg` and `min_points` at the no-flag
+//! defaults, pooled over every shared log.
+//!
+//! `cargo run --release -p lms-lab --example gate_sweep -- [EVERY]`
+
+use std::path::Path;
+
+use anyhow::Result;
+use lms_core::Params;
+use lms_lab::maptruth::TruthConfig;
+use lms_lab::realtruth::{
+    methods, run_log, Base, RealKind, RealMethod, RealTally, SigmaChoice, ORACLE,
+};
+
+fn main() -> Result<()> {
+    let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
+    let m = |name, adjust: fn(Params) -> Params| RealMethod {
+        name,
+        kind: RealKind::Core,
+        base: Base::NoFlags,
+        sigma: SigmaChoice::Base,
+        adjust,
+    };
+    let mut ms = vec![
+        m("no flags (α sd ≤ 1.67°)", |p| p),
+        m("α sd ≤ 1.0°", |p| Params {
+            max_alpha_sd_deg: 1.0,
+            ..p
+        }),
+        m("α sd ≤ 0.75°", |p| Params {
+            max_alpha_sd_deg: 0.75,
+            ..p
+        }),
+        m("α sd ≤ 0.5°", |p| Params {
+            max_alpha_sd_deg: 0.5,
+            ..p
+        }),
+        m("min_points 10", |p| Params {
+            min_points: 10,
+            ..p
+        }),
+        m("min_points 10, α sd ≤ 1.0°", |p| Params {
+            min_points: 10,
+            max_alpha_sd_deg: 1.0,
+            ..p
+        }),
+        m("min_points 15", |p| Params {
+            min_points: 15,
+            ..p
+        }),
+        m("min_length 0.3 m", |p| Params {
+            min_length: 0.3,
+            ..p
+        }),
+        m("min_length 0.5 m", |p| Params {
+            min_length: 0.5,
+            ..p
+        }),
+    ];
+    ms.extend(
+        methods()
+            .into_iter()
+            .filter(|x| x.name == ORACLE || x.name.starts_with("split-and-merge")),
+    );
+    let dir = Path::new("../shared/data/carmen");
+    let mut names: Vec<_> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .collect();
+    names.sort();
+    let cfg = TruthConfig {
+        verify: std::env::var("UNVERIFIED").is_err(),
+        ..TruthConfig::default()
+    };
+    let mut pooled = vec![RealTally::default(); ms.len()];
+    for path in &names {
+        let r = run_log(path, &ms, every, &cfg, None)?;
+        for (k, t) in r.tallies.iter().enumerate() {
+            pooled[k].merge(t);
+        }
+    }
+    println!("| method | TruePos | ≥ 1 m | FalsePos | on no wall | FP on walls | coverage | fragmented | lines/frame |");
+    for (m, t) in ms.iter().zip(&pooled) {
+        let s = t.summary();
+        println!(
+            "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} |",
+            m.name,
+            s.true_pos,
+            s.true_pos_1m,
+            s.false_pos,
+            s.no_wall,
+            s.false_pos_on_walls,
+            s.coverage,
+            s.fragmented,
+            s.lines_per_frame
+        );
+    }
+    Ok(())
+}
