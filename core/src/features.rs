@@ -47,6 +47,12 @@ macro_rules! declare_stats {
             /// All counters zero (`const`, for statics).
             pub const ZERO: Stats = Stats { $($field: 0,)+ };
 
+            /// Add every counter of `o` to this one's (saturating): the
+            /// counts of several runs over parts of one frame.
+            pub fn saturating_add(&mut self, o: &Stats) {
+                $(self.$field = self.$field.saturating_add(o.$field);)+
+            }
+
             /// Counters from `values` in [`Stats::FIELDS`] order; missing
             /// values are 0, extra values are ignored.
             pub fn from_fields(values: &[u16]) -> Stats {

@@ -101,7 +101,28 @@ pub struct Params {
     /// otherwise a non-default value fails validation
     /// ([`ParamError::NotInBuild`]).
     pub fit_sigma: f32,
+    /// Per-turn extraction (ALGORITHM.md §10 proposal (d),
+    /// `docs/ALGORITHM-v3-section10.md`): in the modes that interleave
+    /// mirror turns (0.5°: two, 0.25°: four), each turn's beams run through
+    /// §2–8 as a scan of their own (bearing step `k·γ`), and the turns'
+    /// lines of one wall are fused into one (information-weighted; pairs
+    /// whose beam ranges meet and agree within [`TURN_FUSE_ALPHA_DEG`] and
+    /// [`TURN_FUSE_R`]). Corners (§8) are formed on the fused lines. `false`
+    /// runs the whole scan at once (v1, v2); 1° modes are the same either way.
+    ///
+    /// Only with feature `section10` (host crates; not the firmware):
+    /// otherwise `true` fails validation ([`ParamError::NotInBuild`]).
+    pub per_turn: bool,
 }
+
+/// Pairing gate of [`Params::per_turn`] on |Δα| between two turns' lines
+/// (degrees): the evaluation's matching gate, under which the turns' lines
+/// of one wall differ by the platform's motion in 13.3 ms.
+pub const TURN_FUSE_ALPHA_DEG: f32 = 3.0;
+
+/// Pairing gate of [`Params::per_turn`] on |Δr| (m); see
+/// [`TURN_FUSE_ALPHA_DEG`].
+pub const TURN_FUSE_R: f32 = 0.1;
 
 /// Largest incidence (degrees) the grazing term of
 /// [`Params::grazing_noise`] follows; a window whose outer ranges differ
@@ -149,6 +170,7 @@ impl Params {
         grazing_noise: 0.0,
         same_turn_windows: false,
         fit_sigma: 0.0,
+        per_turn: false,
     };
 
     /// ALGORITHM.md v1: no split before reject, shared corner points in
@@ -209,7 +231,7 @@ pub enum ParamError {
     /// `fit_sigma` must be finite and ≥ 0.
     FitSigma,
     /// An ALGORITHM.md §10 option (`same_turn_windows`, `grazing_noise`,
-    /// `fit_sigma`; named by `option`) has a non-default value, but this
+    /// `fit_sigma`, `per_turn`; named by `option`) has a non-default value, but this
     /// build of the core leaves the §10 options out (feature `section10`
     /// off, as in the firmware).
     NotInBuild {
@@ -285,6 +307,7 @@ impl ValidParams {
         grazing_noise: 0.0,
         same_turn_windows: false,
         fit_sigma: 0.0,
+        per_turn: false,
     });
 
     /// The parameters.
@@ -384,6 +407,8 @@ impl Params {
                 Some("grazing_noise")
             } else if self.fit_sigma != 0.0 {
                 Some("fit_sigma")
+            } else if self.per_turn {
+                Some("per_turn")
             } else {
                 None
             };

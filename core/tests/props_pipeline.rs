@@ -168,6 +168,8 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             same_turn_windows: e.0,
             grazing_noise: e.1,
             fit_sigma: e.2,
+            // Its segments interleave by design: tests/per_turn.rs.
+            per_turn: false,
         })
 }
 

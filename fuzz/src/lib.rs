@@ -430,7 +430,8 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
     let raw: [u32; 12] = core::array::from_fn(|_| input.u32());
     let flags = input.u8();
     // ALGORITHM.md v2's range limit and the line gate (issue 14).
-    // The ALGORITHM.md §10 proposals: grazing term, fit σ (limits 2, 3).
+    // The ALGORITHM.md §10 proposals: grazing term, fit σ (limits 2, 3);
+    // per-turn extraction: the top bit of raw[11].
     let limits: [u32; 4] = core::array::from_fn(|_| input.u32());
     let params = match mode {
         PARAMS_RAW => {
@@ -461,6 +462,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 grazing_noise: f32::from_bits(limits[2]),
                 same_turn_windows: flags & 64 != 0,
                 fit_sigma: f32::from_bits(limits[3]),
+                per_turn: raw[11] & 0x8000_0000 != 0,
             }
         }
         PARAMS_SANE => Params {
@@ -508,6 +510,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
             } else {
                 1e-4 + unit(limits[3]) * 0.1
             },
+            per_turn: raw[11] & 0x8000_0000 != 0,
         },
         _ => Params {
             iterations: 1 + (raw[2] % 40) as u16,

@@ -98,6 +98,12 @@ pub struct ParamArgs {
     /// 81.83 m for cm data]
     #[arg(long, value_name = "M")]
     pub max_range: Option<f32>,
+    /// Per-turn extraction in the interleaved 0.5° and 0.25° modes: each
+    /// mirror turn a scan of its own, the turns' lines of one wall fused
+    /// (ALGORITHM.md §10 proposal (d), docs/ALGORITHM-v3-section10.md; host
+    /// only, the firmware leaves it out)
+    #[arg(long)]
+    pub per_turn: bool,
 }
 
 impl ParamArgs {
@@ -122,6 +128,7 @@ impl ParamArgs {
                 || (!self.no_shared_points && d.fit_shared_points),
             split_depth: self.split_depth.unwrap_or(d.split_depth),
             max_range: self.max_range.unwrap_or(d.max_range),
+            per_turn: self.per_turn || d.per_turn,
             ..d
         };
         p.validate()

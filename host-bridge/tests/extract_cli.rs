@@ -213,6 +213,21 @@ fn output_file_matches_stdout_and_params_apply() {
     // One pass gives other D than the default 30.
     let c = run(&args);
     assert_ne!(b.stdout, c.stdout);
+
+    // Per-turn extraction (0.5° log: two mirror turns) gives other lines;
+    // the co-processor paths refuse it by name.
+    let d = run(&[&args[..], &["--per-turn"]].concat());
+    assert!(d.status.success(), "{}", String::from_utf8_lossy(&d.stderr));
+    let lines = |out: &[u8]| -> Vec<Value> {
+        out.split(|&c| c == b'\n')
+            .filter(|l| !l.is_empty())
+            .map(|l| serde_json::from_slice::<Value>(l).unwrap()["lines"].clone())
+            .collect()
+    };
+    assert_ne!(lines(&c.stdout), lines(&d.stdout));
+    let e = run(&["verify", "--host", "--count", "1", "--per-turn"]);
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("--per-turn"));
     let _ = std::fs::remove_dir_all(dir);
 }
 

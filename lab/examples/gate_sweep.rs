@@ -58,6 +58,37 @@ fn main() -> Result<()> {
             ..p
         }),
     ];
+    ms.extend([
+        m("per turn", |p| Params {
+            per_turn: true,
+            ..p
+        }),
+        m("per turn, α sd ≤ 1.0°", |p| Params {
+            per_turn: true,
+            max_alpha_sd_deg: 1.0,
+            ..p
+        }),
+        m("per turn, α sd ≤ 0.75°", |p| Params {
+            per_turn: true,
+            max_alpha_sd_deg: 0.75,
+            ..p
+        }),
+        m("per turn, min_points 8", |p| Params {
+            per_turn: true,
+            min_points: 8,
+            ..p
+        }),
+        m("per turn, σ ≥ 15 mm", |p| Params {
+            per_turn: true,
+            sigma: p.sigma.max(0.015),
+            ..p
+        }),
+        m("per turn, σ ≥ 20 mm", |p| Params {
+            per_turn: true,
+            sigma: p.sigma.max(0.02),
+            ..p
+        }),
+    ]);
     ms.extend(
         methods()
             .into_iter()

@@ -1,4 +1,4 @@
-//! Diagnostic for [`lms_lab::turns`]: on the 0.5° logs, the no-flag
+//! Diagnostic for `Params::per_turn` (ALGORITHM.md §10 proposal (d)): on the 0.5° logs, the no-flag
 //! defaults on the whole scan, on one mirror turn alone (the even beams as
 //! a 1° scan) and per turn with the turns' lines fused, against the
 //! verified map truth.
@@ -9,11 +9,10 @@ use std::path::Path;
 
 use anyhow::Result;
 use host_bridge::carmen::{self, UnitMode};
-use lms_core::{Extractor, Frame, Geometry};
+use lms_core::{Extractor, Frame, Geometry, Params};
 use lms_lab::baselines::{run_core, Extraction};
 use lms_lab::maptruth::{build_map, frame_truth, TruthConfig};
 use lms_lab::realtruth::{no_flag_params, score_frame, RealTally, ScoredLine};
-use lms_lab::turns::per_turn;
 
 /// The even beams of `frame` as a scan of twice the step.
 fn even_turn(frame: &Frame) -> Result<Frame> {
@@ -55,6 +54,10 @@ fn main() -> Result<()> {
         }
         let map = build_map(&log.scans, &cfg);
         let params = no_flag_params(&path)?;
+        let per_turn = Params {
+            per_turn: true,
+            ..params
+        };
         let mut ex = Extractor::new();
         let mut t = vec![RealTally::default(); 3];
         for scan in log.scans.iter().step_by(every) {
@@ -62,7 +65,7 @@ fn main() -> Result<()> {
             let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
             let whole = lines(&run_core(&mut ex, &scan.frame, &params), 1);
             let even = lines(&run_core(&mut ex, &even_turn(&scan.frame)?, &params), 2);
-            let fused = lines(&per_turn(&mut ex, &scan.frame, &params), 1);
+            let fused = lines(&run_core(&mut ex, &scan.frame, &per_turn), 1);
             for (k, l) in [whole, even, fused].iter().enumerate() {
                 score_frame(&truth, l, &valid, &mut t[k]);
             }

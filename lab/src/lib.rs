@@ -35,7 +35,6 @@ pub mod report;
 pub mod scale;
 pub mod scenes;
 pub mod sensorfit;
-pub mod turns;
 pub mod variants;
 
 use std::io::IsTerminal;
@@ -178,8 +177,6 @@ pub enum Kind {
     },
     /// An experimental variant of the smoothing ([`variants`]).
     Variant(variants::Options),
-    /// The core on each mirror turn, lines fused ([`turns`]).
-    PerTurn,
 }
 
 /// An extractor with its parameter changes against the spec's defaults.
@@ -230,7 +227,6 @@ impl Method {
             Kind::SplitMerge { k } => baselines::split_and_merge(&s.frame, tables, &p, k),
             Kind::Gaussian { s: w } => baselines::gaussian_mask(&s.frame, tables, &p, w),
             Kind::Variant(o) => variants::extract(&s.frame, tables, &p, &o),
-            Kind::PerTurn => turns::per_turn(ex, &s.frame, &p),
         }
     }
 }

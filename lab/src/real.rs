@@ -141,7 +141,6 @@ fn extract(
         Kind::SplitMerge { k } => baselines::split_and_merge(frame, tables, &p, k),
         Kind::Gaussian { s } => baselines::gaussian_mask(frame, tables, &p, s),
         Kind::Variant(o) => crate::variants::extract(frame, tables, &p, &o),
-        Kind::PerTurn => crate::turns::per_turn(ex, frame, &p),
     }
 }
 

@@ -101,11 +101,10 @@ pub fn methods() -> Vec<Method> {
             fit_sigma: 2.0 * p.sigma,
             ..Params::default()
         }),
-        Method::with("v2 per turn, fused (lab prototype)", Kind::PerTurn, |p| {
-            Params {
-                sigma: p.sigma,
-                ..Params::default()
-            }
+        Method::with("v2 + per turn (§10 d)", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            per_turn: true,
+            ..Params::default()
         }),
         Method::new(crate::SPLIT_MERGE, Kind::SplitMerge { k: crate::SPLIT_K }),
     ]

@@ -104,8 +104,6 @@ pub enum RealKind {
     SplitMerge(f32),
     /// The least-squares fit to each true piece's own beams.
     Oracle,
-    /// The core on each mirror turn, lines fused ([`crate::turns`]).
-    PerTurn,
 }
 
 /// One method of the real-scan evaluation.
@@ -143,8 +141,8 @@ impl RealMethod {
 pub const NO_FLAGS: &str = "defaults, no flags (v2, per data)";
 /// Name of v1's no-flags method.
 pub const V1_NO_FLAGS: &str = "v1 defaults, no flags (σ 5 mm)";
-/// Name of the per-turn prototype at the no-flag parameters.
-pub const PER_TURN: &str = "per turn, fused (lab prototype), no flags";
+/// Name of per-turn extraction (`Params::per_turn`) at the no-flag parameters.
+pub const PER_TURN: &str = "no flags + per turn (§10 d)";
 /// Name of the oracle.
 pub const ORACLE: &str = "oracle (LS fit to the true beams)";
 
@@ -206,7 +204,10 @@ pub fn methods() -> Vec<RealMethod> {
             fit_sigma: 2.0 * p.sigma,
             ..p
         }),
-        m(PER_TURN, PerTurn, NoFlags, own),
+        g(PER_TURN, |p| Params {
+            per_turn: true,
+            ..p
+        }),
         m(ORACLE, Oracle, NoFlags, own),
     ]
 }
@@ -521,7 +522,6 @@ pub fn extract(
         RealKind::Core => run_core(ex, &scan.frame, &p),
         RealKind::SplitMerge(k) => baselines::split_and_merge(&scan.frame, tables, &p, k),
         RealKind::Oracle => return oracle_lines(truth),
-        RealKind::PerTurn => crate::turns::per_turn(ex, &scan.frame, &p),
     };
     x.lines.iter().map(ScoredLine::from).collect()
 }

@@ -143,6 +143,18 @@ impl Extractor {
     where
         F: FnMut(u16, &[f32], &[f32]),
     {
+        #[cfg(feature = "section10")]
+        if params.per_turn {
+            let k = crate::pipeline::turns::interleaved_turns(frame.geometry().step);
+            if k > 1 {
+                // Each turn has windows of its own: no D of the whole scan.
+                for x in trace.iter_mut() {
+                    *x = f32::INFINITY;
+                }
+                self.run_per_turn(frame, params, k);
+                return &self.features;
+            }
+        }
         let params: &Params = params;
         // A frame never holds more than MAX_BEAMS beams; the `min`s make
         // that visible to the optimiser, so no slice below can panic.
@@ -199,6 +211,87 @@ impl Extractor {
         find_corners(f, params, &mut stats);
         f.stats = stats;
         &self.features
+    }
+
+    /// [`Params::per_turn`] on a frame of `k` interleaved turns: §2–8 on
+    /// each turn as a frame of its own, the turns' lines fused
+    /// ([`crate::pipeline::turns`]), segments and edge points of all turns
+    /// in the whole frame's beam indices, corners (§8) on the fused lines,
+    /// the smoothed ranges of every turn in their beams. Counters are the
+    /// sums over the turns (a fusion counts as a merge), corners' counted
+    /// once.
+    #[cfg(feature = "section10")]
+    fn run_per_turn(&mut self, frame: &Frame, params: &ValidParams, k: usize) {
+        use crate::features::{Line, Segment, MAX_LINES, MAX_SEGMENTS};
+        use crate::pipeline::turns::{fuse_into, turn_frame};
+        let Ok(inner) = Params {
+            per_turn: false,
+            ..**params
+        }
+        .validate() else {
+            return;
+        };
+        let n = frame.len().min(MAX_BEAMS);
+        let mut lines: heapless::Vec<Line, MAX_LINES> = heapless::Vec::new();
+        let mut segments: heapless::Vec<Segment, MAX_SEGMENTS> = heapless::Vec::new();
+        let mut edges = [false; MAX_BEAMS];
+        let mut smoothed = [0.0f32; MAX_BEAMS];
+        let mut stats = Stats::ZERO;
+        for t in 0..k {
+            let Some(turn) = turn_frame(frame, t, k) else {
+                continue;
+            };
+            let whole = |i: u16| (k * usize::from(i) + t) as u16;
+            let f = self.run_with(&turn, &inner, &mut [], |_, _, _| {});
+            stats.saturating_add(f.stats());
+            for s in f.segments() {
+                let s = Segment {
+                    first: whole(s.first),
+                    last: whole(s.last),
+                };
+                if segments.push(s).is_err() {
+                    stats.segment_overflow = stats.segment_overflow.saturating_add(1);
+                }
+            }
+            for e in f.edges() {
+                if let Some(x) = edges.get_mut(usize::from(whole(e))) {
+                    *x = true;
+                }
+            }
+            let turn_lines: heapless::Vec<Line, MAX_LINES> = f
+                .lines()
+                .iter()
+                .map(|l| Line {
+                    first: whole(l.first),
+                    last: whole(l.last),
+                    ..*l
+                })
+                .collect();
+            for (i, &x) in self.smoothed().iter().enumerate() {
+                if let Some(s) = smoothed.get_mut(k * i + t) {
+                    *s = x;
+                }
+            }
+            for l in &turn_lines {
+                fuse_into(&mut lines, l, &mut stats);
+            }
+        }
+        segments.sort_unstable_by_key(|s| (s.first, s.last));
+        lines.sort_unstable_by_key(|l| (l.first, l.last));
+        let f = &mut self.features;
+        f.segments = segments;
+        f.edges.clear();
+        for (j, _) in edges.iter().enumerate().filter(|(_, &e)| e) {
+            let _ = f.edges.push(j as u16); // ascending, below MAX_BEAMS
+        }
+        f.lines = lines;
+        f.corners.clear();
+        stats.degenerate_corners = 0;
+        stats.corner_overflow = 0;
+        find_corners(f, params, &mut stats);
+        f.stats = stats;
+        self.smoothed[..n].copy_from_slice(&smoothed[..n]);
+        self.len = n;
     }
 
     /// The features of the last run.

@@ -12,7 +12,9 @@
 //! 6. [`split`] — split before reject (§7.4, `Params::split_depth`).
 //! 7. [`corners`] — intersections of consecutive lines with covariance,
 //!    angle and conditioning (§8).
-//! 8. [`extractor`] — the one owner of all working buffers, running stages
+//! 8. `turns` (feature `section10`) — per-turn extraction and the fusion
+//!    of the turns' lines (§10 proposal (d)).
+//! 9. [`extractor`] — the one owner of all working buffers, running stages
 //!    1–7 for a frame and merging neighbouring lines (§7.6).
 //!
 //! Every stage reads the shared types of [`crate::frame`] and
@@ -29,3 +31,5 @@ pub(crate) mod merge;
 pub mod segmentation;
 pub mod smoothing;
 pub mod split;
+#[cfg(feature = "section10")]
+pub mod turns;

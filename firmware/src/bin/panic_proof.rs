@@ -132,6 +132,7 @@ fn any_params() -> Params {
         grazing_noise: any_f32(),
         same_turn_windows: black_box(true),
         fit_sigma: any_f32(),
+        per_turn: black_box(true),
     }
 }
 

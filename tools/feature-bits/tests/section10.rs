@@ -24,7 +24,7 @@ fn grazing_wall() -> Frame {
 
 #[test]
 fn each_option_is_refused_by_name_or_changes_the_result() {
-    let options: [(&str, Params); 3] = [
+    let options: [(&str, Params); 4] = [
         (
             "same_turn_windows",
             Params {
@@ -43,6 +43,13 @@ fn each_option_is_refused_by_name_or_changes_the_result() {
             "fit_sigma",
             Params {
                 fit_sigma: 0.02,
+                ..Params::DEFAULT
+            },
+        ),
+        (
+            "per_turn",
+            Params {
+                per_turn: true,
                 ..Params::DEFAULT
             },
         ),

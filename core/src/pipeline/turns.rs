@@ -1,0 +1,135 @@
+//! Per-turn extraction (ALGORITHM.md §10 proposal (d), [`Params::per_turn`];
+//! feature `section10`, not in the firmware).
+//!
+//! In the LMS's interleaved modes (0.5°: two mirror turns, 0.25°: four) the
+//! turns of one scan are 13.3 ms apart, so on a moving platform their hits
+//! on one wall are parallel point sets a few mm to cm apart
+//! (`docs/ALGORITHM-v3-section10.md` §10.1). The three-point windows of §2
+//! mix the turns and break along such walls; within one turn they do not.
+//! So each turn `t` of `k` — beams `t, t+k, t+2k, …` — runs through §2–8
+//! as a scan of its own at bearing step `k·γ` ([`turn_frame`]), and the
+//! turns' lines of one wall are fused into one ([`fuse_into`]):
+//!
+//! * **Pairing.** Turn by turn, in scan order, a line pairs with the fused
+//!   line whose beam range overlaps its own most, among those whose beam
+//!   ranges meet and whose `(α, r)` agree within [`TURN_FUSE_ALPHA_DEG`]
+//!   and [`TURN_FUSE_R`]; a line no fused line takes is added as it is.
+//! * **Fusion** (information form, fixed order, f32):
+//!   `Σ = (Σ₁⁻¹ + Σ₂⁻¹)⁻¹`, `(α, r) = Σ·(Σ₁⁻¹·x₁ + Σ₂⁻¹·x₂)` with `α₂`
+//!   unwrapped to `α₁`; beam range the union, points the sum, χ² the larger,
+//!   endpoints the outer two projected onto the fused line.
+//!
+//! [`Params::per_turn`]: crate::Params::per_turn
+//! [`TURN_FUSE_ALPHA_DEG`]: crate::params::TURN_FUSE_ALPHA_DEG
+//! [`TURN_FUSE_R`]: crate::params::TURN_FUSE_R
+
+use heapless::Vec;
+
+use crate::features::{Line, Stats, MAX_LINES};
+use crate::frame::{Beam, Frame, Geometry};
+use crate::maths::{cos_sin, wrap_angle};
+use crate::params::{TURN_FUSE_ALPHA_DEG, TURN_FUSE_R};
+
+/// Mirror turns interleaved at bearing step `step` (rad): 2 at 0.5°, 4 at
+/// 0.25°, else 1 (no interleave to follow).
+pub fn interleaved_turns(step: f32) -> usize {
+    let turns = (core::f32::consts::PI / 180.0) / step + 0.5;
+    if !(1.0..5.0).contains(&turns) {
+        return 1;
+    }
+    match turns as usize {
+        k @ (2 | 4) => k,
+        _ => 1,
+    }
+}
+
+/// Turn `t` of `k` of `frame` as a frame of its own: its beam `i` is the
+/// frame's beam `k·i + t`, at bearing step `k·γ`. `None` if that leaves
+/// too few beams for a frame.
+pub fn turn_frame(frame: &Frame, t: usize, k: usize) -> Option<Frame> {
+    let g = frame.geometry();
+    let n = frame.len().saturating_sub(t).div_ceil(k.max(1));
+    let geometry = Geometry {
+        first_bearing: g.first_bearing + t as f32 * g.step,
+        step: k as f32 * g.step,
+    };
+    let mut turn = Frame::new(geometry, n).ok()?;
+    let (ranges, beams) = (frame.ranges(), frame.beams());
+    for i in 0..n {
+        let j = k * i + t;
+        match (beams.get(j), ranges.get(j)) {
+            (Some(Beam::Valid), Some(&d)) => turn.set_metres(i, d),
+            (Some(&Beam::Invalid(why)), _) => turn.set_invalid(i, why),
+            _ => {}
+        }
+    }
+    Some(turn)
+}
+
+/// Beam ranges of `a` and `b` overlap by this many beams minus one
+/// (negative: a gap).
+fn overlap(a: &Line, b: &Line) -> i32 {
+    i32::from(a.last.min(b.last)) - i32::from(a.first.max(b.first))
+}
+
+/// Add `line` (beam indices of the whole frame) to `fused`: fused with its
+/// partner if it has one (see the module docs), else appended; a full list
+/// counts it in `stats.line_overflow`.
+pub fn fuse_into(fused: &mut Vec<Line, MAX_LINES>, line: &Line, stats: &mut Stats) {
+    let gate_alpha = TURN_FUSE_ALPHA_DEG * (core::f32::consts::PI / 180.0);
+    let mut best: Option<(usize, i32)> = None;
+    for (i, f) in fused.iter().enumerate() {
+        let o = overlap(f, line);
+        let agree = libm::fabsf(wrap_angle(line.alpha - f.alpha)) < gate_alpha
+            && libm::fabsf(line.r - f.r) < TURN_FUSE_R;
+        if o >= 0 && agree && best.is_none_or(|(_, bo)| o > bo) {
+            best = Some((i, o));
+        }
+    }
+    if let Some((i, _)) = best {
+        if let Some(slot) = fused.get_mut(i) {
+            if let Some(both) = fuse(slot, line) {
+                *slot = both;
+                stats.merges = stats.merges.saturating_add(1);
+                return;
+            }
+        }
+    }
+    if fused.push(*line).is_err() {
+        stats.line_overflow = stats.line_overflow.saturating_add(1);
+    }
+}
+
+/// Two turns' lines of one wall as one (module docs); `None` if a
+/// covariance is not positive definite.
+pub fn fuse(p: &Line, q: &Line) -> Option<Line> {
+    let ip = p.cov.inverse_spd()?;
+    let iq = q.cov.inverse_spd()?;
+    let cov = ip.add(&iq).inverse_spd()?;
+    let qa = p.alpha + wrap_angle(q.alpha - p.alpha);
+    let v0 = ip.a * p.alpha + ip.b * p.r + iq.a * qa + iq.b * q.r;
+    let v1 = ip.b * p.alpha + ip.c * p.r + iq.b * qa + iq.c * q.r;
+    let mut alpha = wrap_angle(cov.a * v0 + cov.b * v1);
+    let mut r = cov.b * v0 + cov.c * v1;
+    if r < 0.0 {
+        r = -r;
+        alpha = wrap_angle(alpha + core::f32::consts::PI);
+    }
+    let (c, s) = cos_sin(alpha);
+    let project = |e: [f32; 2]| {
+        let d = e[0] * c + e[1] * s - r;
+        [e[0] - d * c, e[1] - d * s]
+    };
+    let first = if p.first <= q.first { p } else { q }.endpoints[0];
+    let last = if p.last >= q.last { p } else { q }.endpoints[1];
+    Some(Line {
+        alpha,
+        r,
+        cov,
+        first: p.first.min(q.first),
+        last: p.last.max(q.last),
+        points: p.points.saturating_add(q.points),
+        chi2: p.chi2.max(q.chi2),
+        endpoints: [project(first), project(last)],
+    })
+}
