@@ -1,7 +1,8 @@
-//! Diagnostic for `Params::per_turn` (ALGORITHM.md §10 proposal (d)): on the 0.5° logs, the no-flag
-//! defaults on the whole scan, on one mirror turn alone (the even beams as
-//! a 1° scan) and per turn with the turns' lines fused, against the
-//! verified map truth.
+//! Diagnostic for `Params::per_turn` (ALGORITHM.md §10 proposal (d)): on
+//! the 0.5° logs, the no-flag defaults on the whole scan, on one mirror turn alone (the even beams as
+//! a 1° scan), per turn with the turns' lines fused, and a hybrid (per
+//! turn plus the whole scan's lines no per-turn line covers half of),
+//! against the verified map truth.
 //!
 //! `cargo run --release -p lms-lab --example one_turn -- [EVERY]`
 
@@ -36,7 +37,7 @@ fn main() -> Result<()> {
         .filter_map(|e| e.ok().map(|e| e.path()))
         .collect();
     names.sort();
-    let mut pooled = vec![RealTally::default(); 3];
+    let mut pooled = vec![RealTally::default(); 4];
     let lines = |x: &Extraction, k: usize| -> Vec<ScoredLine> {
         x.lines
             .iter()
@@ -59,14 +60,27 @@ fn main() -> Result<()> {
             ..params
         };
         let mut ex = Extractor::new();
-        let mut t = vec![RealTally::default(); 3];
+        let mut t = vec![RealTally::default(); 4];
         for scan in log.scans.iter().step_by(every) {
             let truth = frame_truth(scan, &map, &cfg);
             let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
             let whole = lines(&run_core(&mut ex, &scan.frame, &params), 1);
             let even = lines(&run_core(&mut ex, &even_turn(&scan.frame)?, &params), 2);
             let fused = lines(&run_core(&mut ex, &scan.frame, &per_turn), 1);
-            for (k, l) in [whole, even, fused].iter().enumerate() {
+            // Hybrid (measured, not built): per turn, plus the whole scan's
+            // lines that no per-turn line covers half of.
+            let mut hybrid = fused.clone();
+            for w in &whole {
+                let covered = fused
+                    .iter()
+                    .map(|f| (w.last.min(f.last) + 1).saturating_sub(w.first.max(f.first)))
+                    .max()
+                    .unwrap_or(0);
+                if 2 * covered < w.last - w.first + 1 {
+                    hybrid.push(*w);
+                }
+            }
+            for (k, l) in [whole, even, fused, hybrid].iter().enumerate() {
                 score_frame(&truth, l, &valid, &mut t[k]);
             }
         }
@@ -87,10 +101,11 @@ fn main() -> Result<()> {
     }
     let s: Vec<_> = pooled.iter().map(RealTally::summary).collect();
     println!(
-        "pooled: TruePos / ≥ 1 m / FalsePos whole {:.3} / {:.3} / {:.3}, even turn {:.3} / {:.3} / {:.3}, per turn fused {:.3} / {:.3} / {:.3}",
+        "pooled: TruePos / ≥ 1 m / FalsePos whole {:.3} / {:.3} / {:.3}, even turn {:.3} / {:.3} / {:.3}, per turn fused {:.3} / {:.3} / {:.3}, hybrid {:.3} / {:.3} / {:.3}",
         s[0].true_pos, s[0].true_pos_1m, s[0].false_pos,
         s[1].true_pos, s[1].true_pos_1m, s[1].false_pos,
-        s[2].true_pos, s[2].true_pos_1m, s[2].false_pos
+        s[2].true_pos, s[2].true_pos_1m, s[2].false_pos,
+        s[3].true_pos, s[3].true_pos_1m, s[3].false_pos
     );
     Ok(())
 }

@@ -29,7 +29,9 @@
 //! # Errors against the Cramér–Rao bound
 //! For each matched pair the CRB is `σ²(JᵀJ)⁻¹` of the *true* line over the
 //! valid beams the extracted line used (its `first..=last`), with the range
-//! model of §7. The figures are the sample standard deviations of Δα and Δr
+//! model of §7 (with [`Gates::kappa`] > 0, the realistic sensor model's
+//! per-beam noise `σ_j² = σ² + (κ·d_j·tan θ_j)²` instead: the information
+//! `Σ J_j J_jᵀ / σ_j²`, [`crb_footprint`]). The figures are the sample standard deviations of Δα and Δr
 //! (as Nguyen et al.) and the RMS of the normalised errors
 //! `√mean(Δα²/CRB_αα)` and `√mean(Δr²/CRB_rr)` — 1 for an efficient,
 //! unbiased extractor. NEES is `eᵀΣ⁻¹e` with the covariance the extractor
@@ -57,6 +59,10 @@ pub struct Gates {
     pub overlap: f64,
     /// Largest distance of a matched corner (m).
     pub corner: f64,
+    /// Footprint term of the CRB's per-beam noise (rad; the realistic
+    /// model's κ): `σ_j² = σ² + (κ·d·tan θ)²`, θ the incidence (at most
+    /// 85°). 0: σ for every beam.
+    pub kappa: f64,
 }
 
 impl Default for Gates {
@@ -66,6 +72,7 @@ impl Default for Gates {
             r: 0.10,
             overlap: 0.5,
             corner: 0.10,
+            kappa: 0.0,
         }
     }
 }
@@ -143,6 +150,41 @@ pub fn crb(
     }
     let v = sigma * sigma;
     Some([v * c / det, -v * b / det, v * a / det])
+}
+
+/// [`crb`] with the per-beam noise `σ_j² = σ² + (κ·d_j·tan θ_j)²` of a
+/// footprint term `kappa` (rad): `(Σ J_j J_jᵀ / σ_j²)⁻¹`, θ_j = φ_j − α
+/// capped at 85° (as `lms_scene::LmsModel`), d_j = r / cos θ_j. At
+/// `kappa = 0` exactly [`crb`].
+pub fn crb_footprint(
+    alpha: f64,
+    r: f64,
+    bearings: impl Iterator<Item = f64>,
+    sigma: f64,
+    kappa: f64,
+) -> Option<[f64; 3]> {
+    if kappa == 0.0 {
+        return crb(alpha, r, bearings, sigma);
+    }
+    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+    for phi in bearings {
+        let (s, co) = (phi - alpha).sin_cos();
+        if co <= 1e-6 {
+            continue;
+        }
+        let theta = (phi - alpha).abs().min(lms_scene::lms::MAX_INCIDENCE);
+        let v = sigma * sigma + (kappa * (r / co) * theta.tan()).powi(2);
+        let ja = -r * s / (co * co);
+        let jr = 1.0 / co;
+        a += ja * ja / v;
+        b += ja * jr / v;
+        c += jr * jr / v;
+    }
+    let det = a * c - b * b;
+    if !(det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    Some([c / det, -b / det, a / det])
 }
 
 /// `eᵀΣ⁻¹e` for `Σ = [[a, b], [b, c]]`; `None` unless Σ is positive definite.
@@ -225,9 +267,14 @@ pub fn scan_truth(
             let detectable =
                 beams.len() >= params.min_points as usize && length >= params.min_length as f64;
             let resolvable = detectable
-                && crb(l.alpha, l.r, beams.iter().map(|&j| bearings[j]), sigma).is_some_and(|c| {
-                    3.0 * c[0].sqrt() < gates.alpha && 3.0 * c[2].sqrt() < gates.r
-                });
+                && crb_footprint(
+                    l.alpha,
+                    l.r,
+                    beams.iter().map(|&j| bearings[j]),
+                    sigma,
+                    gates.kappa,
+                )
+                .is_some_and(|c| 3.0 * c[0].sqrt() < gates.alpha && 3.0 * c[2].sqrt() < gates.r);
             TruePiece {
                 alpha: l.alpha,
                 r: l.r,
@@ -415,7 +462,8 @@ pub fn score_lines(
         let used = (l.first as usize..=l.last as usize)
             .filter(|&j| beams.get(j).is_some_and(|b| b.is_valid()))
             .filter_map(|j| truth.bearings.get(j).copied());
-        let sigma_crb = crb(p.alpha, p.r, used, sigma).unwrap_or([f64::NAN; 3]);
+        let sigma_crb =
+            crb_footprint(p.alpha, p.r, used, sigma, gates.kappa).unwrap_or([f64::NAN; 3]);
         let e2 = [wrap_angle(l.alpha as f64 - p.alpha), l.r as f64 - p.r];
         let nees = nees2(e2, l.cov.a as f64, l.cov.b as f64, l.cov.c as f64).unwrap_or(f64::NAN);
         let coverage = overlap((l.first as usize, l.last as usize), (p.first, p.last)) as f64

@@ -250,6 +250,34 @@ fn evaluate_the_crb_is_the_core_fit_covariance_on_a_noise_free_wall() {
 }
 
 #[test]
+fn the_footprint_crb_weights_grazing_beams_down() {
+    use lms_lab::metrics::crb_footprint;
+    let bearings = || (0..40).map(|j| (-10.0 + j as f64 * 0.5).to_radians());
+    let (alpha, r, sigma) = (0.0, 3.0, 0.01);
+    let plain = crb(alpha, r, bearings(), sigma).unwrap();
+    assert_eq!(crb_footprint(alpha, r, bearings(), sigma, 0.0), Some(plain));
+    // Near normal incidence (|θ| ≤ 10°) the footprint adds little ...
+    let near = crb_footprint(alpha, r, bearings(), sigma, 0.0038).unwrap();
+    assert!(near[2] > plain[2] && near[2] < 1.05 * plain[2], "{near:?} {plain:?}");
+    // ... along a wall at 60–80°, κ·d·tan θ is several σ: the bound is wider.
+    let grazing = || (0..40).map(|j| (60.0 + j as f64 * 0.5).to_radians());
+    let p = crb(alpha, r, grazing(), sigma).unwrap();
+    let g = crb_footprint(alpha, r, grazing(), sigma, 0.0038).unwrap();
+    assert!(g[0] > 4.0 * p[0] && g[2] > 4.0 * p[2], "{g:?} {p:?}");
+    // Against an f64 sum written out: (Σ J Jᵀ / σ_j²)⁻¹.
+    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+    for phi in grazing() {
+        let t = phi - alpha;
+        let v = sigma * sigma + (0.0038 * r / t.cos() * t.tan()).powi(2);
+        let (ja, jr) = (-r * t.sin() / t.cos().powi(2), 1.0 / t.cos());
+        (a, b, c) = (a + ja * ja / v, b + ja * jr / v, c + jr * jr / v);
+    }
+    let det = a * c - b * b;
+    assert!((g[0] - c / det).abs() < 1e-9 * g[0].max(1e-12));
+    assert!((g[2] - a / det).abs() < 1e-9 * g[2].max(1e-12));
+}
+
+#[test]
 fn evaluate_corners_match_within_the_gate_one_to_one() {
     let truth = ScanTruth {
         corners: vec![
