@@ -8,24 +8,8 @@ use lms_core::pipeline::turns::{fuse, interleaved_turns, turn_frame};
 use lms_core::{Extractor, Frame, Geometry, Invalid, Line, Params, Variant};
 use proptest::prelude::*;
 
-/// A wall `x·cos α + y·sin α = r` seen at 0.5°, the odd beams (the second
-/// turn) from a pose moved `offset` metres towards the wall; a ±`ripple`
-/// deterministic pattern as noise. Beams off the wall's front half: 0.
-fn interleaved_wall(alpha: f32, r: f32, offset: f32, ripple: f32) -> Frame {
-    let mut frame = Frame::for_variant(Variant::Fov180Res50);
-    for j in 0..frame.len() {
-        let phi = frame.geometry().bearing(j);
-        let c = libm::cosf(phi - alpha);
-        if c < 0.25 {
-            frame.set_metres(j, 0.0);
-            continue;
-        }
-        let shift = if j % 2 == 1 { offset } else { 0.0 };
-        let noise = ripple * (((j * 7919) % 11) as f32 / 5.0 - 1.0);
-        frame.set_metres(j, (r - shift) / c + noise);
-    }
-    frame
-}
+mod common;
+use common::interleaved_wall;
 
 fn per_turn(p: Params) -> Params {
     Params {

@@ -258,7 +258,10 @@ fn the_footprint_crb_weights_grazing_beams_down() {
     assert_eq!(crb_footprint(alpha, r, bearings(), sigma, 0.0), Some(plain));
     // Near normal incidence (|θ| ≤ 10°) the footprint adds little ...
     let near = crb_footprint(alpha, r, bearings(), sigma, 0.0038).unwrap();
-    assert!(near[2] > plain[2] && near[2] < 1.05 * plain[2], "{near:?} {plain:?}");
+    assert!(
+        near[2] > plain[2] && near[2] < 1.05 * plain[2],
+        "{near:?} {plain:?}"
+    );
     // ... along a wall at 60–80°, κ·d·tan θ is several σ: the bound is wider.
     let grazing = || (0..40).map(|j| (60.0 + j as f64 * 0.5).to_radians());
     let p = crb(alpha, r, grazing(), sigma).unwrap();

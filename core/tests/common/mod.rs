@@ -43,3 +43,23 @@ pub fn lms_step<S: lms_core::device::emulator::ScanSource>(
     }
     while lms.next_event().is_some() {}
 }
+
+/// A wall `x·cos α + y·sin α = r` seen at 0.5°, the odd beams (the second
+/// mirror turn) from a pose moved `offset` metres towards the wall; a
+/// ±`ripple` deterministic pattern as noise. Beams off the wall's front
+/// half: 0 (ALGORITHM.md §10: tests/same_turn.rs, tests/per_turn.rs).
+pub fn interleaved_wall(alpha: f32, r: f32, offset: f32, ripple: f32) -> lms_core::Frame {
+    let mut frame = lms_core::Frame::for_variant(lms_core::Variant::Fov180Res50);
+    for j in 0..frame.len() {
+        let phi = frame.geometry().bearing(j);
+        let c = libm::cosf(phi - alpha);
+        if c < 0.25 {
+            frame.set_metres(j, 0.0);
+            continue;
+        }
+        let shift = if j % 2 == 1 { offset } else { 0.0 };
+        let noise = ripple * (((j * 7919) % 11) as f32 / 5.0 - 1.0);
+        frame.set_metres(j, (r - shift) / c + noise);
+    }
+    frame
+}
