@@ -9,7 +9,7 @@ use lms_core::{Extractor, Frame, Geometry, Invalid, Line, Params, Variant};
 use proptest::prelude::*;
 
 mod common;
-use common::interleaved_wall;
+use common::{interleaved_wall, one_degree_room};
 
 fn per_turn(p: Params) -> Params {
     Params {
@@ -77,13 +77,7 @@ fn an_offset_wall_is_one_line_per_turn_and_broken_at_once() {
 
 #[test]
 fn one_degree_modes_are_unchanged() {
-    let mut frame = Frame::for_variant(Variant::Fov180Res100);
-    for j in 0..frame.len() {
-        let phi = frame.geometry().bearing(j);
-        let c = libm::cosf(phi - 0.4).max(0.3);
-        let noise = 0.004 * (((j * 31) % 7) as f32 / 3.0 - 1.0);
-        frame.set_metres(j, 3.0 / c + noise);
-    }
+    let frame = one_degree_room();
     let mut a = Extractor::new();
     let mut b = Extractor::new();
     let fa = a.run(&frame, &Params::DEFAULT.validate().unwrap()).clone();

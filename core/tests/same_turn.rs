@@ -3,10 +3,10 @@
 //! are offset (platform motion in 13.3 ms); windows of one turn do not
 //! break on the offset, windows of §2 do. In 1° modes nothing changes.
 
-use lms_core::{Extractor, Frame, Params, Trace, Variant};
+use lms_core::{Extractor, Params, Trace};
 
 mod common;
-use common::interleaved_wall;
+use common::{interleaved_wall, one_degree_room};
 
 fn breaking_windows(trace: &Trace, tau: f32) -> usize {
     trace
@@ -53,13 +53,7 @@ fn a_turn_offset_breaks_spec_windows_but_not_same_turn_windows() {
 
 #[test]
 fn one_degree_modes_are_unchanged() {
-    let mut frame = Frame::for_variant(Variant::Fov180Res100);
-    for j in 0..frame.len() {
-        let phi = frame.geometry().bearing(j);
-        let c = libm::cosf(phi - 0.4).max(0.3);
-        let noise = 0.004 * (((j * 31) % 7) as f32 / 3.0 - 1.0);
-        frame.set_metres(j, 3.0 / c + noise);
-    }
+    let frame = one_degree_room();
     let spec = Params::DEFAULT.validate().unwrap();
     let turn = Params {
         same_turn_windows: true,

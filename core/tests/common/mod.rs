@@ -63,3 +63,16 @@ pub fn interleaved_wall(alpha: f32, r: f32, offset: f32, ripple: f32) -> lms_cor
     }
     frame
 }
+
+/// A 180°/1° scan (one mirror turn) of a wall 3 m away, normal at 0.4 rad,
+/// clipped at incidences over 72.5°, ±4 mm deterministic noise.
+pub fn one_degree_room() -> lms_core::Frame {
+    let mut frame = lms_core::Frame::for_variant(lms_core::Variant::Fov180Res100);
+    for j in 0..frame.len() {
+        let phi = frame.geometry().bearing(j);
+        let c = libm::cosf(phi - 0.4).max(0.3);
+        let noise = 0.004 * (((j * 31) % 7) as f32 / 3.0 - 1.0);
+        frame.set_metres(j, 3.0 / c + noise);
+    }
+    frame
+}
