@@ -1,6 +1,8 @@
 //! The whole pipeline (`Extractor::run`: smoothing passes, segmentation, line
 //! fits, merging, corners) on the real 361-beam frames of the CSAIL log, at
-//! 1, 20 and 30 passes (the paper's scales).
+//! 1, 20 and 30 passes (the paper's scales), and at 30 passes with the
+//! log's own σ (10 mm, what `host-bridge extract LOG` uses without flags)
+//! with and without per-turn extraction (`Params::per_turn`, §10 (d)).
 //!
 //! One benchmark iteration runs every frame of the log once (406 frames), so
 //! the reported time is for the whole log and the throughput is in frames
@@ -37,12 +39,31 @@ fn pipeline(c: &mut Criterion) {
     group.sample_size(10);
     group.warm_up_time(Duration::from_secs(1));
     group.measurement_time(Duration::from_secs(3));
-    for passes in [1u16, 20, 30] {
-        let params = Params {
-            iterations: passes,
-            ..Params::default()
-        };
-        group.bench_with_input(BenchmarkId::new("passes", passes), &params, |b, params| {
+    let cm = Params {
+        sigma: 0.01,
+        ..Params::default()
+    };
+    let cases = [1u16, 20, 30]
+        .map(|passes| {
+            let params = Params {
+                iterations: passes,
+                ..Params::default()
+            };
+            (BenchmarkId::new("passes", passes), params)
+        })
+        .into_iter()
+        .chain([
+            (BenchmarkId::new("sigma_10mm", 30), cm),
+            (
+                BenchmarkId::new("sigma_10mm_per_turn", 30),
+                Params {
+                    per_turn: true,
+                    ..cm
+                },
+            ),
+        ]);
+    for (id, params) in cases {
+        group.bench_with_input(id, &params, |b, params| {
             let mut ex = Extractor::new();
             b.iter(|| {
                 let mut lines = 0usize;
