@@ -5,7 +5,7 @@
 
 use lms_core::maths::Sym2;
 use lms_core::pipeline::turns::{fuse, interleaved_turns, turn_frame};
-use lms_core::{Extractor, Frame, Geometry, Invalid, Line, Params, Variant};
+use lms_core::{Extractor, Frame, Geometry, Invalid, Line, Params, Trace, Variant};
 use proptest::prelude::*;
 
 mod common;
@@ -73,6 +73,44 @@ fn an_offset_wall_is_one_line_per_turn_and_broken_at_once() {
     assert!(usize::from(l.points) + 8 >= valid);
     assert!(f.stats().merges >= 1);
     assert_eq!(ex.smoothed().len(), frame.len());
+}
+
+#[test]
+fn d_is_traced_at_the_window_of_the_same_middle_beam() {
+    let frame = interleaved_wall(0.2, 2.0, 0.02, 0.005);
+    let params = per_turn(Params {
+        sigma: 0.01,
+        ..Params::DEFAULT
+    })
+    .validate()
+    .unwrap();
+    let mut ex = Extractor::new();
+    let mut trace = Trace::new();
+    let mut calls = Vec::new();
+    ex.run_observed(&frame, &params, &mut trace, |pass, d, r| {
+        calls.push((pass, d.len(), r.len()));
+    });
+    // Once, after the last pass, with the whole scan's windows and beams.
+    assert_eq!(
+        calls,
+        vec![(params.iterations, frame.len() - 2, frame.len())]
+    );
+    // Windows whose three beams (of one turn: middle ± 2) are on the wall
+    // have a finite D; windows touching the cleared beams +inf.
+    let d = trace.mahalanobis();
+    let valid = |j: usize| frame.beams()[j].is_valid();
+    for (w, x) in d.iter().enumerate() {
+        let mid = w + 1;
+        let turn_ok =
+            mid >= 2 && mid + 2 < frame.len() && valid(mid - 2) && valid(mid) && valid(mid + 2);
+        assert_eq!(x.is_finite(), turn_ok, "window {w}: D {x}");
+    }
+    // The turns do not break on their own offset (σ = 1 cm, ripple ±5 mm).
+    let breaks = d
+        .iter()
+        .filter(|x| x.is_finite() && **x >= params.tau)
+        .count();
+    assert!(breaks < 10, "{breaks} breaking windows");
 }
 
 #[test]

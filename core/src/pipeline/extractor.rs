@@ -144,16 +144,8 @@ impl Extractor {
         F: FnMut(u16, &[f32], &[f32]),
     {
         #[cfg(feature = "section10")]
-        if params.per_turn {
-            let k = crate::pipeline::turns::interleaved_turns(frame.geometry().step);
-            if k > 1 {
-                // Each turn has windows of its own: no D of the whole scan.
-                for x in trace.iter_mut() {
-                    *x = f32::INFINITY;
-                }
-                self.run_per_turn(frame, params, k);
-                return &self.features;
-            }
+        if self.run_interleaved(frame, params, trace, &mut after_pass) {
+            return &self.features;
         }
         let params: &Params = params;
         // A frame never holds more than MAX_BEAMS beams; the `min`s make
@@ -213,85 +205,53 @@ impl Extractor {
         &self.features
     }
 
-    /// [`Params::per_turn`] on a frame of `k` interleaved turns: §2–8 on
-    /// each turn as a frame of its own, the turns' lines fused
-    /// ([`crate::pipeline::turns`]), segments and edge points of all turns
-    /// in the whole frame's beam indices, corners (§8) on the fused lines,
-    /// the smoothed ranges of every turn in their beams. Counters are the
-    /// sums over the turns (a fusion counts as a merge), corners' counted
-    /// once.
+    /// [`Params::per_turn`] on a frame of interleaved mirror turns: §2–8 on
+    /// each turn as a frame of its own, the turns' lines fused, corners (§8)
+    /// on the fused lines ([`crate::pipeline::turns`]); `D` of each turn's
+    /// last pass in `trace` at the whole scan's window of the same middle
+    /// beam, `after_pass` once, after the last pass. `false` (nothing done)
+    /// unless the option is on and the frame interleaves turns.
     #[cfg(feature = "section10")]
-    fn run_per_turn(&mut self, frame: &Frame, params: &ValidParams, k: usize) {
-        use crate::features::{Line, Segment, MAX_LINES, MAX_SEGMENTS};
-        use crate::pipeline::turns::{fuse_into, turn_frame};
-        let Ok(inner) = Params {
+    fn run_interleaved<F>(
+        &mut self,
+        frame: &Frame,
+        params: &ValidParams,
+        trace: &mut [f32],
+        after_pass: &mut F,
+    ) -> bool
+    where
+        F: FnMut(u16, &[f32], &[f32]),
+    {
+        use crate::pipeline::turns::{interleaved_turns, turn_frame, TurnsMerged};
+        let k = interleaved_turns(frame.geometry().step);
+        let inner = Params {
             per_turn: false,
             ..**params
         }
-        .validate() else {
-            return;
+        .validate();
+        let (true, true, Ok(inner)) = (params.per_turn, k > 1, inner) else {
+            return false;
         };
         let n = frame.len().min(MAX_BEAMS);
-        let mut lines: heapless::Vec<Line, MAX_LINES> = heapless::Vec::new();
-        let mut segments: heapless::Vec<Segment, MAX_SEGMENTS> = heapless::Vec::new();
-        let mut edges = [false; MAX_BEAMS];
-        let mut smoothed = [0.0f32; MAX_BEAMS];
-        let mut stats = Stats::ZERO;
+        let trace = trace.get_mut(..n.saturating_sub(2)).unwrap_or_default();
+        trace.fill(f32::INFINITY);
+        let mut merged = TurnsMerged::new(k);
         for t in 0..k {
             let Some(turn) = turn_frame(frame, t, k) else {
                 continue;
             };
-            let whole = |i: u16| (k * usize::from(i) + t) as u16;
-            let f = self.run_with(&turn, &inner, &mut [], |_, _, _| {});
-            stats.saturating_add(f.stats());
-            for s in f.segments() {
-                let s = Segment {
-                    first: whole(s.first),
-                    last: whole(s.last),
-                };
-                if segments.push(s).is_err() {
-                    stats.segment_overflow = stats.segment_overflow.saturating_add(1);
-                }
-            }
-            for e in f.edges() {
-                if let Some(x) = edges.get_mut(usize::from(whole(e))) {
-                    *x = true;
-                }
-            }
-            let turn_lines: heapless::Vec<Line, MAX_LINES> = f
-                .lines()
-                .iter()
-                .map(|l| Line {
-                    first: whole(l.first),
-                    last: whole(l.last),
-                    ..*l
-                })
-                .collect();
-            for (i, &x) in self.smoothed().iter().enumerate() {
-                if let Some(s) = smoothed.get_mut(k * i + t) {
-                    *s = x;
-                }
-            }
-            for l in &turn_lines {
-                fuse_into(&mut lines, l, &mut stats);
-            }
+            let mut turn_d = [f32::INFINITY; MAX_WINDOWS];
+            let keep = if trace.is_empty() { 0 } else { MAX_WINDOWS };
+            self.run_with(&turn, &inner, &mut turn_d[..keep], no_observer);
+            merged.add_turn(t, &self.features, self.smoothed());
+            merged.trace_turn(t, &turn_d[..keep.min(turn.len().saturating_sub(2))], trace);
         }
-        segments.sort_unstable_by_key(|s| (s.first, s.last));
-        lines.sort_unstable_by_key(|l| (l.first, l.last));
-        let f = &mut self.features;
-        f.segments = segments;
-        f.edges.clear();
-        for (j, _) in edges.iter().enumerate().filter(|(_, &e)| e) {
-            let _ = f.edges.push(j as u16); // ascending, below MAX_BEAMS
-        }
-        f.lines = lines;
-        f.corners.clear();
-        stats.degenerate_corners = 0;
-        stats.corner_overflow = 0;
-        find_corners(f, params, &mut stats);
-        f.stats = stats;
-        self.smoothed[..n].copy_from_slice(&smoothed[..n]);
+        let mut stats = merged.finish(&mut self.features, &mut self.smoothed[..n]);
+        find_corners(&mut self.features, params, &mut stats);
+        self.features.stats = stats;
         self.len = n;
+        after_pass(params.iterations, trace, self.smoothed());
+        true
     }
 
     /// The features of the last run.
@@ -313,6 +273,12 @@ impl Extractor {
         self.geometry = Some(geometry);
     }
 }
+
+/// An `after_pass` that observes nothing: one type, whatever the caller's
+/// observer (a closure here would be a new type per instantiation, and
+/// the per-turn run's recursion would never end).
+#[cfg(feature = "section10")]
+fn no_observer(_: u16, _: &[f32], _: &[f32]) {}
 
 /// The buffers the smoothing passes work on (§4–5).
 struct ScaleSpace<'a> {

@@ -25,8 +25,8 @@
 
 use heapless::Vec;
 
-use crate::features::{Line, Stats, MAX_LINES};
-use crate::frame::{Beam, Frame, Geometry};
+use crate::features::{Features, Line, Segment, Stats, MAX_LINES, MAX_SEGMENTS};
+use crate::frame::{Beam, Frame, Geometry, MAX_BEAMS};
 use crate::maths::{cos_sin, wrap_angle};
 use crate::params::{TURN_FUSE_ALPHA_DEG, TURN_FUSE_R};
 
@@ -132,4 +132,109 @@ pub fn fuse(p: &Line, q: &Line) -> Option<Line> {
         chi2: p.chi2.max(q.chi2),
         endpoints: [project(first), project(last)],
     })
+}
+
+/// What the turns of one frame add up to, turn by turn, in the whole
+/// frame's beam indices: fused lines, segments, edge points, smoothed
+/// ranges, counters (summed; a fusion counts as a merge).
+pub struct TurnsMerged {
+    k: usize,
+    lines: Vec<Line, MAX_LINES>,
+    segments: Vec<Segment, MAX_SEGMENTS>,
+    edges: [bool; MAX_BEAMS],
+    smoothed: [f32; MAX_BEAMS],
+    stats: Stats,
+}
+
+impl TurnsMerged {
+    /// Nothing yet, for a frame of `k` turns.
+    pub fn new(k: usize) -> Self {
+        TurnsMerged {
+            k,
+            lines: Vec::new(),
+            segments: Vec::new(),
+            edges: [false; MAX_BEAMS],
+            smoothed: [0.0; MAX_BEAMS],
+            stats: Stats::ZERO,
+        }
+    }
+
+    /// The frame's beam of turn `t`'s beam `i`.
+    fn whole(&self, t: usize, i: u16) -> u16 {
+        (self.k * usize::from(i) + t) as u16
+    }
+
+    /// Add turn `t`'s features `f` and smoothed ranges (its own indices).
+    pub fn add_turn(&mut self, t: usize, f: &Features, smoothed: &[f32]) {
+        self.stats.saturating_add(f.stats());
+        for s in f.segments() {
+            let s = Segment {
+                first: self.whole(t, s.first),
+                last: self.whole(t, s.last),
+            };
+            if self.segments.push(s).is_err() {
+                self.stats.segment_overflow = self.stats.segment_overflow.saturating_add(1);
+            }
+        }
+        for e in f.edges() {
+            let j = usize::from(self.whole(t, e));
+            if let Some(x) = self.edges.get_mut(j) {
+                *x = true;
+            }
+        }
+        let k = self.k;
+        for (i, &x) in smoothed.iter().enumerate() {
+            if let Some(s) = self.smoothed.get_mut(k * i + t) {
+                *s = x;
+            }
+        }
+        for l in f.lines() {
+            let l = Line {
+                first: self.whole(t, l.first),
+                last: self.whole(t, l.last),
+                ..*l
+            };
+            fuse_into(&mut self.lines, &l, &mut self.stats);
+        }
+    }
+
+    /// `D` of turn `t`'s windows into `trace` (the whole frame's windows):
+    /// turn window `i` has the middle beam `k·(i + 1) + t`, the frame's
+    /// window `k·i + k + t − 1`.
+    pub fn trace_turn(&self, t: usize, turn_d: &[f32], trace: &mut [f32]) {
+        for (i, &d) in turn_d.iter().enumerate() {
+            if let Some(x) = trace.get_mut(self.k * i + self.k + t - 1) {
+                *x = d;
+            }
+        }
+    }
+
+    /// Into `features` (segments and lines in scan order, edge points,
+    /// no corners yet) and `smoothed` (the frame's beams); the counters,
+    /// without the turns' corner counts (corners are the fused lines').
+    pub fn finish(self, features: &mut Features, smoothed: &mut [f32]) -> Stats {
+        let TurnsMerged {
+            mut lines,
+            mut segments,
+            edges,
+            smoothed: turns_smoothed,
+            mut stats,
+            ..
+        } = self;
+        segments.sort_unstable_by_key(|s| (s.first, s.last));
+        lines.sort_unstable_by_key(|l| (l.first, l.last));
+        features.segments = segments;
+        features.edges.clear();
+        for (j, _) in edges.iter().enumerate().filter(|(_, &e)| e) {
+            let _ = features.edges.push(j as u16); // ascending, below MAX_BEAMS
+        }
+        features.lines = lines;
+        features.corners.clear();
+        for (s, &x) in smoothed.iter_mut().zip(turns_smoothed.iter()) {
+            *s = x;
+        }
+        stats.degenerate_corners = 0;
+        stats.corner_overflow = 0;
+        stats
+    }
 }
