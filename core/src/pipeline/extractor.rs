@@ -223,13 +223,16 @@ impl Extractor {
         F: FnMut(u16, &[f32], &[f32]),
     {
         use crate::pipeline::turns::{interleaved_turns, turn_frame, TurnsMerged};
+        if !params.per_turn {
+            return false;
+        }
         let k = interleaved_turns(frame.geometry().step);
         let inner = Params {
             per_turn: false,
             ..**params
         }
         .validate();
-        let (true, true, Ok(inner)) = (params.per_turn, k > 1, inner) else {
+        let (true, Ok(inner)) = (k > 1, inner) else {
             return false;
         };
         let n = frame.len().min(MAX_BEAMS);
