@@ -144,11 +144,7 @@ fn check_args(args: &CoprocessorArgs) -> Result<()> {
 /// Run `host-bridge coprocessor`.
 pub fn run(args: &CoprocessorArgs) -> Result<()> {
     check_args(args)?;
-    anyhow::ensure!(
-        !args.params.per_turn,
-        "--per-turn: the co-processor does not run it (an ALGORITHM.md §10 option the firmware \
-         leaves out, and its D0 echo could not tell a client): use it with extract or plot"
-    );
+    args.params.ensure_coprocessor_runs_them()?;
     let params = args
         .params
         .to_params()?

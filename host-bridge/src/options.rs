@@ -107,6 +107,19 @@ pub struct ParamArgs {
 }
 
 impl ParamArgs {
+    /// Refuse what the co-processor cannot run (for `verify` and
+    /// `coprocessor`): `--per-turn`, an ALGORITHM.md §10 option the firmware
+    /// leaves out and the `D0` echo cannot carry.
+    pub fn ensure_coprocessor_runs_them(&self) -> Result<()> {
+        anyhow::ensure!(
+            !self.per_turn,
+            "--per-turn: the co-processor does not run it (an ALGORITHM.md §10 option the \
+             firmware leaves out, and its D0 echo could not tell a client): use it with \
+             extract or plot"
+        );
+        Ok(())
+    }
+
     /// The parameters, checked with [`Params::validate`].
     pub fn to_params(&self) -> Result<Params> {
         self.to_params_over(Params::default())

@@ -8,26 +8,13 @@
 
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use host_bridge::carmen::{self, UnitMode};
-use lms_core::{Extractor, Frame, Geometry, Params};
+use lms_core::pipeline::turns::turn_frame;
+use lms_core::{Extractor, Params};
 use lms_lab::baselines::{run_core, Extraction};
 use lms_lab::maptruth::{build_map, frame_truth, TruthConfig};
 use lms_lab::realtruth::{no_flag_params, score_frame, RealTally, ScoredLine};
-
-/// The even beams of `frame` as a scan of twice the step.
-fn even_turn(frame: &Frame) -> Result<Frame> {
-    let g = frame.geometry();
-    let n = frame.len().div_ceil(2);
-    let step = 2.0 * g.step;
-    let mut f = Frame::new(Geometry { step, ..g }, n)?;
-    for i in 0..n {
-        if frame.beams()[2 * i].is_valid() {
-            f.set_metres(i, frame.ranges()[2 * i]);
-        }
-    }
-    Ok(f)
-}
 
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
@@ -65,7 +52,14 @@ fn main() -> Result<()> {
             let truth = frame_truth(scan, &map, &cfg);
             let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
             let whole = lines(&run_core(&mut ex, &scan.frame, &params), 1);
-            let even = lines(&run_core(&mut ex, &even_turn(&scan.frame)?, &params), 2);
+            let even = lines(
+                &run_core(
+                    &mut ex,
+                    &turn_frame(&scan.frame, 0, 2).context("a frame too short for its turns")?,
+                    &params,
+                ),
+                2,
+            );
             let fused = lines(&run_core(&mut ex, &scan.frame, &per_turn), 1);
             // Hybrid (measured, not built): per turn, plus the whole scan's
             // lines that no per-turn line covers half of.

@@ -18,7 +18,7 @@ use std::fmt::Write as _;
 
 use anyhow::Result;
 use lms_core::{Extractor, Params};
-use lms_scene::{seeded_rng, Bearings, LmsModel, LogMode, Pose};
+use lms_scene::{seeded_rng, Bearings, LmsModel, LogMode};
 use rand::Rng;
 
 use crate::metrics::{Gates, Tally};
@@ -63,18 +63,11 @@ pub fn sample(
     let mut rng = seeded_rng(seed ^ 0x1a5_e14 ^ ((index as u64) << 20) ^ family.salt());
     let dir: f64 = rng.random_range(0.0..std::f64::consts::TAU);
     let v = 2f64.sqrt() * delta / model.turn_time;
-    let (vx, vy) = (v * dir.cos(), v * dir.sin());
-    let m = model.moving([vx, vy, 0.0]);
+    let m = model.moving([v * dir.cos(), v * dir.sin(), 0.0]);
     let b = Bearings::lms_180_half_deg();
     // The truth is the mid-time pose: turn 0 half the turns' span earlier.
     let t_mid = model.turn_time * (LmsModel::turns(&b) as f64 - 1.0) / 2.0;
-    let p = plain.truth.pose;
-    let (c, s) = (p.theta.cos(), p.theta.sin());
-    let turn0 = Pose::new(
-        p.x - (vx * c - vy * s) * t_mid,
-        p.y - (vx * s + vy * c) * t_mid,
-        p.theta,
-    );
+    let turn0 = m.pose_after(plain.truth.pose, -t_mid);
     let values = m.scan(&plain.scene, &b, turn0, &mut rng);
     let readings: Vec<lms_scene::Reading> = values.iter().map(|v| v.reading()).collect();
     let frame = host_bridge::synthetic::frame_from_readings(&readings)?;

@@ -197,7 +197,12 @@ impl LmsModel {
 
     /// The pose of mirror turn `k` when turn 0 is at `pose`.
     pub fn turn_pose(&self, pose: Pose, k: usize) -> Pose {
-        let t = self.turn_time * k as f64;
+        self.pose_after(pose, self.turn_time * k as f64)
+    }
+
+    /// The pose `t` seconds after `pose` (before it for `t < 0`) at the
+    /// model's motion.
+    pub fn pose_after(&self, pose: Pose, t: f64) -> Pose {
         let [vx, vy, w] = self.motion;
         let (c, s) = (pose.theta.cos(), pose.theta.sin());
         Pose::new(

@@ -25,7 +25,7 @@ use crate::pipeline::smoothing::{
     smoothing_pass, usable, usable_windows, WindowSink, WINDOW_WORDS,
 };
 #[cfg(feature = "section10")]
-use crate::pipeline::smoothing::{smoothing_pass_strided, usable_windows_strided, MAX_STRIDE};
+use crate::pipeline::smoothing::{smoothing_pass_strided, usable_windows_strided};
 use crate::pipeline::split::split_before_reject;
 
 /// All working memory of the pipeline, reused frame after frame.
@@ -384,14 +384,7 @@ fn window_stride(params: &Params, geometry: Geometry) -> usize {
     if !params.same_turn_windows {
         return 1;
     }
-    let turns = (core::f32::consts::PI / 180.0) / geometry.step + 0.5;
-    if !(1.0..(MAX_STRIDE + 1) as f32).contains(&turns) {
-        return 1;
-    }
-    match turns as usize {
-        k @ (2 | 4) => k,
-        _ => 1,
-    }
+    crate::pipeline::turns::interleaved_turns(geometry.step)
 }
 
 /// The window filter for windows `step` apart (rad): §3, with the §10

@@ -203,12 +203,8 @@ fn checked_options(args: &VerifyArgs) -> Result<(Baud, Params)> {
             args.host_baud
         )
     })?;
+    args.params.ensure_coprocessor_runs_them()?;
     let params = args.params.to_params()?;
-    ensure!(
-        !params.per_turn,
-        "--per-turn: the co-processor cannot run it (an ALGORITHM.md §10 option the firmware \
-         leaves out, and the D0 echo does not carry it): verify compares the defaults of §2–8"
-    );
     if let Some(t) = args.recompute_tau {
         ensure!(t.is_finite() && t > 0.0, "--recompute-tau must be > 0");
     }
