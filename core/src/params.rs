@@ -113,6 +113,26 @@ pub struct Params {
     /// Only with feature `section10` (host crates; not the firmware):
     /// otherwise `true` fails validation ([`ParamError::NotInBuild`]).
     pub per_turn: bool,
+    /// Merge across rejected segments (ALGORITHM.md §10 (e),
+    /// `docs/ALGORITHM-v3-section10.md` §10.7): two consecutive accepted
+    /// lines merge whatever lies between them when the refit of their union
+    /// (the beams between included) passes `max_chi2` and each line's own
+    /// beams fit the union line within `max_chi2` too
+    /// ([`crate::pipeline::line_fit::residual_chi2`]). A wall that grazing
+    /// stair-steps cut into a long line and short pieces is one line again.
+    /// Default on; `false` is §7.6 as written (v1, v2).
+    pub bridge_merge: bool,
+    /// Beam-footprint term κ of the range noise (rad; ALGORITHM.md §10 (f),
+    /// `docs/ALGORITHM-v3-section10.md` §10.7): a beam at range `d` meeting
+    /// a surface at incidence `θ` has `σ_j² = σ² + (κ·d·tan θ)²` (the sensor
+    /// model fitted to the shared logs: κ = 0.7–4.7 mrad). The fits of §7
+    /// (and the straightness test of split before reject, and §7.6) weight
+    /// each beam by `σ²/σ_j²` at the line's incidence, so the covariance and
+    /// χ² follow the same model; the windows of §3 are unchanged (their
+    /// grazing term is `grazing_noise`, `ρ = κ/γ`). Default
+    /// [`DEFAULT_FOOTPRINT`] (3 mrad, measured best of 2–5 mrad); `0` is §7
+    /// as written (v1, v2).
+    pub footprint: f32,
 }
 
 /// Pairing gate of [`Params::per_turn`] on |Δα| between two turns' lines
@@ -123,6 +143,11 @@ pub const TURN_FUSE_ALPHA_DEG: f32 = 3.0;
 /// Pairing gate of [`Params::per_turn`] on |Δr| (m); see
 /// [`TURN_FUSE_ALPHA_DEG`].
 pub const TURN_FUSE_R: f32 = 0.1;
+
+/// The default [`Params::footprint`] (rad): the best of 2, 3, 4 and 5 mrad
+/// on the real logs' map truth and the realistic synthetic scenes
+/// (`cargo run --release -p lms-lab --example footprint_sweep`).
+pub const DEFAULT_FOOTPRINT: f32 = 0.003;
 
 /// Largest incidence (degrees) the grazing term of
 /// [`Params::grazing_noise`] follows; a window whose outer ranges differ
@@ -148,7 +173,9 @@ impl Params {
         }
     }
 
-    /// The defaults of ALGORITHM.md v2, usable in `const` contexts.
+    /// The defaults, usable in `const` contexts: ALGORITHM.md v2 with the
+    /// project's measured additions (`merge_collinear`, `max_alpha_sd_deg`,
+    /// and since stop 21 `bridge_merge` and `footprint`, §10 (e) and (f)).
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
@@ -171,6 +198,17 @@ impl Params {
         same_turn_windows: false,
         fit_sigma: 0.0,
         per_turn: false,
+        bridge_merge: true,
+        footprint: DEFAULT_FOOTPRINT,
+    };
+
+    /// The defaults before §10 (e) and (f) (up to stop 20): ALGORITHM.md v2
+    /// with `merge_collinear` and the σ_α gate, every beam at `sigma`, §7.6
+    /// merging only across `merge_gap_beams`.
+    pub const V2: Params = Params {
+        bridge_merge: false,
+        footprint: 0.0,
+        ..Params::DEFAULT
     };
 
     /// ALGORITHM.md v1: no split before reject, shared corner points in
@@ -181,7 +219,7 @@ impl Params {
         max_range: f32::INFINITY,
         merge_collinear: false,
         max_alpha_sd_deg: f32::INFINITY,
-        ..Params::DEFAULT
+        ..Params::V2
     };
 }
 
@@ -230,6 +268,8 @@ pub enum ParamError {
     GrazingNoise,
     /// `fit_sigma` must be finite and ≥ 0.
     FitSigma,
+    /// `footprint` must be finite and ≥ 0.
+    Footprint,
     /// An ALGORITHM.md §10 option (`same_turn_windows`, `grazing_noise`,
     /// `fit_sigma`, `per_turn`; named by `option`) has a non-default value, but this
     /// build of the core leaves the §10 options out (feature `section10`
@@ -265,6 +305,7 @@ impl fmt::Display for ParamError {
             ParamError::MaxAlphaSd => "max_alpha_sd_deg must be > 0 (degrees; inf for no limit)",
             ParamError::GrazingNoise => "grazing_noise must be finite and >= 0",
             ParamError::FitSigma => "fit_sigma must be finite and >= 0 (metres; 0: sigma)",
+            ParamError::Footprint => "footprint must be finite and >= 0 (radians; 0: off)",
             ParamError::NotInBuild { .. } => "",
         })
     }
@@ -308,6 +349,8 @@ impl ValidParams {
         same_turn_windows: false,
         fit_sigma: 0.0,
         per_turn: false,
+        bridge_merge: false,
+        footprint: 0.0,
     });
 
     /// The parameters.
@@ -399,6 +442,9 @@ impl Params {
         if !non_neg(self.fit_sigma) {
             return Err(ParamError::FitSigma);
         }
+        if !non_neg(self.footprint) {
+            return Err(ParamError::Footprint);
+        }
         if !cfg!(feature = "section10") {
             // Never a silent difference: a §10 option this build leaves out.
             let option = if self.same_turn_windows {
@@ -409,6 +455,7 @@ impl Params {
                 Some("fit_sigma")
             } else if self.per_turn {
                 Some("per_turn")
+
             } else {
                 None
             };

@@ -145,6 +145,8 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             any::<bool>(),
             prop_oneof![Just(0.0f32), 0.0f32..3.0],
             prop_oneof![Just(0.0f32), 1e-4f32..0.2],
+            any::<bool>(),
+            prop_oneof![Just(0.0f32), 0.0f32..0.02],
         ),
     )
         .prop_map(|(a, b, c, d, e)| Params {
@@ -170,6 +172,8 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             fit_sigma: e.2,
             // Its segments interleave by design: tests/per_turn.rs.
             per_turn: false,
+            bridge_merge: e.3,
+            footprint: e.4,
         })
 }
 

@@ -48,7 +48,11 @@ QEMU_PLUGIN_EXPORT int qemu_plugin_version = 1;
 
 #define MAX_INTERVALS 100000
 static uint64_t executed;            /* guest instructions so far (one vCPU) */
-static uint64_t begin_addr, end_addr;
+/* end= may be given up to MAX_ENDS times: a function called from several
+ * sites returns to each of them. */
+#define MAX_ENDS 8
+static uint64_t begin_addr, end_addrs[MAX_ENDS];
+static size_t n_ends;
 static uint64_t started_at;
 static int open_interval;
 static uint64_t intervals[MAX_INTERVALS];
@@ -124,8 +128,10 @@ static void on_translate(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
         if (pc == (begin_addr & ~1ull)) {
             qemu_plugin_register_vcpu_insn_exec_cb(insn, on_begin, QEMU_PLUGIN_CB_NO_REGS, NULL);
         }
-        if (pc == (end_addr & ~1ull)) {
-            qemu_plugin_register_vcpu_insn_exec_cb(insn, on_end, QEMU_PLUGIN_CB_NO_REGS, NULL);
+        for (size_t k = 0; k < n_ends; k++) {
+            if (pc == (end_addrs[k] & ~1ull)) {
+                qemu_plugin_register_vcpu_insn_exec_cb(insn, on_end, QEMU_PLUGIN_CB_NO_REGS, NULL);
+            }
         }
         qemu_plugin_register_vcpu_insn_exec_inline(insn, QEMU_PLUGIN_INLINE_ADD_U64, &executed, 1);
     }
@@ -171,7 +177,11 @@ QEMU_PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_
         if (strncmp(argv[i], "begin=", 6) == 0) {
             begin_addr = strtoull(argv[i] + 6, NULL, 0);
         } else if (strncmp(argv[i], "end=", 4) == 0) {
-            end_addr = strtoull(argv[i] + 4, NULL, 0);
+            if (n_ends == MAX_ENDS) {
+                fprintf(stderr, "icount: at most %d end= addresses\n", MAX_ENDS);
+                return -1;
+            }
+            end_addrs[n_ends++] = strtoull(argv[i] + 4, NULL, 0);
         } else if (strncmp(argv[i], "profile=", 8) == 0) {
             profile = atoi(argv[i] + 8);
         } else if (strncmp(argv[i], "skip=", 5) == 0) {
@@ -181,7 +191,7 @@ QEMU_PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_
             return -1;
         }
     }
-    if (begin_addr == 0 || end_addr == 0) {
+    if (begin_addr == 0 || n_ends == 0) {
         fprintf(stderr, "icount: begin= and end= addresses are required\n");
         return -1;
     }

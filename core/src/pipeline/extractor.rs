@@ -193,6 +193,7 @@ impl Extractor {
             ranges: frame.ranges(),
             beams: frame.beams(),
             max_range: params.max_range,
+            footprint: params.footprint,
         };
         if params.split_depth > 0 {
             split_before_reject(&scan, params, &mut f.segments, &mut stats);

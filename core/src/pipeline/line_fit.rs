@@ -80,6 +80,11 @@ pub struct RawScan<'a, B: BearingTable = Bearings<'a>> {
     pub beams: &'a [Beam],
     /// Beams at or beyond this range (m) are skipped too (§1 v2).
     pub max_range: f32,
+    /// Footprint term κ (rad) of the range noise, [`crate::Params::footprint`]:
+    /// beam `j` has `σ_j² = σ² + (κ·d_j·tan θ_j)²` at incidence `θ_j`
+    /// (`θ_j = phi_j − α`), and the fits weight it by `σ²/σ_j²`. `0`: every
+    /// beam `σ` (§7 as written).
+    pub footprint: f32,
 }
 
 /// Fit a line to the valid beams of `first..=last` of `ranges` (m), with
@@ -100,6 +105,7 @@ pub fn fit_line<B: BearingTable>(
         ranges,
         beams,
         max_range: f32::INFINITY,
+        footprint: 0.0,
     };
     fit_piece(&scan, first, last, sigma)
 }
@@ -112,7 +118,8 @@ pub fn fit_piece<B: BearingTable>(
     last: u16,
     sigma: f32,
 ) -> Result<Line, FitError> {
-    let span = Span::new(scan, first, last).ok_or(FitError::TooFewPoints)?;
+    let mut span = Span::new(scan, first, last).ok_or(FitError::TooFewPoints)?;
+    span.set_footprint(scan.footprint, sigma);
     // 1. Total least squares start.
     let (m, start) = span.total_least_squares()?;
     // 2. Gauss–Newton in the range direction.
@@ -149,9 +156,30 @@ struct Span<'a, B> {
     bearings: B,
     lo: usize,
     max_range: f32,
+    /// `κ/σ` of the footprint weights (1/m·rad; 0: unweighted).
+    kappa_per_sigma: f32,
 }
 
 impl<'a, B: BearingTable> Span<'a, B> {
+    /// Weight the beams by the footprint term `footprint` (κ ≥ 0, rad) at
+    /// range noise `sigma` (m); κ = 0: off.
+    #[inline(always)]
+    fn set_footprint(&mut self, footprint: f32, sigma: f32) {
+        if footprint > 0.0 {
+            self.kappa_per_sigma = footprint / sigma;
+        }
+    }
+
+    /// `σ²/σ_j²` of a beam at range `d` whose incidence on the line has
+    /// cosine `cd > 0` and sine `sd`: `1 / (1 + (κ·d·tan θ / σ)²)`; exactly
+    /// 1 when the footprint term is off (`κ/σ = 0`), so that every product
+    /// with it is the unweighted §7 value bit for bit.
+    #[inline(always)]
+    fn weight(&self, d: f32, cd: f32, sd: f32) -> f32 {
+        let t = self.kappa_per_sigma * d * (sd / cd);
+        1.0 / (1.0 + t * t)
+    }
+
     /// The span, or `None` if it holds no beam.
     fn new(scan: &RawScan<'a, B>, first: u16, last: u16) -> Option<Self> {
         let (bearings, ranges, beams) = (scan.bearings, scan.ranges, scan.beams);
@@ -167,6 +195,7 @@ impl<'a, B: BearingTable> Span<'a, B> {
             bearings,
             lo,
             max_range: scan.max_range,
+            kappa_per_sigma: 0.0,
         })
     }
 
@@ -247,11 +276,13 @@ impl<'a, B: BearingTable> Span<'a, B> {
                 let e = d - r * inv_c;
                 let ja = -r * sd * inv_c * inv_c;
                 let jr = inv_c;
-                jtj.a += ja * ja;
-                jtj.b += ja * jr;
-                jtj.c += jr * jr;
-                jte[0] += ja * e;
-                jte[1] += jr * e;
+                // §10 (f): weighted by σ²/σ_j² at this step's α (1: §7).
+                let w = self.weight(d, cd, sd);
+                jtj.a += w * (ja * ja);
+                jtj.b += w * (ja * jr);
+                jtj.c += w * (jr * jr);
+                jte[0] += w * (ja * e);
+                jte[1] += w * (jr * e);
             });
             if edge_on {
                 return Err(FitError::Degenerate);
@@ -283,10 +314,11 @@ impl<'a, B: BearingTable> Span<'a, B> {
             let inv_c = 1.0 / cd;
             let e = d - r * inv_c;
             let ja = -r * sd * inv_c * inv_c;
-            jtj.a += ja * ja;
-            jtj.b += ja * inv_c;
-            jtj.c += inv_c * inv_c;
-            sum_e2 += e * e;
+            let w = self.weight(d, cd, sd); // §10 (f); 1: §7
+            jtj.a += w * (ja * ja);
+            jtj.b += w * (ja * inv_c);
+            jtj.c += w * (inv_c * inv_c);
+            sum_e2 += w * (e * e);
         });
         if edge_on {
             return Err(FitError::Degenerate);
@@ -360,7 +392,14 @@ fn rotate(ca: f32, sa: f32, delta: f32) -> (f32, f32) {
 /// `Δᵀ(Σ₁ + Σ₂)⁻¹Δ` with `Δ = (α₂ − α₁ wrapped, r₂ − r₁)` (§7.6).
 /// `None` if the summed covariance is not positive definite.
 pub fn parameter_distance(l1: &Line, l2: &Line) -> Option<f32> {
-    let inv = l1.cov.add(&l2.cov).inverse_spd()?;
+    mahalanobis(&l1.cov.add(&l2.cov), l1, l2)
+}
+
+/// `Δᵀ cov⁻¹ Δ` with `Δ = (α₂ − α₁ wrapped, r₂ − r₁)`; `None` if `cov` is
+/// not positive definite.
+#[inline(never)] // one copy for §7.6 and §10 (e)
+pub fn mahalanobis(cov: &Sym2, l1: &Line, l2: &Line) -> Option<f32> {
+    let inv = cov.inverse_spd()?;
     let da = wrap_angle(l2.alpha - l1.alpha);
     let dr = l2.r - l1.r;
     Some(inv.quad(da, dr))

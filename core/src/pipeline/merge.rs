@@ -7,7 +7,9 @@ use crate::features::{Line, Segment};
 use crate::frame::Beam;
 use crate::maths::wrap_angle;
 use crate::params::Params;
-use crate::pipeline::line_fit::{fit_piece, parameter_distance, BearingTable, RawScan};
+use crate::pipeline::line_fit::{
+    fit_piece, mahalanobis, parameter_distance, BearingTable, RawScan,
+};
 use crate::pipeline::smoothing::usable;
 
 /// The beams fitted for segment `k`: the whole segment (§7), or, with
@@ -50,7 +52,8 @@ pub fn try_merge<B: BearingTable>(
         .count();
     let gated = valid_between <= params.merge_gap_beams as usize
         && parameter_distance(prev, next).is_some_and(|d| d < params.merge_gate);
-    if !(gated || (params.merge_collinear && collinear_and_touching(prev, next, params))) {
+    let vouched = gated || (params.merge_collinear && collinear_and_touching(prev, next, params));
+    if !(vouched || params.bridge_merge) {
         return None;
     }
     let scan = RawScan {
@@ -58,13 +61,25 @@ pub fn try_merge<B: BearingTable>(
         ranges: raw,
         beams,
         max_range,
+        footprint: params.footprint,
     };
-    let merged = fit_piece(&scan, prev.first, next.last, params.line_sigma()).ok()?;
-    if merged.chi2 <= params.max_chi2 {
-        Some(merged)
-    } else {
-        None
-    }
+    let sigma = params.line_sigma();
+    let merged = fit_piece(&scan, prev.first, next.last, sigma).ok()?;
+    // A bridge (§10 (e)): each line's own beams must fit the union line.
+    let fits = |part: &Line| part_chi2(part, &merged).is_some_and(|c| c <= params.max_chi2);
+    (merged.chi2 <= params.max_chi2 && (vouched || (fits(prev) && fits(next)))).then_some(merged)
+}
+
+/// χ² per point of the beams `part` was fitted to about `line` (§10 (e)),
+/// from `part`'s own fit: its weighted residual sum, `chi2·(m − 2)` in
+/// units of σ², plus what it rises by when the parameters move from
+/// `part`'s to `line`'s, `Δᵀ Σ⁻¹ Δ` (`Σ = σ²(JᵀWJ)⁻¹`, so exact for the
+/// range model linearised at `part`), over the `m` points. `None` if
+/// `part`'s covariance is not positive definite.
+fn part_chi2(part: &Line, line: &Line) -> Option<f32> {
+    let rise = mahalanobis(&part.cov, part, line)?;
+    let m = f32::from(part.points);
+    Some((part.chi2 * (m - 2.0) + rise) / m)
 }
 
 /// Whether `next` continues `prev` nearly collinearly: facing endpoints

@@ -58,6 +58,19 @@ pub fn chi2_quantile_999(nu: f32) -> f32 {
 ///   the beam's direction); if that is at or below the quantile, so is the
 ///   fit's.
 ///
+/// With the footprint weights `w_j = 1/(1 + (k·d_j·tan θ_j)²)` (§10 (f),
+/// `k = κ/σ`) the sums are `Σ w_j e_j²`, and:
+///
+/// - there is no lower bound (a weight can be far below 1);
+/// - upper: the TLS line's weighted range residuals (the weights at its
+///   incidences). The fit starts from that line and lowers its weighted
+///   sum; with weights that move with α this holds to first order, so a
+///   piece within it is kept without the fit (and still faces §7.4).
+///
+/// (A lower bound `λ / max(1, k²·d_max²)` holds, since `w_j e_j² =
+/// p_j² / (cos²θ_j + k²d_j² sin²θ_j)`, but saved only 1 % of the
+/// instructions on noisy scans for 60 B of flash the firmware lacks.)
+///
 /// Only a piece between the bounds (or seen nearly edge-on) is fitted.
 fn not_straight<B: BearingTable>(scan: &RawScan<'_, B>, piece: Segment, sigma: f32) -> bool {
     match straightness_bounds(scan, piece, sigma) {
@@ -101,12 +114,15 @@ fn straightness_bounds<B: BearingTable>(
         syy += v * v;
         sxy += u * v;
     });
+    // (κ/σ)² of the footprint weights; 0: off, and every weight below is 1.
+    let k = scan.footprint / sigma;
+    let k2 = k * k;
     let half_diff = (sxx - syy) / 2.0;
     let root = libm::sqrtf(half_diff * half_diff + sxy * sxy);
     let least = (sxx + syy) / 2.0 - root;
     let limit = chi2_quantile_999(m as f32 - 2.0) * (sigma * sigma);
-    if least > limit {
-        return Bounds::Above;
+    if least > limit && k2 == 0.0 {
+        return Bounds::Above; // the lower bound, without the weights only
     }
     // Normal of the smaller eigenvalue: (S − λ·I)·n = 0, from the row of
     // larger norm (both rows are parallel for a symmetric 2×2).
@@ -127,7 +143,9 @@ fn straightness_bounds<B: BearingTable>(
         let incidence = libm::fabsf(c * nx + s * ny);
         edge_on |= !(incidence > MIN_UPPER_INCIDENCE);
         let e = ((d * c - cx) * nx + (d * s - cy) * ny) / incidence;
-        upper += e * e;
+        // tan²θ = (1 − cos²θ)/cos²θ; the weight is exactly 1 for k = 0.
+        let tan2 = (1.0 - incidence * incidence) / (incidence * incidence);
+        upper += (e * e) / (1.0 + k2 * (d * d) * tan2);
     });
     if edge_on {
         Bounds::Between
