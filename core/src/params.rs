@@ -455,7 +455,6 @@ impl Params {
                 Some("fit_sigma")
             } else if self.per_turn {
                 Some("per_turn")
-
             } else {
                 None
             };

@@ -431,7 +431,8 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
     let flags = input.u8();
     // ALGORITHM.md v2's range limit and the line gate (issue 14).
     // The ALGORITHM.md §10 proposals: grazing term, fit σ (limits 2, 3);
-    // per-turn extraction: the top bit of raw[11].
+    // per-turn extraction: the top bit of raw[11]; the merge across
+    // rejected segments: flags bit 7; the footprint κ: raw[7]'s top half.
     let limits: [u32; 4] = core::array::from_fn(|_| input.u32());
     let params = match mode {
         PARAMS_RAW => {
@@ -463,6 +464,8 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 same_turn_windows: flags & 64 != 0,
                 fit_sigma: f32::from_bits(limits[3]),
                 per_turn: raw[11] & 0x8000_0000 != 0,
+                bridge_merge: flags & 128 != 0,
+                footprint: f32::from_bits(raw[7] ^ raw[9]),
             }
         }
         PARAMS_SANE => Params {
@@ -511,6 +514,12 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 1e-4 + unit(limits[3]) * 0.1
             },
             per_turn: raw[11] & 0x8000_0000 != 0,
+            bridge_merge: flags & 128 != 0,
+            footprint: if raw[7] & 0x1_0000 == 0 {
+                0.0
+            } else {
+                unit(raw[7].rotate_left(16)) * 0.02
+            },
         },
         _ => Params {
             iterations: 1 + (raw[2] % 40) as u16,

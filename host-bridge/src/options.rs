@@ -104,6 +104,18 @@ pub struct ParamArgs {
     /// only, the firmware leaves it out)
     #[arg(long)]
     pub per_turn: bool,
+    /// Beam-footprint term κ of the range noise (rad): the line fits weight
+    /// a beam at range d and incidence θ by σ²/(σ² + (κ·d·tan θ)²);
+    /// 0 fits every beam at σ, as ALGORITHM.md v2 (ALGORITHM.md §10 (f),
+    /// docs/ALGORITHM-v3-section10.md) [default: 0.003]
+    #[arg(long, value_name = "RAD")]
+    pub footprint: Option<f32>,
+    /// Merge consecutive lines only across invalid beams (or at most three
+    /// valid ones), as ALGORITHM.md v2 §7.6, not across
+    /// rejected segments (ALGORITHM.md §10 (e)); with --footprint 0 the
+    /// defaults before both (`Params::V2`)
+    #[arg(long)]
+    pub no_bridge_merge: bool,
 }
 
 impl ParamArgs {
@@ -142,6 +154,8 @@ impl ParamArgs {
             split_depth: self.split_depth.unwrap_or(d.split_depth),
             max_range: self.max_range.unwrap_or(d.max_range),
             per_turn: self.per_turn || d.per_turn,
+            footprint: self.footprint.unwrap_or(d.footprint),
+            bridge_merge: !self.no_bridge_merge && d.bridge_merge,
             ..d
         };
         p.validate()

@@ -355,28 +355,54 @@ fn synthetic_scene_is_the_default() {
 /// `extract LOG` (defaults) on every shared log gives exactly the JSON it
 /// gave when these digests were pinned (FNV-1a-64 of stdout): no field, no
 /// bit of any float may change. Re-pin only for an intended change (last:
-/// the core's `maths::cos_sin` and `maths::atan2` instead of libm's; see
-/// tools/feature-bits/tests/digests.rs for how far lines and corners moved).
+/// the footprint-weighted fits and the merge across rejected segments of
+/// ALGORITHM.md §10 (e), (f) as defaults; see
+/// tools/feature-bits/tests/digests.rs). The digests before it are what
+/// `--footprint 0 --no-bridge-merge` gives (v2 reachable bit for bit).
 #[test]
 fn extract_json_of_every_shared_log_is_pinned() {
-    const PINNED: [(&str, u64); 7] = [
-        ("acapulco-corrected", 0x57c75f8ec1c303b5),
-        ("belgioioso-corrected", 0x8278d002b8a1be54),
-        ("csail-corrected", 0xb7f8a060b9e10ff7),
-        ("freiburg-101-corrected", 0x1320a15056d12c34),
-        ("freiburg-campus-corrected", 0xe9180309d1d94bfd),
-        ("intel-corrected", 0xb01af4ea833f3820),
-        ("orebro-corrected", 0x80d2cbbb04049e68),
+    // (log stem, defaults, `--footprint 0 --no-bridge-merge`)
+    const PINNED: [(&str, u64, u64); 7] = [
+        ("acapulco-corrected", 0xc3929d878ccb4e2c, 0x57c75f8ec1c303b5),
+        (
+            "belgioioso-corrected",
+            0xf040b3b3779f54d2,
+            0x8278d002b8a1be54,
+        ),
+        ("csail-corrected", 0x58b0bf50f0e89679, 0xb7f8a060b9e10ff7),
+        (
+            "freiburg-101-corrected",
+            0x9e0878902dbd72e4,
+            0x1320a15056d12c34,
+        ),
+        (
+            "freiburg-campus-corrected",
+            0xcecb39abe31b6188,
+            0xe9180309d1d94bfd,
+        ),
+        ("intel-corrected", 0x3c92353e51c89fd0, 0xb01af4ea833f3820),
+        ("orebro-corrected", 0xd80fb2ca8bb9f702, 0x80d2cbbb04049e68),
     ];
     let mut wrong = Vec::new();
-    for (stem, pinned) in PINNED {
+    for (stem, pinned, pinned_v2) in PINNED {
         let path = data(&format!("{stem}.log.gz"));
-        let out = run(&["extract", path.to_str().unwrap()]);
-        assert!(out.status.success(), "{stem}: {}", common::stderr(&out));
-        let digest = feature_bits::digest_of(&out.stdout[..]).unwrap();
-        println!("{stem}: {} bytes, digest 0x{digest:016x}", out.stdout.len());
-        if digest != pinned {
-            wrong.push(format!("{stem}: 0x{digest:016x}, pinned 0x{pinned:016x}"));
+        let path = path.to_str().unwrap();
+        for (flags, pinned) in [
+            (&[][..], pinned),
+            (&["--footprint", "0", "--no-bridge-merge"][..], pinned_v2),
+        ] {
+            let out = run(&[&["extract", path][..], flags].concat());
+            assert!(out.status.success(), "{stem}: {}", common::stderr(&out));
+            let digest = feature_bits::digest_of(&out.stdout[..]).unwrap();
+            println!(
+                "{stem} {flags:?}: {} bytes, digest 0x{digest:016x}",
+                out.stdout.len()
+            );
+            if digest != pinned {
+                wrong.push(format!(
+                    "{stem} {flags:?}: 0x{digest:016x}, pinned 0x{pinned:016x}"
+                ));
+            }
         }
     }
     assert!(
@@ -384,6 +410,31 @@ fn extract_json_of_every_shared_log_is_pinned() {
         "extract output changed:\n{}",
         wrong.join("\n")
     );
+}
+
+/// `--footprint` and `--no-bridge-merge` reach the core; a bad footprint
+/// is refused with the reason.
+#[test]
+fn footprint_and_bridge_flags_apply() {
+    let log = data("csail-corrected.log.gz");
+    let args = ["extract", log.to_str().unwrap(), "--frames", "0..200"];
+    let digest = |flags: &[&str]| {
+        let out = run(&[&args[..], flags].concat());
+        assert!(out.status.success(), "{}", common::stderr(&out));
+        feature_bits::digest_of(&out.stdout[..]).unwrap()
+    };
+    let default = digest(&[]);
+    for flags in [&["--footprint", "0.005"][..], &["--no-bridge-merge"][..]] {
+        assert_ne!(digest(flags), default, "{flags:?} changed nothing");
+    }
+    assert_eq!(
+        digest(&["--footprint", "0.003"]),
+        default,
+        "0.003 rad is the default"
+    );
+    let bad = run(&[&args[..], &["--footprint=-0.001"]].concat());
+    assert!(!bad.status.success());
+    assert!(common::stderr(&bad).contains("footprint must be finite and >= 0"));
 }
 
 /// `extract LOG`'s parameters without flags (`defaults::for_log`) are the

@@ -67,7 +67,9 @@ fn main() -> Result<()> {
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
     let vs = variants();
     let mut ex = Extractor::new();
-    println!("| σ₀ | method | TruePos | FalsePos | off arcs | σΔα/CRB | σΔr/CRB | gross | lines/scan |");
+    println!(
+        "| σ₀ | method | TruePos | FalsePos | off arcs | σΔα/CRB | σΔr/CRB | gross | lines/scan |"
+    );
     println!("|:---|:---|---:|---:|---:|---:|---:|---:|---:|");
     for sigma in SIGMAS {
         let model = realistic_model(sigma);

@@ -133,6 +133,8 @@ fn any_params() -> Params {
         same_turn_windows: black_box(true),
         fit_sigma: any_f32(),
         per_turn: black_box(true),
+        bridge_merge: black_box(true),
+        footprint: any_f32(),
     }
 }
 

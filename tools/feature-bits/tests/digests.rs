@@ -13,17 +13,25 @@
 //! 1.3 µm; ill-conditioned ones (flag cleared) by up to 0.16 m, at 179 m
 //! with σ of kilometres (`atan2` alone: α by one ulp, 2.4e-7 rad).
 //!
+//! Re-pinned when the defaults took the footprint-weighted fits and the
+//! merge across rejected segments (ALGORITHM.md §10 (e), (f); stop 21):
+//! the digests before are those of `Params::V2`, checked below, so the old
+//! behaviour stays reachable bit for bit.
+//!
 //! To re-pin after an intended change of results (say why in the commit):
 //! `cargo run --release -p feature-bits -- LOG` and FNV-1a-64 its output
 //! (`feature_bits::digest_of`), or read the digests this test prints.
 
 use std::path::{Path, PathBuf};
 
-use feature_bits::{per_data_params, write_log_bits, write_log_bits_with, Fnv64};
-
-/// (log stem, FNV-1a-64 of the feature bits, frames).
 #[cfg(not(feature = "libm-trig"))]
-const PINNED: [(&str, u64, usize); 7] = [
+use feature_bits::{per_data_params, write_log_bits};
+use feature_bits::{write_log_bits_with, Fnv64};
+
+/// (log stem, FNV-1a-64 of the feature bits, frames) at `Params::V2`, 30
+/// passes (the defaults up to stop 20).
+#[cfg(not(feature = "libm-trig"))]
+const PINNED_V2: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x6ebae6f9863f5531, 861),
     ("belgioioso-corrected", 0xe74b61b71ab4085f, 395),
     ("csail-corrected", 0x2aef7e7d56bac119, 406),
@@ -34,11 +42,11 @@ const PINNED: [(&str, u64, usize); 7] = [
 ];
 
 /// With libm's `cosf`/`sinf`/`atan2f` (feature `libm-trig`, ALGORITHM.md §9
-/// as written): the digests pinned before the core had its own forms, so
-/// that behaviour stays reachable bit for bit
+/// as written) at `Params::V2`: the digests pinned before the core had its
+/// own forms, so that behaviour stays reachable bit for bit
 /// (`cargo test -p feature-bits --features libm-trig --test digests`).
 #[cfg(feature = "libm-trig")]
-const PINNED: [(&str, u64, usize); 7] = [
+const PINNED_V2: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0xf0d32dddc9de977a, 861),
     ("belgioioso-corrected", 0xc3f785b5bc14c817, 395),
     ("csail-corrected", 0xe9bcddc73a5fe2b0, 406),
@@ -54,19 +62,36 @@ fn log(stem: &str) -> PathBuf {
         .join(format!("{stem}.log.gz"))
 }
 
-#[test]
-fn feature_bits_of_every_shared_log_are_pinned() {
+/// (log stem, FNV-1a-64 of the feature bits, frames) at `Params::default`,
+/// 30 passes.
+#[cfg(not(feature = "libm-trig"))]
+const PINNED: [(&str, u64, usize); 7] = [
+    ("acapulco-corrected", 0x8f0f7db9f9d29277, 861),
+    ("belgioioso-corrected", 0xe3bbcf6cdcd894f7, 395),
+    ("csail-corrected", 0x86c3cced0b747d9c, 406),
+    ("freiburg-101-corrected", 0xb558ced1acf8e17b, 292),
+    ("freiburg-campus-corrected", 0x003450ef44cb2219, 2008),
+    ("intel-corrected", 0x2c471986b13d5aeb, 910),
+    ("orebro-corrected", 0xd4588364ce8a1fd3, 237),
+];
+
+/// Every log of `pinned` at `params` (30 passes): the digests that differ.
+fn check_pins(pinned: &[(&str, u64, usize)], params: &lms_core::Params) -> Vec<String> {
     let mut wrong = Vec::new();
-    for (stem, digest, frames) in PINNED {
+    let params = lms_core::Params {
+        iterations: 30,
+        ..*params
+    };
+    for &(stem, digest, frames) in pinned {
         let path = log(stem);
         let mut d = Fnv64::default();
-        let n = write_log_bits(&path, 30, &mut d).unwrap_or_else(|e| {
+        let n = write_log_bits_with(&path, &params, &mut d).unwrap_or_else(|e| {
             panic!(
                 "{}: {e} (../shared must sit beside the repo)",
                 path.display()
             )
         });
-        println!("{stem}: {n} frames, digest 0x{:016x}", d.0);
+        println!("(\"{stem}\", 0x{:016x}, {n}),", d.0);
         if (d.0, n) != (digest, frames) {
             wrong.push(format!(
                 "{stem}: 0x{:016x} over {n} frames, pinned 0x{digest:016x} over {frames}",
@@ -74,9 +99,27 @@ fn feature_bits_of_every_shared_log_are_pinned() {
             ));
         }
     }
+    wrong
+}
+
+#[cfg(not(feature = "libm-trig"))]
+#[test]
+fn feature_bits_of_every_shared_log_are_pinned() {
+    let wrong = check_pins(&PINNED, &lms_core::Params::default());
     assert!(wrong.is_empty(), "results changed:\n{}", wrong.join("\n"));
 }
 
+#[test]
+fn feature_bits_of_every_shared_log_at_v2_are_pinned() {
+    let wrong = check_pins(&PINNED_V2, &lms_core::Params::V2);
+    assert!(
+        wrong.is_empty(),
+        "v2 results changed:\n{}",
+        wrong.join("\n")
+    );
+}
+
+#[cfg(not(feature = "libm-trig"))]
 #[test]
 fn a_changed_bit_changes_the_digest() {
     // The check can fail: one more pass changes the digest of a log.
@@ -97,35 +140,94 @@ fn a_changed_bit_changes_the_digest() {
 /// values. (Örebro has no range beyond its limit: its digest is the one at
 /// `Params::default`.) `host-bridge`'s
 /// `extract_cli::per_data_defaults_match_the_pinned_feature_bits` checks
-/// that its `defaults::for_log` gives these same parameters.
+/// that its `defaults::for_log` gives these same parameters. The last
+/// column is the digest with `Params::V2` otherwise (pinned up to stop 20).
 #[cfg(not(feature = "libm-trig"))]
-const PINNED_PER_DATA: [(&str, f32, f32, u64); 7] = [
-    ("acapulco-corrected", 0.030000001, 50.0, 0xbb10e8ac21ee7a2d),
-    ("belgioioso-corrected", 0.01, 81.83, 0x537d9d69c2ff323b),
-    ("csail-corrected", 0.01, 81.83, 0xd99b305f2acf4ee8),
-    ("freiburg-101-corrected", 0.01, 81.83, 0x7ef20b88b6223797),
-    ("freiburg-campus-corrected", 0.01, 81.83, 0xbe0ab76a3c025330),
-    ("intel-corrected", 0.01, 81.83, 0x5d105f0e8dcf1438),
-    ("orebro-corrected", 0.005, 32.759, 0xb82e116bd3e06034),
+const PINNED_PER_DATA: [(&str, f32, f32, u64, u64); 7] = [
+    (
+        "acapulco-corrected",
+        0.030000001,
+        50.0,
+        0xcfa1b3384b29e6f2,
+        0xbb10e8ac21ee7a2d,
+    ),
+    (
+        "belgioioso-corrected",
+        0.01,
+        81.83,
+        0xcf25f846ba026f7e,
+        0x537d9d69c2ff323b,
+    ),
+    (
+        "csail-corrected",
+        0.01,
+        81.83,
+        0x5498b108e1913fa7,
+        0xd99b305f2acf4ee8,
+    ),
+    (
+        "freiburg-101-corrected",
+        0.01,
+        81.83,
+        0x466d8dff9805249e,
+        0x7ef20b88b6223797,
+    ),
+    (
+        "freiburg-campus-corrected",
+        0.01,
+        81.83,
+        0x9e88244309cea3ee,
+        0xbe0ab76a3c025330,
+    ),
+    (
+        "intel-corrected",
+        0.01,
+        81.83,
+        0xe90a374b585ed343,
+        0x5d105f0e8dcf1438,
+    ),
+    (
+        "orebro-corrected",
+        0.005,
+        32.759,
+        0xd4588364ce8a1fd3,
+        0xb82e116bd3e06034,
+    ),
 ];
 
 #[cfg(not(feature = "libm-trig"))]
 #[test]
 fn feature_bits_at_the_per_data_defaults_are_pinned() {
     let mut wrong = Vec::new();
-    for (stem, sigma, max_range, digest) in PINNED_PER_DATA {
+    for (stem, sigma, max_range, digest, digest_v2) in PINNED_PER_DATA {
         let path = log(stem);
         let params = per_data_params(&path).unwrap();
         let mut d = Fnv64::default();
         write_log_bits_with(&path, &params, &mut d).unwrap();
-        println!(
-            "(\"{stem}\", {:?}, {:?}, 0x{:016x}),",
-            params.sigma, params.max_range, d.0
+        let v2 = lms_core::Params {
+            bridge_merge: false,
+            footprint: 0.0,
+            ..params
+        };
+        assert_eq!(
+            v2,
+            lms_core::Params {
+                sigma,
+                max_range,
+                ..lms_core::Params::V2
+            }
         );
-        if (params.sigma, params.max_range, d.0) != (sigma, max_range, digest) {
+        let mut d2 = Fnv64::default();
+        write_log_bits_with(&path, &v2, &mut d2).unwrap();
+        println!(
+            "(\"{stem}\", {:?}, {:?}, 0x{:016x}, 0x{:016x}),",
+            params.sigma, params.max_range, d.0, d2.0
+        );
+        if (params.sigma, params.max_range, d.0, d2.0) != (sigma, max_range, digest, digest_v2) {
             wrong.push(format!(
-                "{stem}: σ {} m, max_range {} m, 0x{:016x}; pinned {sigma}, {max_range}, 0x{digest:016x}",
-                params.sigma, params.max_range, d.0
+                "{stem}: σ {} m, max_range {} m, 0x{:016x}, v2 0x{:016x}; pinned {sigma}, \
+                 {max_range}, 0x{digest:016x}, v2 0x{digest_v2:016x}",
+                params.sigma, params.max_range, d.0, d2.0
             ));
         }
         // Only σ and the range limit come from the data.
