@@ -2,7 +2,10 @@
 //! fits, merging, corners) on the real 361-beam frames of the CSAIL log, at
 //! 1, 20 and 30 passes (the paper's scales), and at 30 passes with the
 //! log's own σ (10 mm, what `host-bridge extract LOG` uses without flags)
-//! with and without per-turn extraction (`Params::per_turn`, §10 (d)).
+//! with and without per-turn extraction (`Params::per_turn`, §10 (d)); and
+//! at 30 passes with `Params::V2` (no footprint weights, no merge across
+//! rejected segments: the defaults up to stop 20), at 5 and 10 mm, for the
+//! cost of §10 (e), (f) as a ratio on the same machine.
 //!
 //! One benchmark iteration runs every frame of the log once (406 frames), so
 //! the reported time is for the whole log and the throughput is in frames
@@ -59,6 +62,14 @@ fn pipeline(c: &mut Criterion) {
                 Params {
                     per_turn: true,
                     ..cm
+                },
+            ),
+            (BenchmarkId::new("v2", 30), Params::V2),
+            (
+                BenchmarkId::new("v2_sigma_10mm", 30),
+                Params {
+                    sigma: 0.01,
+                    ..Params::V2
                 },
             ),
         ]);

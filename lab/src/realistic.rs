@@ -74,45 +74,55 @@ pub fn sample(
     Ok(Sample { frame, ..plain })
 }
 
-/// The methods: ALGORITHM.md v1's and v2's defaults, split-and-merge.
+/// The methods: ALGORITHM.md v1's defaults, v2's (`Params::V2`), the
+/// defaults with the §10 (e), (f) weights and merge, §10 options on them,
+/// split-and-merge.
 pub fn methods() -> Vec<Method> {
     vec![
         Method::with("v1 defaults (Params::V1)", Kind::Core, |p| Params {
             sigma: p.sigma,
             ..Params::V1
         }),
-        Method::with("v2 defaults (Params::default)", Kind::Core, |p| Params {
+        Method::with("v2 defaults (Params::V2)", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            ..Params::V2
+        }),
+        Method::with("defaults (Params::default)", Kind::Core, |p| Params {
             sigma: p.sigma,
             ..Params::default()
         }),
-        Method::with("v2 + grazing ρ = 0.5", Kind::Core, |p| Params {
+        Method::with("defaults + grazing ρ = 0.5", Kind::Core, |p| Params {
             sigma: p.sigma,
             grazing_noise: 0.5,
             ..Params::default()
         }),
-        Method::with("v2 + same-turn windows", Kind::Core, |p| Params {
+        Method::with("defaults + same-turn windows", Kind::Core, |p| Params {
             sigma: p.sigma,
             same_turn_windows: true,
             ..Params::default()
         }),
-        Method::with("v2 + same-turn, fit σ = 1.5σ", Kind::Core, |p| Params {
-            sigma: p.sigma,
-            same_turn_windows: true,
-            fit_sigma: 1.5 * p.sigma,
-            ..Params::default()
+        Method::with("defaults + same-turn, fit σ = 1.5σ", Kind::Core, |p| {
+            Params {
+                sigma: p.sigma,
+                same_turn_windows: true,
+                fit_sigma: 1.5 * p.sigma,
+                ..Params::default()
+            }
         }),
-        Method::with("v2 + same-turn, fit σ = 2σ", Kind::Core, |p| Params {
+        Method::with("defaults + same-turn, fit σ = 2σ", Kind::Core, |p| {
+            Params {
+                sigma: p.sigma,
+                same_turn_windows: true,
+                fit_sigma: 2.0 * p.sigma,
+                ..Params::default()
+            }
+        }),
+        Method::with("defaults, fit σ = 2σ", Kind::Core, |p| Params {
             sigma: p.sigma,
-            same_turn_windows: true,
             fit_sigma: 2.0 * p.sigma,
             ..Params::default()
         }),
-        Method::with("v2, fit σ = 2σ", Kind::Core, |p| Params {
-            sigma: p.sigma,
-            fit_sigma: 2.0 * p.sigma,
-            ..Params::default()
-        }),
-        Method::with("v2 + per turn (§10 d)", Kind::Core, |p| Params {
+        Method::with("defaults + per turn (§10 d)", Kind::Core, |p| Params {
             sigma: p.sigma,
             per_turn: true,
             ..Params::default()

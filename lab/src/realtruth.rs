@@ -30,9 +30,12 @@
 //!
 //! # Methods
 //! `no flags` is what `host-bridge extract LOG` does without options
-//! ([`no_flag_params`]: ALGORITHM.md v2's defaults — `split_depth = 8`,
-//! `fit_shared_points = false` — with σ and `max_range` from the data);
-//! `v1` is [`Params::V1`], the defaults before v2; `σ by unit` is 10 mm for
+//! ([`no_flag_params`]: the defaults — ALGORITHM.md v2's `split_depth = 8`,
+//! `fit_shared_points = false`, and since stop 21 the footprint weights and
+//! the merge across rejected segments of §10 (e), (f) — with σ and
+//! `max_range` from the data); `v2` is the same with [`Params::V2`]'s
+//! footprint and merge (the defaults up to stop 20); `v1` is
+//! [`Params::V1`], the defaults before v2; `σ by unit` is 10 mm for
 //! cm logs and 5 mm for mm logs ([`crate::real::sigma_for`]); the oracle is a
 //! total-least-squares fit to each counted piece's own on-wall hits — what
 //! an extractor that knew the walls would report, so its TruePos is the
@@ -76,7 +79,7 @@ pub fn no_flag_params(path: &Path) -> Result<Params> {
 /// Which parameters a method starts from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Base {
-    /// As without flags ([`no_flag_params`]: ALGORITHM.md v2, per data).
+    /// As without flags ([`no_flag_params`]: the defaults, per data).
     NoFlags,
     /// ALGORITHM.md v1's defaults ([`Params::V1`]: σ = 5 mm, no split
     /// before reject, shared corner points, no range limit) — what `extract`
@@ -138,7 +141,10 @@ impl RealMethod {
 }
 
 /// Name of the no-flags method.
-pub const NO_FLAGS: &str = "defaults, no flags (v2, per data)";
+pub const NO_FLAGS: &str = "defaults, no flags (per data; footprint + bridge)";
+/// Name of the no-flags method with the defaults up to stop 20
+/// (`Params::V2`: no footprint weights, no merge across rejected segments).
+pub const V2_NO_FLAGS: &str = "v2 defaults, no flags (per data)";
 /// Name of v1's no-flags method.
 pub const V1_NO_FLAGS: &str = "v1 defaults, no flags (σ 5 mm)";
 /// Name of per-turn extraction (`Params::per_turn`) at the no-flag parameters.
@@ -166,11 +172,16 @@ pub fn methods() -> Vec<RealMethod> {
     let own = SigmaChoice::Base;
     vec![
         m(NO_FLAGS, Core, NoFlags, own),
+        g(V2_NO_FLAGS, |p| Params {
+            footprint: 0.0,
+            bridge_merge: false,
+            ..p
+        }),
         m(V1_NO_FLAGS, Core, V1, own),
         m("v1, σ by unit (10 mm cm, 5 mm mm)", Core, V1, ByUnit),
-        m("v2, σ by unit", Core, NoFlags, ByUnit),
-        m("v2, σ = 20 mm", Core, NoFlags, Fixed(0.02)),
-        m("v2, σ = 30 mm", Core, NoFlags, Fixed(0.03)),
+        m("defaults, σ by unit", Core, NoFlags, ByUnit),
+        m("defaults, σ = 20 mm", Core, NoFlags, Fixed(0.02)),
+        m("defaults, σ = 30 mm", Core, NoFlags, Fixed(0.03)),
         m(
             "split-and-merge (4σ), σ by unit",
             SplitMerge(4.0),
@@ -206,6 +217,12 @@ pub fn methods() -> Vec<RealMethod> {
         }),
         g(PER_TURN, |p| Params {
             per_turn: true,
+            ..p
+        }),
+        g("v2 + per turn", |p| Params {
+            per_turn: true,
+            footprint: 0.0,
+            bridge_merge: false,
             ..p
         }),
         m(ORACLE, Oracle, NoFlags, own),

@@ -106,7 +106,14 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
             md.contains("| csail-corrected.log.gz (cm) | 5 |"),
             "truth table"
         );
-        assert!(md.contains("| csail-corrected.log.gz · defaults, no flags (v2, per data) |"));
+        assert!(md.contains(&format!(
+            "| csail-corrected.log.gz · {} |",
+            lms_lab::realtruth::NO_FLAGS
+        )));
+        assert!(md.contains(&format!(
+            "| csail-corrected.log.gz · {} |",
+            lms_lab::realtruth::V2_NO_FLAGS
+        )));
         assert!(md.contains("## 6. Sensor model fitted to the real logs"));
         assert!(
             md.contains("| csail-corrected.log.gz | 361 | 10 |"),
