@@ -14,7 +14,7 @@ use lms_lab::baselines::run_core;
 use lms_lab::maptruth::TruthConfig;
 use lms_lab::metrics::{scan_truth, Gates, Tally};
 use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
-use lms_lab::realtruth::{run_log, Base, RealKind, RealMethod, RealTally, SigmaChoice};
+use lms_lab::realtruth::{pooled_over_logs, pooled_table, Base, RealKind, RealMethod, SigmaChoice};
 use lms_lab::scenes::Family;
 
 type Adjust = fn(Params) -> Params;
@@ -118,38 +118,14 @@ fn main() -> Result<()> {
             adjust,
         })
         .collect();
-    let dir = Path::new("../shared/data/carmen");
-    let mut names: Vec<_> = std::fs::read_dir(dir)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .collect();
-    names.sort();
-    let mut pooled = vec![RealTally::default(); methods.len()];
-    for path in &names {
-        let r = run_log(path, &methods, every, &TruthConfig::default(), None)?;
-        for (k, t) in r.tallies.iter().enumerate() {
-            pooled[k].merge(t);
-        }
-    }
-    println!(
-        "\n| real logs, every {every}. frame | TruePos | ≥ 1 m | FalsePos | on no wall | \
-         FalsePos on walls | coverage | walls > 5 % fragmented | lines / frame |"
-    );
-    println!("|:---|---:|---:|---:|---:|---:|---:|---:|---:|");
-    for (m, t) in methods.iter().zip(&pooled) {
-        let s = t.summary();
-        println!(
-            "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {} of {} | {:.2} |",
-            m.name,
-            s.true_pos,
-            s.true_pos_1m,
-            s.false_pos,
-            s.no_wall,
-            s.false_pos_on_walls,
-            s.coverage,
-            s.walls_fragmented.0,
-            s.walls_fragmented.1,
-            s.lines_per_frame
-        );
-    }
+    let pooled = pooled_over_logs(
+        Path::new("../shared/data/carmen"),
+        &methods,
+        every,
+        &TruthConfig::default(),
+    )?;
+    let names: Vec<&str> = methods.iter().map(|m| m.name).collect();
+    println!("\nReal logs, every {every}. frame, pooled:\n");
+    print!("{}", pooled_table(&names, &pooled));
     Ok(())
 }

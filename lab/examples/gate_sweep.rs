@@ -10,7 +10,7 @@ use anyhow::Result;
 use lms_core::Params;
 use lms_lab::maptruth::TruthConfig;
 use lms_lab::realtruth::{
-    methods, run_log, Base, RealKind, RealMethod, RealTally, SigmaChoice, ORACLE,
+    methods, pooled_over_logs, pooled_table, Base, RealKind, RealMethod, SigmaChoice, ORACLE,
 };
 
 fn main() -> Result<()> {
@@ -94,37 +94,12 @@ fn main() -> Result<()> {
             .into_iter()
             .filter(|x| x.name == ORACLE || x.name.starts_with("split-and-merge")),
     );
-    let dir = Path::new("../shared/data/carmen");
-    let mut names: Vec<_> = std::fs::read_dir(dir)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .collect();
-    names.sort();
     let cfg = TruthConfig {
         verify: std::env::var("UNVERIFIED").is_err(),
         ..TruthConfig::default()
     };
-    let mut pooled = vec![RealTally::default(); ms.len()];
-    for path in &names {
-        let r = run_log(path, &ms, every, &cfg, None)?;
-        for (k, t) in r.tallies.iter().enumerate() {
-            pooled[k].merge(t);
-        }
-    }
-    println!("| method | TruePos | ≥ 1 m | FalsePos | on no wall | FP on walls | coverage | fragmented | lines/frame |");
-    for (m, t) in ms.iter().zip(&pooled) {
-        let s = t.summary();
-        println!(
-            "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} |",
-            m.name,
-            s.true_pos,
-            s.true_pos_1m,
-            s.false_pos,
-            s.no_wall,
-            s.false_pos_on_walls,
-            s.coverage,
-            s.fragmented,
-            s.lines_per_frame
-        );
-    }
+    let pooled = pooled_over_logs(Path::new("../shared/data/carmen"), &ms, every, &cfg)?;
+    let names: Vec<&str> = ms.iter().map(|m| m.name).collect();
+    print!("{}", pooled_table(&names, &pooled));
     Ok(())
 }

@@ -648,6 +648,54 @@ pub fn run_log(
     })
 }
 
+/// Every CARMEN log of `dir` ([`crate::real::find_logs`]) scored with
+/// `methods` on every `every`-th frame, pooled over the logs (one tally
+/// per method): what the diagnostic examples print.
+pub fn pooled_over_logs(
+    dir: &Path,
+    methods: &[RealMethod],
+    every: usize,
+    cfg: &TruthConfig,
+) -> Result<Vec<RealTally>> {
+    let mut pooled = vec![RealTally::default(); methods.len()];
+    for path in crate::real::find_logs(dir)? {
+        let r = run_log(&path, methods, every, cfg, None)?;
+        for (p, t) in pooled.iter_mut().zip(&r.tallies) {
+            p.merge(t);
+        }
+    }
+    Ok(pooled)
+}
+
+/// A Markdown table of pooled tallies, one row per method: TruePos (all,
+/// ≥ 1 m), FalsePos (all, on no wall, on walls), coverage, fragmented
+/// share and walls, lines per frame.
+pub fn pooled_table(names: &[&str], pooled: &[RealTally]) -> String {
+    let mut md = String::from(
+        "| method | TruePos | ≥ 1 m | FalsePos | on no wall | FalsePos on walls | coverage | \
+         fragmented | walls > 5 % fragmented | lines / frame |\n\
+         |:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for (name, t) in names.iter().zip(pooled) {
+        let s = t.summary();
+        let _ = writeln!(
+            md,
+            "| {name} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {} of {} | {:.2} |",
+            s.true_pos,
+            s.true_pos_1m,
+            s.false_pos,
+            s.no_wall,
+            s.false_pos_on_walls,
+            s.coverage,
+            s.fragmented,
+            s.walls_fragmented.0,
+            s.walls_fragmented.1,
+            s.lines_per_frame
+        );
+    }
+    md
+}
+
 /// Every log of `logs`.
 pub fn run_logs(
     logs: &[PathBuf],
