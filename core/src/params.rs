@@ -117,8 +117,8 @@ pub struct Params {
     /// `docs/ALGORITHM-v3-section10.md` §10.7): two consecutive accepted
     /// lines merge whatever lies between them when the refit of their union
     /// (the beams between included) passes `max_chi2` and each line's own
-    /// beams fit the union line within `max_chi2` too
-    /// ([`crate::pipeline::line_fit::residual_chi2`]). A wall that grazing
+    /// beams fit the union line within `max_chi2` too (from each line's own
+    /// fit, `crate::pipeline::merge`). A wall that grazing
     /// stair-steps cut into a long line and short pieces is one line again.
     /// Default on; `false` is §7.6 as written (v1, v2).
     pub bridge_merge: bool,
