@@ -398,7 +398,7 @@ impl From<&Line> for ScoredLine {
 }
 
 /// Fraction of `first..=last` inside `pf..=pl`.
-fn overlap(first: usize, last: usize, pf: usize, pl: usize) -> f64 {
+pub fn overlap(first: usize, last: usize, pf: usize, pl: usize) -> f64 {
     let lo = first.max(pf);
     let hi = last.min(pl);
     if hi < lo {
@@ -409,7 +409,7 @@ fn overlap(first: usize, last: usize, pf: usize, pl: usize) -> f64 {
 }
 
 /// `(Δα, Δr)` of a line against a piece, if they are a candidate pair.
-fn candidate(l: &ScoredLine, p: &crate::maptruth::Piece) -> Option<(f64, f64)> {
+pub fn candidate(l: &ScoredLine, p: &crate::maptruth::Piece) -> Option<(f64, f64)> {
     if overlap(l.first, l.last, p.first, p.last) < GATE_OVERLAP {
         return None;
     }
