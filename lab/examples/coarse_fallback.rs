@@ -10,17 +10,10 @@
 //!
 //! `cargo run --release -p lms-lab --example coarse_fallback -- [EVERY] [SCANS]`
 
-use std::path::Path;
-
 use anyhow::Result;
-use host_bridge::carmen::{self, UnitMode};
 use lms_core::{Extractor, Frame, Params};
 use lms_lab::baselines::{run_core, Extraction};
-use lms_lab::maptruth::{build_map, frame_truth, TruthConfig};
-use lms_lab::metrics::{scan_truth, Gates, Tally};
-use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
-use lms_lab::realtruth::{no_flag_params, pooled_table, score_frame, RealTally, ScoredLine};
-use lms_lab::scenes::Family;
+use lms_lab::sweep::print_sweep_with;
 
 /// Fewest valid beams of a coarse line that is kept.
 const MIN_BEAMS: usize = 10;
@@ -77,63 +70,8 @@ fn extract(ex: &mut Extractor, frame: &Frame, params: &Params, v: &Variant) -> E
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
-    let mut ex = Extractor::new();
-    println!("| σ₀ | method | TruePos | FalsePos | σΔα/CRB | σΔr/CRB | lines/scan |");
-    println!("|:---|:---|---:|---:|---:|---:|---:|");
-    for sigma in SIGMAS {
-        let model = realistic_model(sigma);
-        let gates = Gates {
-            kappa: model.kappa,
-            ..Gates::default()
-        };
-        let mut tallies = vec![Tally::default(); VARIANTS.len()];
-        for family in Family::ALL {
-            for k in 0..scans {
-                let s = sample(family, k, 1, &model, DELTA)?;
-                let base = Params {
-                    sigma: sigma as f32,
-                    ..Params::default()
-                };
-                let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
-                for (v, t) in VARIANTS.iter().zip(tallies.iter_mut()) {
-                    let x = extract(&mut ex, &s.frame, &base, v);
-                    let (ls, cs) = lms_lab::score(&truth, &x, &s.frame, sigma, &gates);
-                    t.add(&ls, &cs, x.segments.len(), 0.0);
-                }
-            }
-        }
-        for (v, t) in VARIANTS.iter().zip(&tallies) {
-            let s = t.summary();
-            println!(
-                "| {} mm | {} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} |",
-                sigma * 1e3,
-                v.0,
-                s.true_pos,
-                s.false_pos,
-                s.crb_alpha,
-                s.crb_r,
-                s.lines_per_scan
-            );
-        }
-    }
-    let cfg = TruthConfig::default();
-    let mut pooled = vec![RealTally::default(); VARIANTS.len()];
-    for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
-        let log = carmen::read_log(&path, UnitMode::Auto)?;
-        let map = build_map(&log.scans, &cfg);
-        let params = no_flag_params(&path)?;
-        for scan in log.scans.iter().step_by(every) {
-            let truth = frame_truth(scan, &map, &cfg);
-            let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
-            for (v, t) in VARIANTS.iter().zip(pooled.iter_mut()) {
-                let x = extract(&mut ex, &scan.frame, &params, v);
-                let lines: Vec<ScoredLine> = x.lines.iter().map(ScoredLine::from).collect();
-                score_frame(&truth, &lines, &valid, t);
-            }
-        }
-    }
     let names: Vec<&str> = VARIANTS.iter().map(|v| v.0).collect();
-    println!("\nReal logs, every {every}. frame, pooled:\n");
-    print!("{}", pooled_table(&names, &pooled));
-    Ok(())
+    print_sweep_with(&names, every, scans, &|k, ex, frame, params| {
+        extract(ex, frame, params, &VARIANTS[k])
+    })
 }

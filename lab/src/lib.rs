@@ -35,6 +35,7 @@ pub mod report;
 pub mod scale;
 pub mod scenes;
 pub mod sensorfit;
+pub mod sweep;
 pub mod variants;
 
 use std::io::IsTerminal;

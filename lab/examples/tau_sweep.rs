@@ -1,0 +1,44 @@
+//! The segmentation gate τ (§6) on the defaults, with and without
+//! same-turn windows (ALGORITHM.md §10 (c), `Params::same_turn_windows`):
+//! split before reject finds the corners that a larger τ no longer marks,
+//! so τ trades edges in the windows for splits in §7. Realistic synthetic
+//! scenes (100 scans per family and σ₀) and the real logs' map truth (every
+//! 5th frame), pooled (docs/ALGORITHM-v3-section10.md §10.8).
+//!
+//! `cargo run --release -p lms-lab --example tau_sweep -- [EVERY] [SCANS]`
+
+use anyhow::Result;
+use lms_core::Params;
+use lms_lab::sweep::{print_sweep, Adjust};
+
+/// The variants, each applied to the defaults (the per-data defaults on
+/// real logs, σ₀ on synthetic scenes).
+fn variants() -> Vec<(&'static str, Adjust)> {
+    vec![
+        ("defaults (τ = 9)", |p| p),
+        ("τ = 12", |p| Params { tau: 12.0, ..p }),
+        ("τ = 16", |p| Params { tau: 16.0, ..p }),
+        ("τ = 20", |p| Params { tau: 20.0, ..p }),
+        ("τ = 25", |p| Params { tau: 25.0, ..p }),
+        ("same-turn windows", |p| Params {
+            same_turn_windows: true,
+            ..p
+        }),
+        ("same-turn windows, τ = 16", |p| Params {
+            same_turn_windows: true,
+            tau: 16.0,
+            ..p
+        }),
+        ("same-turn windows, τ = 20", |p| Params {
+            same_turn_windows: true,
+            tau: 20.0,
+            ..p
+        }),
+    ]
+}
+
+fn main() -> Result<()> {
+    let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
+    let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
+    print_sweep(&variants(), every, scans)
+}

@@ -1,0 +1,109 @@
+//! The variant sweeps of the diagnostic examples: one pair of tables —
+//! realistic synthetic scenes and the real logs' map truth — for a list of
+//! extraction variants.
+
+use std::path::Path;
+
+use anyhow::Result;
+use host_bridge::carmen::{self, UnitMode};
+use lms_core::{Extractor, Frame, Params};
+
+use crate::baselines::{run_core, Extraction};
+use crate::maptruth::{build_map, frame_truth, TruthConfig};
+use crate::metrics::{scan_truth, Gates, Tally};
+use crate::realistic::{realistic_model, sample, DELTA, SIGMAS};
+use crate::realtruth::{no_flag_params, pooled_table, score_frame, RealTally, ScoredLine};
+use crate::scenes::Family;
+
+/// A change applied to the defaults (the per-data defaults on real logs,
+/// σ₀ on synthetic scenes).
+pub type Adjust = fn(Params) -> Params;
+
+/// Print, for each variant, the realistic synthetic scenes' figures
+/// (`scans` per family and σ₀) and the real logs' map-truth figures
+/// (every `every`-th frame, pooled), as Markdown tables.
+pub fn print_sweep(variants: &[(&'static str, Adjust)], every: usize, scans: usize) -> Result<()> {
+    let names: Vec<&str> = variants.iter().map(|v| v.0).collect();
+    print_sweep_with(&names, every, scans, &|k, ex, frame, params| {
+        run_core(ex, frame, &(variants[k].1)(*params))
+    })
+}
+
+/// Extraction of variant `k` on a frame, from the defaults `params`.
+pub type RunVariant<'a> = dyn Fn(usize, &mut Extractor, &Frame, &Params) -> Extraction + 'a;
+
+/// [`print_sweep`] for variants that are more than a parameter change:
+/// `run(k, …)` extracts variant `k` (named `names[k]`).
+pub fn print_sweep_with(
+    names: &[&str],
+    every: usize,
+    scans: usize,
+    run: &RunVariant<'_>,
+) -> Result<()> {
+    let mut ex = Extractor::new();
+    println!(
+        "| σ₀ | method | TruePos | FalsePos | off arcs | σΔα/CRB | σΔr/CRB | gross | lines/scan |"
+    );
+    println!("|:---|:---|---:|---:|---:|---:|---:|---:|---:|");
+    for sigma in SIGMAS {
+        let model = realistic_model(sigma);
+        let gates = Gates {
+            kappa: model.kappa,
+            ..Gates::default()
+        };
+        let mut tallies = vec![Tally::default(); names.len()];
+        for family in Family::ALL {
+            for i in 0..scans {
+                let s = sample(family, i, 1, &model, DELTA)?;
+                let base = Params {
+                    sigma: sigma as f32,
+                    ..Params::default()
+                };
+                let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
+                for (k, t) in tallies.iter_mut().enumerate() {
+                    let x = run(k, &mut ex, &s.frame, &base);
+                    let (ls, cs) = crate::score(&truth, &x, &s.frame, sigma, &gates);
+                    t.add(&ls, &cs, x.segments.len(), 0.0);
+                }
+            }
+        }
+        for (name, t) in names.iter().zip(&tallies) {
+            let s = t.summary();
+            println!(
+                "| {} mm | {name} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.3} | {:.2} |",
+                sigma * 1e3,
+                s.true_pos,
+                s.false_pos,
+                s.false_pos_no_arc,
+                s.crb_alpha,
+                s.crb_r,
+                s.outliers,
+                s.lines_per_scan
+            );
+        }
+    }
+    let cfg = TruthConfig::default();
+    let mut pooled = vec![RealTally::default(); names.len()];
+    for path in crate::real::find_logs(Path::new("../shared/data/carmen"))? {
+        let log = carmen::read_log(&path, UnitMode::Auto)?;
+        let map = build_map(&log.scans, &cfg);
+        let params = no_flag_params(&path)?;
+        // Per log, then pooled: wall ids are per log.
+        let mut tallies = vec![RealTally::default(); names.len()];
+        for scan in log.scans.iter().step_by(every.max(1)) {
+            let truth = frame_truth(scan, &map, &cfg);
+            let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
+            for (k, t) in tallies.iter_mut().enumerate() {
+                let x = run(k, &mut ex, &scan.frame, &params);
+                let lines: Vec<ScoredLine> = x.lines.iter().map(ScoredLine::from).collect();
+                score_frame(&truth, &lines, &valid, t);
+            }
+        }
+        for (p, t) in pooled.iter_mut().zip(&tallies) {
+            p.merge(t);
+        }
+    }
+    println!("\nReal logs, every {every}. frame, pooled:\n");
+    print!("{}", pooled_table(names, &pooled));
+    Ok(())
+}
