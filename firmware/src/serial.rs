@@ -34,6 +34,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use embedded_io::{ErrorType, Read, ReadReady, Write, WriteReady};
 use heapless::spsc::{Consumer, Producer};
+use lms_core::maths::div_u64;
 use stm32f4::stm32f405::usart1::RegisterBlock;
 use stm32f4::stm32f405::Interrupt;
 
@@ -350,8 +351,9 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
     /// as one bad telegram).
     pub fn drain(&mut self) {
         let bits = (self.tx.len() as u64 + 2) * 10;
-        let deadline =
-            crate::clock::now_us() + 2 * bits * 1_000_000 / u64::from(self.baud.max(1)) + 2_000;
+        let deadline = crate::clock::now_us()
+            + div_u64(2 * bits * 1_000_000, u64::from(self.baud.max(1)))
+            + 2_000;
         let mut queued = self.tx.len();
         while crate::clock::now_us() < deadline {
             let done = critical_section::with(|_| {

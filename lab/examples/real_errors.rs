@@ -65,6 +65,10 @@ struct Errors {
     pieces: usize,
     missed: [usize; 3],
     unlined: Vec<Unlined>,
+    /// Per pair of consecutive lines on one counted piece (a fragment):
+    /// χ² per point of a TLS fit to the pair's union at σ, and whether
+    /// their parameters agree within `merge_gate` (§7.6).
+    fragment_pairs: Vec<(f64, bool)>,
 }
 
 impl Errors {
@@ -82,6 +86,7 @@ impl Errors {
             *a += b;
         }
         self.unlined.extend(o.unlined);
+        self.fragment_pairs.extend(o.fragment_pairs);
     }
 }
 
@@ -236,6 +241,60 @@ fn missed_pieces(scan: &Scan, truth: &FrameTruth, x: &Extraction, used: &[bool],
     }
 }
 
+const OWN: bool = true;
+/// The pairs of consecutive lines that both match one counted piece.
+fn fragment_pairs(
+    scan: &Scan,
+    truth: &FrameTruth,
+    x: &Extraction,
+    params: &lms_core::Params,
+    e: &mut Errors,
+) {
+    let (g, rg, b) = (
+        scan.frame.geometry(),
+        scan.frame.ranges(),
+        scan.frame.beams(),
+    );
+    let sigma = f64::from(params.sigma);
+    for p in truth.pieces.iter().filter(|p| p.counted) {
+        let on: Vec<&lms_core::Line> = x
+            .lines
+            .iter()
+            .filter(|l| candidate(&ScoredLine::from(*l), p).is_some())
+            .collect();
+        for w in on.windows(2) {
+            let (l1, l2) = (w[0], w[1]);
+            let da = lms_scene::wrap_angle(f64::from(l2.alpha) - f64::from(l1.alpha));
+            let dr = f64::from(l2.r) - f64::from(l1.r);
+            let (a, c, o) = (
+                f64::from(l1.cov.a) + f64::from(l2.cov.a),
+                f64::from(l1.cov.c) + f64::from(l2.cov.c),
+                f64::from(l1.cov.b) + f64::from(l2.cov.b),
+            );
+            let d2 = (c * da * da - 2.0 * o * da * dr + a * dr * dr) / (a * c - o * o);
+            let own = |j: usize| {
+                (usize::from(l1.first)..=usize::from(l1.last)).contains(&j)
+                    || (usize::from(l2.first)..=usize::from(l2.last)).contains(&j)
+            };
+            let pts: Vec<[f64; 2]> = (usize::from(l1.first)..=usize::from(l2.last))
+                .filter(|&j| b[j].is_valid() && rg[j] < params.max_range && (!OWN || own(j)))
+                .map(|j| {
+                    let (d, phi) = (f64::from(rg[j]), f64::from(g.bearing(j)));
+                    [d * phi.cos(), d * phi.sin()]
+                })
+                .collect();
+            let (alpha, r) = lms_lab::maptruth::tls(&pts);
+            let rss: f64 = pts
+                .iter()
+                .map(|q| (q[0] * alpha.cos() + q[1] * alpha.sin() - r).powi(2))
+                .sum();
+            let chi2 = rss / (sigma * sigma) / (pts.len() as f64 - 2.0).max(1.0);
+            e.fragment_pairs
+                .push((chi2, d2 < f64::from(params.merge_gate)));
+        }
+    }
+}
+
 fn log_errors(path: &Path, every: usize, cfg: &TruthConfig) -> Result<Errors> {
     let log = carmen::read_log(path, UnitMode::Auto)?;
     let map = build_map(&log.scans, cfg);
@@ -263,8 +322,26 @@ fn log_errors(path: &Path, every: usize, cfg: &TruthConfig) -> Result<Errors> {
         e.lines += lines.len();
         false_lines(scan, &truth, &x, &used, &on_static, &mut e);
         missed_pieces(scan, &truth, &x, &used, &mut e);
+        fragment_pairs(scan, &truth, &x, &params, &mut e);
     }
     Ok(e)
+}
+
+fn fragment_row(name: &str, e: &Errors) -> String {
+    let f = &e.fragment_pairs;
+    let n = f.len().max(1) as f64;
+    let mut chi: Vec<f64> = f.iter().map(|p| p.0).collect();
+    chi.sort_by(f64::total_cmp);
+    let q = |k: usize| chi.get(k * chi.len() / 4).copied().unwrap_or(f64::NAN);
+    format!(
+        "| {name} | {} | {:.3} | {:.3} | {:.1}, {:.1}, {:.1} |",
+        f.len(),
+        f.iter().filter(|p| p.0 > 4.0).count() as f64 / n,
+        f.iter().filter(|p| p.1).count() as f64 / n,
+        q(1),
+        q(2),
+        q(3)
+    )
 }
 
 fn rows(name: &str, e: &Errors) -> (String, String) {
@@ -304,17 +381,19 @@ fn rows(name: &str, e: &Errors) -> (String, String) {
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
     let cfg = TruthConfig::default();
-    let (mut false_md, mut missed_md) = (Vec::new(), Vec::new());
+    let (mut false_md, mut missed_md, mut frag_md) = (Vec::new(), Vec::new(), Vec::new());
     let mut all = Errors::default();
     for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
         let e = log_errors(&path, every, &cfg)?;
         let name = path.file_name().unwrap_or_default().to_string_lossy();
         let (f, m) = rows(&name, &e);
+        frag_md.push(fragment_row(&name, &e));
         false_md.push(f);
         missed_md.push(m);
         all.add(e);
     }
     let (f, m) = rows("all", &all);
+    frag_md.push(fragment_row("all", &all));
     false_md.push(f);
     missed_md.push(m);
     println!(
@@ -333,6 +412,13 @@ fn main() -> Result<()> {
          median range (m) |\n\
          |:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n{}",
         missed_md.join("\n")
+    );
+    println!(
+        "\nFragments: pairs of consecutive lines that both match one counted piece; χ² per \
+         point of a TLS fit to their union's hits at σ (the merge's refit needs ≤ 4):\n\n\
+         | log | pairs | union χ² > 4 | parameters within the merge gate | union χ² quartiles |\n\
+         |:---|---:|---:|---:|---:|\n{}",
+        frag_md.join("\n")
     );
     Ok(())
 }

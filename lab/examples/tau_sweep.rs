@@ -34,6 +34,17 @@ fn variants() -> Vec<(&'static str, Adjust)> {
             tau: 20.0,
             ..p
         }),
+        ("same-turn windows, τ = 25", |p| Params {
+            same_turn_windows: true,
+            tau: 25.0,
+            ..p
+        }),
+        ("same-turn windows, τ = 30", |p| Params {
+            same_turn_windows: true,
+            tau: 30.0,
+            ..p
+        }),
+        ("τ = 30", |p| Params { tau: 30.0, ..p }),
     ]
 }
 

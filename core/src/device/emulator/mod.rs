@@ -175,7 +175,7 @@ pub const MIN_TX_CAPACITY: usize = 1 + HEADER_LEN + 1 + STATUS_BLOCK_LEN + 1 + C
 pub const fn line_time_us(bytes: usize, baud: Baud) -> u64 {
     let bits = (bytes as u64).saturating_mul(BITS_PER_BYTE);
     let bps = baud.bits_per_second() as u64;
-    bits.saturating_mul(1_000_000).div_ceil(bps)
+    crate::maths::div_ceil_u64(bits.saturating_mul(1_000_000), bps)
 }
 
 /// Mirror turns per complete scan: 1 at 1°, 2 at 0.5° and 4 at 0.25°
@@ -191,7 +191,7 @@ pub const fn turns_per_scan(variant: Variant) -> u64 {
 /// Time between complete scans in continuous mode (µs, rounded): 13333 at
 /// 1°, 26667 at 0.5°, 53333 at 0.25°.
 pub const fn scan_period_us(variant: Variant) -> u64 {
-    (turns_per_scan(variant) * TURN_US_TIMES_3 + 1) / 3
+    crate::maths::div_u64(turns_per_scan(variant) * TURN_US_TIMES_3 + 1, 3)
 }
 
 /// The simulated sensor (see the [module docs](self)). `TX` is its

@@ -2,6 +2,7 @@
 //! turns (see *Timing* in the module docs).
 
 use super::*;
+use crate::maths::div_u64;
 
 /// A reply as decided when its request arrived.
 #[derive(Clone, Copy, Debug)]
@@ -80,7 +81,7 @@ impl Stream {
 
     /// Time scan `k` is complete (µs).
     fn tick_us(&self, k: u64, turns: u64) -> u64 {
-        let offset = k.saturating_mul(turns * TURN_US_TIMES_3) / 3;
+        let offset = div_u64(k.saturating_mul(turns * TURN_US_TIMES_3), 3);
         self.start_us.saturating_add(offset)
     }
 
@@ -90,11 +91,11 @@ impl Stream {
     fn next(&self, free_us: u64, turns: u64) -> (u64, u64) {
         let free = free_us.max(self.start_us);
         let elapsed = free.saturating_sub(self.start_us);
-        // `checked_div`: `turns` comes from the value mode's samples too.
-        let newest = elapsed
-            .saturating_mul(3)
-            .checked_div(turns.saturating_mul(TURN_US_TIMES_3))
-            .unwrap_or(0);
+        // A zero divisor gives 0: `turns` comes from the value mode's samples too.
+        let newest = div_u64(
+            elapsed.saturating_mul(3),
+            turns.saturating_mul(TURN_US_TIMES_3),
+        );
         let k = match self.last() {
             Some(last) if newest <= last => last.saturating_add(1),
             _ => newest,
@@ -151,8 +152,11 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             return self.tx_len;
         }
         // elapsed < 818 bytes at 9600 Bd < 10⁶ µs: no overflow.
-        let bits = elapsed.saturating_mul(u64::from(self.baud.bits_per_second())) / 1_000_000;
-        usize::try_from(bits / BITS_PER_BYTE)
+        let bits = div_u64(
+            elapsed.saturating_mul(u64::from(self.baud.bits_per_second())),
+            1_000_000,
+        );
+        usize::try_from(div_u64(bits, BITS_PER_BYTE))
             .unwrap_or(usize::MAX)
             .min(self.tx_len)
     }
