@@ -398,6 +398,59 @@ pub fn cos_sin(x: f32) -> (f32, f32) {
     }
 }
 
+/// `(n / d, n % d)` for 64-bit integers without the compiler's 64-bit
+/// division routine (`__aeabi_uldivmod`, 0.9 KB of flash on the
+/// Cortex-M4, which divides only 32-bit numbers in hardware): one hardware
+/// division when `n` fits 32 bits, else binary long division (≤ 64 steps).
+/// Exact: the same results as `/` and `%` on every target. `d = 0` gives
+/// `(0, n)` (callers guard against it; no panic).
+///
+/// The device layer's timekeeping (µs since boot, line times) and the
+/// firmware's decimal output use it; the pipeline has no integer division.
+pub const fn div_rem_u64(n: u64, d: u64) -> (u64, u64) {
+    if d == 0 || n < d {
+        return (0, n);
+    }
+    if n <= u32::MAX as u64 {
+        // d ≤ n: both fit 32 bits.
+        let (n, d) = (n as u32, d as u32);
+        return ((n / d) as u64, (n % d) as u64);
+    }
+    if d > u64::MAX >> 1 {
+        // n ≥ d > 2⁶³: the quotient is 1.
+        return (1, n - d);
+    }
+    let (mut q, mut r) = (0u64, 0u64);
+    let mut bit = 64 - n.leading_zeros();
+    while bit > 0 {
+        bit -= 1;
+        // r < d ≤ 2⁶³, so the shift cannot overflow.
+        r = (r << 1) | ((n >> bit) & 1);
+        if r >= d {
+            r -= d;
+            q |= 1 << bit;
+        }
+    }
+    (q, r)
+}
+
+/// `n / d` rounded down, as [`div_rem_u64`]; `d = 0` gives 0.
+#[inline]
+pub const fn div_u64(n: u64, d: u64) -> u64 {
+    div_rem_u64(n, d).0
+}
+
+/// `n / d` rounded up, as [`div_rem_u64`]; `d = 0` gives 0.
+#[inline]
+pub const fn div_ceil_u64(n: u64, d: u64) -> u64 {
+    let (q, r) = div_rem_u64(n, d);
+    if d != 0 && r != 0 {
+        q + 1
+    } else {
+        q
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -627,58 +680,5 @@ mod tests {
         assert_eq!(wrap_angle(PI), PI);
         assert!((wrap_angle(-PI) - PI).abs() < 1e-6);
         assert!((wrap_angle(0.25) - 0.25).abs() < 1e-7);
-    }
-}
-
-/// `(n / d, n % d)` for 64-bit integers without the compiler's 64-bit
-/// division routine (`__aeabi_uldivmod`, 0.9 KB of flash on the
-/// Cortex-M4, which divides only 32-bit numbers in hardware): one hardware
-/// division when `n` fits 32 bits, else binary long division (≤ 64 steps).
-/// Exact: the same results as `/` and `%` on every target. `d = 0` gives
-/// `(0, n)` (callers guard against it; no panic).
-///
-/// The device layer's timekeeping (µs since boot, line times) and the
-/// firmware's decimal output use it; the pipeline has no integer division.
-pub const fn div_rem_u64(n: u64, d: u64) -> (u64, u64) {
-    if d == 0 || n < d {
-        return (0, n);
-    }
-    if n <= u32::MAX as u64 {
-        // d ≤ n: both fit 32 bits.
-        let (n, d) = (n as u32, d as u32);
-        return ((n / d) as u64, (n % d) as u64);
-    }
-    if d > u64::MAX >> 1 {
-        // n ≥ d > 2⁶³: the quotient is 1.
-        return (1, n - d);
-    }
-    let (mut q, mut r) = (0u64, 0u64);
-    let mut bit = 64 - n.leading_zeros();
-    while bit > 0 {
-        bit -= 1;
-        // r < d ≤ 2⁶³, so the shift cannot overflow.
-        r = (r << 1) | ((n >> bit) & 1);
-        if r >= d {
-            r -= d;
-            q |= 1 << bit;
-        }
-    }
-    (q, r)
-}
-
-/// `n / d` rounded down, as [`div_rem_u64`]; `d = 0` gives 0.
-#[inline]
-pub const fn div_u64(n: u64, d: u64) -> u64 {
-    div_rem_u64(n, d).0
-}
-
-/// `n / d` rounded up, as [`div_rem_u64`]; `d = 0` gives 0.
-#[inline]
-pub const fn div_ceil_u64(n: u64, d: u64) -> u64 {
-    let (q, r) = div_rem_u64(n, d);
-    if d != 0 && r != 0 {
-        q + 1
-    } else {
-        q
     }
 }
