@@ -105,6 +105,10 @@ declare_stats! {
     /// Lines dropped because the standard deviation of their α exceeds
     /// `Params::max_alpha_sd_deg` (off by default). Not in `D0`.
     rejected_wide,
+    /// Lines dropped as pieces of an arc (a pillar, a curved wall): a chain
+    /// of at least `Params::arc_chain` touching lines that turn the same
+    /// way ([`crate::pipeline::arcs`]). Not in `D0`.
+    rejected_arc,
 }
 
 impl Stats {
@@ -375,6 +379,15 @@ impl Line {
             self.endpoints[1][0],
             self.endpoints[1][1],
         ]
+    }
+
+    /// Distance from this line's last endpoint to `next`'s first (m): how
+    /// far apart the facing ends of consecutive lines are (§8's corner gap).
+    #[inline]
+    pub fn gap_to(&self, next: &Line) -> f32 {
+        let gap_x = next.endpoints[0][0] - self.endpoints[1][0];
+        let gap_y = next.endpoints[0][1] - self.endpoints[1][1];
+        libm::sqrtf(gap_x * gap_x + gap_y * gap_y)
     }
 
     /// Distance between the endpoints (m).

@@ -148,8 +148,14 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             any::<bool>(),
             prop_oneof![Just(0.0f32), 0.0f32..0.02],
         ),
+        // Arcs dropped (issue 14 item 6).
+        (
+            prop_oneof![Just(0u8), 2u8..=8],
+            0.0f32..20.0,
+            20.0f32..=180.0,
+        ),
     )
-        .prop_map(|(a, b, c, d, e)| Params {
+        .prop_map(|(a, b, c, d, e, f)| Params {
             sigma: a.0,
             q: a.1,
             iterations: a.2,
@@ -174,6 +180,9 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             per_turn: false,
             bridge_merge: e.3,
             footprint: e.4,
+            arc_chain: f.0,
+            arc_min_turn_deg: f.1,
+            arc_max_turn_deg: f.2,
         })
 }
 
@@ -442,7 +451,8 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
             + usize::from(s.merges)
             + usize::from(s.line_overflow)
             + usize::from(s.rejected_short)
-            + usize::from(s.rejected_wide),
+            + usize::from(s.rejected_wide)
+            + usize::from(s.rejected_arc),
         "every segment is a line or counted: {:?}",
         s
     );

@@ -466,6 +466,9 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 per_turn: raw[11] & 0x8000_0000 != 0,
                 bridge_merge: flags & 128 != 0,
                 footprint: f32::from_bits(raw[7] ^ raw[9]),
+                arc_chain: (raw[10] >> 24) as u8,
+                arc_min_turn_deg: f32::from_bits(raw[8] ^ raw[10]),
+                arc_max_turn_deg: f32::from_bits(limits[0] ^ raw[3]),
             }
         }
         PARAMS_SANE => Params {
@@ -520,6 +523,12 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
             } else {
                 unit(raw[7].rotate_left(16)) * 0.02
             },
+            arc_chain: match raw[10] >> 28 {
+                0..=3 => 0,
+                k => (k - 2) as u8,
+            },
+            arc_min_turn_deg: unit(raw[8].rotate_left(8)) * 20.0,
+            arc_max_turn_deg: 20.0 + unit(raw[9].rotate_left(8)) * 160.0,
         },
         _ => Params {
             iterations: 1 + (raw[2] % 40) as u16,

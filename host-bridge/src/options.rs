@@ -116,6 +116,35 @@ pub struct ParamArgs {
     /// defaults before both (`Params::V2`)
     #[arg(long)]
     pub no_bridge_merge: bool,
+    /// Fewest consecutive touching lines, turning the same way by
+    /// --arc-turn-deg each, that are taken for an arc (a pillar, a curved
+    /// wall) and dropped; 0 keeps every line, as ALGORITHM.md v2 [default: 3]
+    #[arg(long, value_name = "N", value_parser = arc_chain_parser)]
+    pub arc_chain: Option<u8>,
+    /// Turn between consecutive lines of an arc, smallest and largest
+    /// (degrees) [default: 5,40]
+    #[arg(long, value_name = "MIN,MAX", value_parser = arc_turns_parser)]
+    pub arc_turn_deg: Option<(f32, f32)>,
+}
+
+/// `--arc-chain`: 0 or at least 2.
+fn arc_chain_parser(s: &str) -> std::result::Result<u8, String> {
+    match s.parse::<u8>() {
+        Ok(n) if n != 1 => Ok(n),
+        Ok(_) => Err("1 would drop every line: give 0 (off) or at least 2".into()),
+        Err(e) => Err(format!("{e}: give a count, 0 (off) or 2 to 255")),
+    }
+}
+
+/// `--arc-turn-deg MIN,MAX`, 0 ≤ MIN ≤ MAX ≤ 180.
+fn arc_turns_parser(s: &str) -> std::result::Result<(f32, f32), String> {
+    let parsed = s
+        .split_once(',')
+        .and_then(|(a, b)| Some((a.trim().parse::<f32>().ok()?, b.trim().parse::<f32>().ok()?)));
+    match parsed {
+        Some((lo, hi)) if (0.0..=hi).contains(&lo) && hi <= 180.0 => Ok((lo, hi)),
+        _ => Err("give MIN,MAX in degrees with 0 <= MIN <= MAX <= 180, e.g. 5,40".into()),
+    }
 }
 
 impl ParamArgs {
@@ -156,6 +185,9 @@ impl ParamArgs {
             per_turn: self.per_turn || d.per_turn,
             footprint: self.footprint.unwrap_or(d.footprint),
             bridge_merge: !self.no_bridge_merge && d.bridge_merge,
+            arc_chain: self.arc_chain.unwrap_or(d.arc_chain),
+            arc_min_turn_deg: self.arc_turn_deg.map_or(d.arc_min_turn_deg, |t| t.0),
+            arc_max_turn_deg: self.arc_turn_deg.map_or(d.arc_max_turn_deg, |t| t.1),
             ..d
         };
         p.validate()

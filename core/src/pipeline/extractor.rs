@@ -10,11 +10,12 @@
 //! [`Extractor::run_observed`] hands `D` and the ranges to a callback after
 //! every pass (the scale-space plots of paper Fig. 10).
 
-use crate::features::{Features, Stats, MAX_WINDOWS};
+use crate::features::{Features, Stats, MAX_LINES, MAX_WINDOWS};
 use crate::frame::{Frame, Geometry, MAX_BEAMS};
 #[cfg(feature = "section10")]
 use crate::params::GRAZING_MAX_INCIDENCE_DEG;
 use crate::params::{Params, ValidParams};
+use crate::pipeline::arcs::mark_arcs;
 use crate::pipeline::bearings::TwoLevelBearings;
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
@@ -477,18 +478,27 @@ fn fit_lines<B: BearingTable>(
         }
     }
     // Too short, then (beyond ALGORITHM.md) too uncertain to be useful:
-    // σ_α above the limit. One pass; a line counts for the first it fails.
+    // σ_α above the limit, then on an arc ([`crate::pipeline::arcs`]). One
+    // pass; a line counts for the first it fails.
     let max_var = {
         let sd = params.max_alpha_sd_deg * (core::f32::consts::PI / 180.0);
         sd * sd
     };
-    let (mut short, mut wide) = (0u16, 0u16);
+    // Beyond ALGORITHM.md too: the polylines of curves are no walls.
+    let mut on_arc = [false; MAX_LINES];
+    mark_arcs(&f.lines, params, &mut on_arc);
+    let mut on_arc = on_arc.iter();
+    let (mut short, mut wide, mut arc) = (0u16, 0u16, 0u16);
     f.lines.retain(|l| {
+        let on_arc = on_arc.next().copied().unwrap_or(false);
         if !(l.length() >= params.min_length) {
             short += 1;
             false
         } else if !(l.cov.a <= max_var) {
             wide += 1;
+            false
+        } else if on_arc {
+            arc += 1;
             false
         } else {
             true
@@ -496,6 +506,7 @@ fn fit_lines<B: BearingTable>(
     });
     stats.rejected_short = short;
     stats.rejected_wide = wide;
+    stats.rejected_arc = arc;
 }
 
 /// §8: a corner for each pair of consecutive lines whose facing endpoints are
@@ -503,9 +514,7 @@ fn fit_lines<B: BearingTable>(
 fn find_corners(f: &mut Features, params: &Params, stats: &mut Stats) {
     for (i, pair) in f.lines.windows(2).enumerate() {
         let (l1, l2) = (&pair[0], &pair[1]);
-        let gap_x = l2.endpoints[0][0] - l1.endpoints[1][0];
-        let gap_y = l2.endpoints[0][1] - l1.endpoints[1][1];
-        if !(libm::sqrtf(gap_x * gap_x + gap_y * gap_y) < params.corner_gap) {
+        if !(l1.gap_to(l2) < params.corner_gap) {
             continue;
         }
         match intersect(i as u8, l1, (i + 1) as u8, l2, params.min_corner_angle_deg) {

@@ -86,9 +86,7 @@ fn part_chi2(part: &Line, line: &Line) -> Option<f32> {
 /// closer than `corner_gap` and normals less than `min_corner_angle_deg`
 /// apart (the pair would give an ill-conditioned corner).
 fn collinear_and_touching(prev: &Line, next: &Line, params: &Params) -> bool {
-    let gap_x = next.endpoints[0][0] - prev.endpoints[1][0];
-    let gap_y = next.endpoints[0][1] - prev.endpoints[1][1];
-    let close = libm::sqrtf(gap_x * gap_x + gap_y * gap_y) < params.corner_gap;
+    let close = prev.gap_to(next) < params.corner_gap;
     let apart = libm::fabsf(wrap_angle(next.alpha - prev.alpha));
     close && apart < params.min_corner_angle_deg * (core::f32::consts::PI / 180.0)
 }

@@ -21,6 +21,7 @@
 //! [`crate::features`] and never a later stage; only the extractor knows
 //! them all.
 
+pub mod arcs;
 pub mod bearings;
 pub mod corners;
 pub mod ekf;

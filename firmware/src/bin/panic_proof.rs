@@ -135,6 +135,9 @@ fn any_params() -> Params {
         per_turn: black_box(true),
         bridge_merge: black_box(true),
         footprint: any_f32(),
+        arc_chain: black_box(3),
+        arc_min_turn_deg: any_f32(),
+        arc_max_turn_deg: any_f32(),
     }
 }
 

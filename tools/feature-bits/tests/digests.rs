@@ -18,10 +18,19 @@
 //! the digests before are those of `Params::V2`, checked below, so the old
 //! behaviour stays reachable bit for bit.
 //!
+//! Stop 22: the defaults drop the lines of arcs (`Params::arc_chain`), and
+//! `Stats` gained the counter `rejected_arc`, so every frame's `stats`
+//! line gained `, rejected_arc: 0` where nothing is dropped. The digests
+//! pinned before are checked as they were, at `Params::STOP21` and
+//! `Params::V2`, with that text taken out ([`WithoutArcCounter`]): every
+//! other bit of every frame is as pinned. The new defaults have their own
+//! digests.
+//!
 //! To re-pin after an intended change of results (say why in the commit):
 //! `cargo run --release -p feature-bits -- LOG` and FNV-1a-64 its output
 //! (`feature_bits::digest_of`), or read the digests this test prints.
 
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 #[cfg(not(feature = "libm-trig"))]
@@ -66,6 +75,19 @@ fn log(stem: &str) -> PathBuf {
 /// 30 passes.
 #[cfg(not(feature = "libm-trig"))]
 const PINNED: [(&str, u64, usize); 7] = [
+    ("acapulco-corrected", 0xb35889939f2438c8, 861),
+    ("belgioioso-corrected", 0x2891f8ae17743741, 395),
+    ("csail-corrected", 0xea3db9f40ec2fa01, 406),
+    ("freiburg-101-corrected", 0x1326e4e6916bbdee, 292),
+    ("freiburg-campus-corrected", 0x6f30c7b96e2c31cb, 2008),
+    ("intel-corrected", 0x1be97f919abfbbe6, 910),
+    ("orebro-corrected", 0xee57028d62c2f364, 237),
+];
+
+/// The same at `Params::STOP21` (the defaults of stop 21: no arcs dropped),
+/// without the `rejected_arc` counter ([`WithoutArcCounter`]).
+#[cfg(not(feature = "libm-trig"))]
+const PINNED_STOP21: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x8f0f7db9f9d29277, 861),
     ("belgioioso-corrected", 0xe3bbcf6cdcd894f7, 395),
     ("csail-corrected", 0x86c3cced0b747d9c, 406),
@@ -75,27 +97,106 @@ const PINNED: [(&str, u64, usize); 7] = [
     ("orebro-corrected", 0xd4588364ce8a1fd3, 237),
 ];
 
-/// Every log of `pinned` at `params` (30 passes): the digests that differ.
-fn check_pins(pinned: &[(&str, u64, usize)], params: &lms_core::Params) -> Vec<String> {
+/// A writer that takes `, rejected_arc: 0` out of each line before passing
+/// it on: the feature bits as written before `Stats` had that counter.
+struct WithoutArcCounter<W: Write> {
+    inner: W,
+    line: Vec<u8>,
+}
+
+impl<W: Write> WithoutArcCounter<W> {
+    const TEXT: &'static [u8] = b", rejected_arc: 0";
+
+    fn new(inner: W) -> Self {
+        WithoutArcCounter {
+            inner,
+            line: Vec::new(),
+        }
+    }
+
+    fn flush_line(&mut self) -> io::Result<()> {
+        let line = std::mem::take(&mut self.line);
+        match line.windows(Self::TEXT.len()).position(|w| w == Self::TEXT) {
+            Some(at) => {
+                self.inner.write_all(&line[..at])?;
+                self.inner.write_all(&line[at + Self::TEXT.len()..])
+            }
+            None => self.inner.write_all(&line),
+        }
+    }
+}
+
+impl<W: Write> Write for WithoutArcCounter<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        for &b in buf {
+            self.line.push(b);
+            if b == b'\n' {
+                self.flush_line()?;
+            }
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.flush_line()?;
+        self.inner.flush()
+    }
+}
+
+/// The feature bits of the log at `path` with `params`, hashed, with or
+/// without the `rejected_arc` counter: (digest, frames).
+fn digest(path: &Path, params: &lms_core::Params, without_arc_counter: bool) -> (u64, usize) {
+    let run = |out: &mut dyn Write| {
+        write_log_bits_with(path, params, &mut WriteRef(out)).unwrap_or_else(|e| {
+            panic!(
+                "{}: {e} (../shared must sit beside the repo)",
+                path.display()
+            )
+        })
+    };
+    let mut d = Fnv64::default();
+    let n = if without_arc_counter {
+        let mut w = WithoutArcCounter::new(&mut d);
+        let n = run(&mut w);
+        w.flush().unwrap();
+        n
+    } else {
+        run(&mut d)
+    };
+    (d.0, n)
+}
+
+/// `&mut dyn Write` as a sized writer.
+struct WriteRef<'a>(&'a mut dyn Write);
+
+impl Write for WriteRef<'_> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.0.write(buf)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.0.flush()
+    }
+}
+
+/// Every log of `pinned` at `params` (30 passes), with or without the
+/// `rejected_arc` counter: the digests that differ.
+fn check_pins(
+    pinned: &[(&str, u64, usize)],
+    params: &lms_core::Params,
+    without_arc_counter: bool,
+) -> Vec<String> {
     let mut wrong = Vec::new();
     let params = lms_core::Params {
         iterations: 30,
         ..*params
     };
-    for &(stem, digest, frames) in pinned {
-        let path = log(stem);
-        let mut d = Fnv64::default();
-        let n = write_log_bits_with(&path, &params, &mut d).unwrap_or_else(|e| {
-            panic!(
-                "{}: {e} (../shared must sit beside the repo)",
-                path.display()
-            )
-        });
-        println!("(\"{stem}\", 0x{:016x}, {n}),", d.0);
-        if (d.0, n) != (digest, frames) {
+    for &(stem, pin, frames) in pinned {
+        let (d, n) = digest(&log(stem), &params, without_arc_counter);
+        println!("(\"{stem}\", 0x{d:016x}, {n}),");
+        if (d, n) != (pin, frames) {
             wrong.push(format!(
-                "{stem}: 0x{:016x} over {n} frames, pinned 0x{digest:016x} over {frames}",
-                d.0
+                "{stem}: 0x{d:016x} over {n} frames, pinned 0x{pin:016x} over {frames}"
             ));
         }
     }
@@ -105,13 +206,24 @@ fn check_pins(pinned: &[(&str, u64, usize)], params: &lms_core::Params) -> Vec<S
 #[cfg(not(feature = "libm-trig"))]
 #[test]
 fn feature_bits_of_every_shared_log_are_pinned() {
-    let wrong = check_pins(&PINNED, &lms_core::Params::default());
+    let wrong = check_pins(&PINNED, &lms_core::Params::default(), false);
     assert!(wrong.is_empty(), "results changed:\n{}", wrong.join("\n"));
+}
+
+#[cfg(not(feature = "libm-trig"))]
+#[test]
+fn feature_bits_of_every_shared_log_at_stop_21_are_pinned() {
+    let wrong = check_pins(&PINNED_STOP21, &lms_core::Params::STOP21, true);
+    assert!(
+        wrong.is_empty(),
+        "stop-21 results changed:\n{}",
+        wrong.join("\n")
+    );
 }
 
 #[test]
 fn feature_bits_of_every_shared_log_at_v2_are_pinned() {
-    let wrong = check_pins(&PINNED_V2, &lms_core::Params::V2);
+    let wrong = check_pins(&PINNED_V2, &lms_core::Params::V2, true);
     assert!(
         wrong.is_empty(),
         "v2 results changed:\n{}",
@@ -140,14 +252,17 @@ fn a_changed_bit_changes_the_digest() {
 /// values. (Örebro has no range beyond its limit: its digest is the one at
 /// `Params::default`.) `host-bridge`'s
 /// `extract_cli::per_data_defaults_match_the_pinned_feature_bits` checks
-/// that its `defaults::for_log` gives these same parameters. The last
-/// column is the digest with `Params::V2` otherwise (pinned up to stop 20).
+/// that its `defaults::for_log` gives these same parameters. The last two
+/// columns are the digests with `Params::STOP21` and `Params::V2`
+/// otherwise (pinned at stop 21 and up to stop 20), without the
+/// `rejected_arc` counter ([`WithoutArcCounter`]).
 #[cfg(not(feature = "libm-trig"))]
-const PINNED_PER_DATA: [(&str, f32, f32, u64, u64); 7] = [
+const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
     (
         "acapulco-corrected",
         0.030000001,
         50.0,
+        0x456597c9d8b236ef,
         0xcfa1b3384b29e6f2,
         0xbb10e8ac21ee7a2d,
     ),
@@ -155,6 +270,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64); 7] = [
         "belgioioso-corrected",
         0.01,
         81.83,
+        0x75938ce6a1c5b4a5,
         0xcf25f846ba026f7e,
         0x537d9d69c2ff323b,
     ),
@@ -162,6 +278,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64); 7] = [
         "csail-corrected",
         0.01,
         81.83,
+        0x455f886c86dfd6df,
         0x5498b108e1913fa7,
         0xd99b305f2acf4ee8,
     ),
@@ -169,6 +286,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64); 7] = [
         "freiburg-101-corrected",
         0.01,
         81.83,
+        0x0362fee13d4c4d67,
         0x466d8dff9805249e,
         0x7ef20b88b6223797,
     ),
@@ -176,6 +294,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64); 7] = [
         "freiburg-campus-corrected",
         0.01,
         81.83,
+        0x25f8056abd522a73,
         0x9e88244309cea3ee,
         0xbe0ab76a3c025330,
     ),
@@ -183,6 +302,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64); 7] = [
         "intel-corrected",
         0.01,
         81.83,
+        0x95bb851e351bd0cb,
         0xe90a374b585ed343,
         0x5d105f0e8dcf1438,
     ),
@@ -190,6 +310,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64); 7] = [
         "orebro-corrected",
         0.005,
         32.759,
+        0xee57028d62c2f364,
         0xd4588364ce8a1fd3,
         0xb82e116bd3e06034,
     ),
@@ -199,15 +320,17 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64); 7] = [
 #[test]
 fn feature_bits_at_the_per_data_defaults_are_pinned() {
     let mut wrong = Vec::new();
-    for (stem, sigma, max_range, digest, digest_v2) in PINNED_PER_DATA {
+    for (stem, sigma, max_range, pin, pin_stop21, pin_v2) in PINNED_PER_DATA {
         let path = log(stem);
         let params = per_data_params(&path).unwrap();
-        let mut d = Fnv64::default();
-        write_log_bits_with(&path, &params, &mut d).unwrap();
+        let stop21 = lms_core::Params {
+            arc_chain: 0,
+            ..params
+        };
         let v2 = lms_core::Params {
             bridge_merge: false,
             footprint: 0.0,
-            ..params
+            ..stop21
         };
         assert_eq!(
             v2,
@@ -217,17 +340,21 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
                 ..lms_core::Params::V2
             }
         );
-        let mut d2 = Fnv64::default();
-        write_log_bits_with(&path, &v2, &mut d2).unwrap();
+        let (d, _) = digest(&path, &params, false);
+        let (d21, _) = digest(&path, &stop21, true);
+        let (d2, _) = digest(&path, &v2, true);
         println!(
-            "(\"{stem}\", {:?}, {:?}, 0x{:016x}, 0x{:016x}),",
-            params.sigma, params.max_range, d.0, d2.0
+            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d21:016x}, 0x{d2:016x}),",
+            params.sigma, params.max_range
         );
-        if (params.sigma, params.max_range, d.0, d2.0) != (sigma, max_range, digest, digest_v2) {
+        if (params.sigma, params.max_range, d, d21, d2)
+            != (sigma, max_range, pin, pin_stop21, pin_v2)
+        {
             wrong.push(format!(
-                "{stem}: σ {} m, max_range {} m, 0x{:016x}, v2 0x{:016x}; pinned {sigma}, \
-                 {max_range}, 0x{digest:016x}, v2 0x{digest_v2:016x}",
-                params.sigma, params.max_range, d.0, d2.0
+                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, stop 21 0x{d21:016x}, v2 \
+                 0x{d2:016x}; pinned {sigma}, {max_range}, 0x{pin:016x}, 0x{pin_stop21:016x}, \
+                 0x{pin_v2:016x}",
+                params.sigma, params.max_range
             ));
         }
         // Only σ and the range limit come from the data.
