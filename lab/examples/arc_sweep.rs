@@ -28,6 +28,15 @@ fn variants() -> Vec<(&'static str, Adjust)> {
             arc_max_turn_deg: 60.0,
             ..p
         }),
+        ("defaults + per turn", |p| Params {
+            per_turn: true,
+            ..p
+        }),
+        ("stop 21 + per turn", |p| Params {
+            per_turn: true,
+            arc_chain: 0,
+            ..p
+        }),
     ]
 }
 

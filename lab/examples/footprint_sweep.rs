@@ -3,6 +3,8 @@
 //! each alone, together at κ = 2–5 mrad, and with per-turn extraction, on
 //! the realistic synthetic scenes (100 scans per family and σ₀) and the
 //! real logs' map truth, pooled (`docs/ALGORITHM-v3-section10.md` §10.7).
+//! Measured at stop 21, before the lines of arcs were dropped: every
+//! variant has `arc_chain: 0` (`arc_sweep` measures that step).
 //!
 //! `cargo run --release -p lms-lab --example footprint_sweep -- [EVERY] [SCANS]`
 
@@ -17,37 +19,48 @@ fn variants() -> Vec<(&'static str, Adjust)> {
         ("v2 (Params::V2)", |p| Params {
             footprint: 0.0,
             bridge_merge: false,
+            arc_chain: 0,
             ..p
         }),
         ("v2 + bridge", |p| Params {
             footprint: 0.0,
+            arc_chain: 0,
             ..p
         }),
         ("v2 + footprint 3 mrad", |p| Params {
             bridge_merge: false,
+            arc_chain: 0,
             ..p
         }),
-        ("defaults (footprint 3 mrad + bridge)", |p| p),
+        ("defaults (footprint 3 mrad + bridge)", |p| Params {
+            arc_chain: 0,
+            ..p
+        }),
         ("footprint 2 mrad + bridge", |p| Params {
             footprint: 0.002,
+            arc_chain: 0,
             ..p
         }),
         ("footprint 4 mrad + bridge", |p| Params {
             footprint: 0.004,
+            arc_chain: 0,
             ..p
         }),
         ("footprint 5 mrad + bridge", |p| Params {
             footprint: 0.005,
+            arc_chain: 0,
             ..p
         }),
         ("defaults + per turn", |p| Params {
             per_turn: true,
+            arc_chain: 0,
             ..p
         }),
         ("v2 + per turn", |p| Params {
             footprint: 0.0,
             bridge_merge: false,
             per_turn: true,
+            arc_chain: 0,
             ..p
         }),
     ]

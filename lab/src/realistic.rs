@@ -74,9 +74,9 @@ pub fn sample(
     Ok(Sample { frame, ..plain })
 }
 
-/// The methods: ALGORITHM.md v1's defaults, v2's (`Params::V2`), the
-/// defaults with the §10 (e), (f) weights and merge, §10 options on them,
-/// split-and-merge.
+/// The methods: ALGORITHM.md v1's defaults, v2's (`Params::V2`), stop
+/// 21's (§10 (e), (f): `Params::STOP21`), the defaults (those and the lines
+/// of arcs dropped), §10 options on them, split-and-merge.
 pub fn methods() -> Vec<Method> {
     vec![
         Method::with("v1 defaults (Params::V1)", Kind::Core, |p| Params {
@@ -86,6 +86,12 @@ pub fn methods() -> Vec<Method> {
         Method::with("v2 defaults (Params::V2)", Kind::Core, |p| Params {
             sigma: p.sigma,
             ..Params::V2
+        }),
+        Method::with("stop-21 defaults (Params::STOP21)", Kind::Core, |p| {
+            Params {
+                sigma: p.sigma,
+                ..Params::STOP21
+            }
         }),
         Method::with("defaults (Params::default)", Kind::Core, |p| Params {
             sigma: p.sigma,

@@ -31,10 +31,12 @@
 //! # Methods
 //! `no flags` is what `host-bridge extract LOG` does without options
 //! ([`no_flag_params`]: the defaults — ALGORITHM.md v2's `split_depth = 8`,
-//! `fit_shared_points = false`, and since stop 21 the footprint weights and
-//! the merge across rejected segments of §10 (e), (f) — with σ and
-//! `max_range` from the data); `v2` is the same with [`Params::V2`]'s
-//! footprint and merge (the defaults up to stop 20); `v1` is
+//! `fit_shared_points = false`, since stop 21 the footprint weights and
+//! the merge across rejected segments of §10 (e), (f), since stop 22 the
+//! lines of arcs dropped — with σ and `max_range` from the data); `stop 21`
+//! is the same without dropping arcs ([`Params::STOP21`]); `v2` the same
+//! with [`Params::V2`]'s footprint and merge (the defaults up to stop 20);
+//! `v1` is
 //! [`Params::V1`], the defaults before v2; `σ by unit` is 10 mm for
 //! cm logs and 5 mm for mm logs ([`crate::real::sigma_for`]); the oracle is a
 //! total-least-squares fit to each counted piece's own on-wall hits — what
@@ -141,7 +143,10 @@ impl RealMethod {
 }
 
 /// Name of the no-flags method.
-pub const NO_FLAGS: &str = "defaults, no flags (per data; footprint + bridge)";
+pub const NO_FLAGS: &str = "defaults, no flags (per data; footprint + bridge + arcs)";
+/// Name of the no-flags method with the defaults of stop 21
+/// (`Params::STOP21`: no lines of arcs dropped).
+pub const STOP21_NO_FLAGS: &str = "stop-21 defaults, no flags (--arc-chain 0)";
 /// Name of the no-flags method with the defaults up to stop 20
 /// (`Params::V2`: no footprint weights, no merge across rejected segments).
 pub const V2_NO_FLAGS: &str = "v2 defaults, no flags (per data)";
@@ -172,9 +177,11 @@ pub fn methods() -> Vec<RealMethod> {
     let own = SigmaChoice::Base;
     vec![
         m(NO_FLAGS, Core, NoFlags, own),
+        g(STOP21_NO_FLAGS, |p| Params { arc_chain: 0, ..p }),
         g(V2_NO_FLAGS, |p| Params {
             footprint: 0.0,
             bridge_merge: false,
+            arc_chain: 0,
             ..p
         }),
         m(V1_NO_FLAGS, Core, V1, own),
@@ -223,6 +230,7 @@ pub fn methods() -> Vec<RealMethod> {
             per_turn: true,
             footprint: 0.0,
             bridge_merge: false,
+            arc_chain: 0,
             ..p
         }),
         m(ORACLE, Oracle, NoFlags, own),

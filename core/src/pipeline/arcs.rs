@@ -14,21 +14,20 @@
 //! direction, is dropped and counted (`Stats::rejected_arc`). Two lines
 //! alone are kept: an obtuse corner looks the same.
 //!
-//! Runs on the lines §7 accepted and merged, with the length and σ_α gates
-//! (one pass drops a line for the first of them it fails), and before §8
-//! (no corner is reported on an arc). f32, fixed order, no allocation.
+//! Runs on the lines §7 kept (accepted, merged, long and certain enough)
+//! and before §8 (no corner is reported on an arc). f32, fixed order, no
+//! allocation.
 
 use crate::features::{Line, MAX_LINES};
 use crate::params::Params;
 
 /// Mark in `on_arc` (entry `k`: line `k`) the lines of `lines` (scan
-/// order) that belong to an arc. The caller drops them with its other
-/// gates, in one pass over the lines.
+/// order) that belong to an arc; returns how many.
 #[inline(never)]
-pub fn mark_arcs(lines: &[Line], params: &Params, on_arc: &mut [bool; MAX_LINES]) {
+pub fn mark_arcs(lines: &[Line], params: &Params, on_arc: &mut [bool; MAX_LINES]) -> u16 {
     let chain = usize::from(params.arc_chain);
     if chain < 2 {
-        return;
+        return 0;
     }
     let deg = core::f32::consts::PI / 180.0;
     let (min_turn, max_turn) = (params.arc_min_turn_deg * deg, params.arc_max_turn_deg * deg);
@@ -57,6 +56,7 @@ pub fn mark_arcs(lines: &[Line], params: &Params, on_arc: &mut [bool; MAX_LINES]
         (start, last_turn) = if linked { (k, turn) } else { (k + 1, 0.0) };
     }
     close(start, lines.len().saturating_sub(1));
+    on_arc.iter().filter(|&&f| f).count() as u16
 }
 
 /// `b − a` wrapped into (−π, π] for `a`, `b` in (−π, π] (a line's α):
@@ -83,10 +83,10 @@ mod tests {
     /// Drop the arcs' lines as the extractor does; how many.
     fn drop_arcs(lines: &mut Vec<Line, MAX_LINES>, params: &Params) -> u16 {
         let mut on_arc = [false; MAX_LINES];
-        mark_arcs(lines, params, &mut on_arc);
+        let n = mark_arcs(lines, params, &mut on_arc);
         let mut flags = on_arc.iter();
         lines.retain(|_| !flags.next().copied().unwrap_or(false));
-        on_arc.iter().filter(|&&f| f).count() as u16
+        n
     }
 
     /// A line from `(x0, y0)` to `(x1, y1)` (its α, r from the segment).

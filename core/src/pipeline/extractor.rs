@@ -478,27 +478,19 @@ fn fit_lines<B: BearingTable>(
         }
     }
     // Too short, then (beyond ALGORITHM.md) too uncertain to be useful:
-    // σ_α above the limit, then on an arc ([`crate::pipeline::arcs`]). One
-    // pass; a line counts for the first it fails.
+    // σ_α above the limit. One pass; a line counts for the first it fails.
+    // Then the lines of arcs among those kept ([`crate::pipeline::arcs`]).
     let max_var = {
         let sd = params.max_alpha_sd_deg * (core::f32::consts::PI / 180.0);
         sd * sd
     };
-    // Beyond ALGORITHM.md too: the polylines of curves are no walls.
-    let mut on_arc = [false; MAX_LINES];
-    mark_arcs(&f.lines, params, &mut on_arc);
-    let mut on_arc = on_arc.iter();
-    let (mut short, mut wide, mut arc) = (0u16, 0u16, 0u16);
+    let (mut short, mut wide) = (0u16, 0u16);
     f.lines.retain(|l| {
-        let on_arc = on_arc.next().copied().unwrap_or(false);
         if !(l.length() >= params.min_length) {
             short += 1;
             false
         } else if !(l.cov.a <= max_var) {
             wide += 1;
-            false
-        } else if on_arc {
-            arc += 1;
             false
         } else {
             true
@@ -506,7 +498,14 @@ fn fit_lines<B: BearingTable>(
     });
     stats.rejected_short = short;
     stats.rejected_wide = wide;
-    stats.rejected_arc = arc;
+    // Beyond ALGORITHM.md too: the polylines of curves are no walls.
+    let mut on_arc = [false; MAX_LINES];
+    let arcs = mark_arcs(&f.lines, params, &mut on_arc);
+    if arcs > 0 {
+        let mut on_arc = on_arc.iter();
+        f.lines.retain(|_| !on_arc.next().copied().unwrap_or(false));
+    }
+    stats.rejected_arc = arcs;
 }
 
 /// §8: a corner for each pair of consecutive lines whose facing endpoints are

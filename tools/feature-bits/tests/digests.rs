@@ -75,12 +75,12 @@ fn log(stem: &str) -> PathBuf {
 /// 30 passes.
 #[cfg(not(feature = "libm-trig"))]
 const PINNED: [(&str, u64, usize); 7] = [
-    ("acapulco-corrected", 0xb35889939f2438c8, 861),
-    ("belgioioso-corrected", 0x2891f8ae17743741, 395),
-    ("csail-corrected", 0xea3db9f40ec2fa01, 406),
-    ("freiburg-101-corrected", 0x1326e4e6916bbdee, 292),
-    ("freiburg-campus-corrected", 0x6f30c7b96e2c31cb, 2008),
-    ("intel-corrected", 0x1be97f919abfbbe6, 910),
+    ("acapulco-corrected", 0x24ed53cce9a29316, 861),
+    ("belgioioso-corrected", 0x2743f09b450eb760, 395),
+    ("csail-corrected", 0x58173c8a6729017c, 406),
+    ("freiburg-101-corrected", 0xf3e45852f2fb8d7d, 292),
+    ("freiburg-campus-corrected", 0x79697a5bde364063, 2008),
+    ("intel-corrected", 0xad71a8bdfa4237b8, 910),
     ("orebro-corrected", 0xee57028d62c2f364, 237),
 ];
 
@@ -270,7 +270,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "belgioioso-corrected",
         0.01,
         81.83,
-        0x75938ce6a1c5b4a5,
+        0xc2c8950c6374724d,
         0xcf25f846ba026f7e,
         0x537d9d69c2ff323b,
     ),
@@ -278,7 +278,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "csail-corrected",
         0.01,
         81.83,
-        0x455f886c86dfd6df,
+        0xeed794a1b8ba1c99,
         0x5498b108e1913fa7,
         0xd99b305f2acf4ee8,
     ),
@@ -286,7 +286,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "freiburg-101-corrected",
         0.01,
         81.83,
-        0x0362fee13d4c4d67,
+        0x47dce9c54f84e796,
         0x466d8dff9805249e,
         0x7ef20b88b6223797,
     ),
@@ -294,7 +294,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "freiburg-campus-corrected",
         0.01,
         81.83,
-        0x25f8056abd522a73,
+        0x43b22e4e673cb55e,
         0x9e88244309cea3ee,
         0xbe0ab76a3c025330,
     ),
@@ -302,7 +302,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "intel-corrected",
         0.01,
         81.83,
-        0x95bb851e351bd0cb,
+        0xe3cf0b3e0d27c2db,
         0xe90a374b585ed343,
         0x5d105f0e8dcf1438,
     ),
@@ -342,6 +342,13 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
         );
         let (d, _) = digest(&path, &params, false);
         let (d21, _) = digest(&path, &stop21, true);
+        // No line of these logs is taken for an arc: but for the counter,
+        // the defaults give the features of stop 21, bit for bit.
+        assert_eq!(
+            digest(&path, &params, true).0,
+            pin_stop21,
+            "{stem}: a line of a real log dropped as an arc"
+        );
         let (d2, _) = digest(&path, &v2, true);
         println!(
             "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d21:016x}, 0x{d2:016x}),",
