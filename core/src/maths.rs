@@ -412,9 +412,13 @@ pub const fn div_rem_u64(n: u64, d: u64) -> (u64, u64) {
         return (0, n);
     }
     if n <= u32::MAX as u64 {
-        // d ≤ n: both fit 32 bits.
+        // d ≤ n: both fit 32 bits (`checked_`: no panic path for the
+        // firmware's link-time check, though `d ≠ 0` here).
         let (n, d) = (n as u32, d as u32);
-        return ((n / d) as u64, (n % d) as u64);
+        return match (n.checked_div(d), n.checked_rem(d)) {
+            (Some(q), Some(r)) => (q as u64, r as u64),
+            _ => (0, n as u64),
+        };
     }
     if d > u64::MAX >> 1 {
         // n ≥ d > 2⁶³: the quotient is 1.
