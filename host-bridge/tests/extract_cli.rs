@@ -439,9 +439,9 @@ fn extract_json_of_every_shared_log_is_pinned() {
             let out = run(&[&["extract", path][..], flags].concat());
             assert!(out.status.success(), "{stem}: {}", common::stderr(&out));
             let text = if flags.is_empty() {
-                out.stdout.clone()
+                std::borrow::Cow::Borrowed(&out.stdout[..])
             } else {
-                without_arc_counter(&out.stdout)
+                std::borrow::Cow::Owned(without_arc_counter(&out.stdout))
             };
             let digest = feature_bits::digest_of(&text[..]).unwrap();
             println!(
