@@ -80,16 +80,15 @@ pub struct Params {
     /// otherwise a non-default value fails validation
     /// ([`ParamError::NotInBuild`]).
     pub grazing_noise: f32,
-    /// Same-turn windows (ALGORITHM.md §10 proposal,
-    /// `docs/ALGORITHM-v3-section10.md`): in the modes that interleave
-    /// mirror turns (0.5°: two, 0.25°: four), window `i` is the beams
-    /// `i, i+k, i+2k` of one turn (`k` turns, the filter's angle `k·γ`),
-    /// so the offset between turns (platform motion in 13.3 ms) is no
-    /// break. `false` is §2–6 (v1, v2); 1° modes are the same either way.
-    ///
-    /// Only with feature `section10` (host crates; not the firmware):
-    /// otherwise a non-default value fails validation
-    /// ([`ParamError::NotInBuild`]).
+    /// Same-turn windows (ALGORITHM.md §10 (c), the default since stop 23,
+    /// `docs/ALGORITHM-v3-section10.md` §10.9): in the modes that
+    /// interleave mirror turns (0.5°: two, 0.25°: four), window `i` is the
+    /// beams `i, i+k, i+2k` of one turn (`k` turns, the filter's angle
+    /// `k·γ`), so the offset between turns (platform motion in 13.3 ms) is
+    /// no break; a run of windows covers every beam of its windows up to
+    /// its neighbours ([`crate::pipeline::segmentation::segment_strided`]).
+    /// `false` is §2–6 (v1, v2, [`Params::STOP22`]); 1° modes are the same
+    /// either way.
     pub same_turn_windows: bool,
     /// Range noise of the line fits and their tests (m; §7, split, merge;
     /// ALGORITHM.md §10 proposal): the raw ranges of both mirror turns
@@ -193,7 +192,7 @@ impl Params {
     /// The defaults, usable in `const` contexts: ALGORITHM.md v2 with the
     /// project's measured additions (`merge_collinear`, `max_alpha_sd_deg`,
     /// since stop 21 `bridge_merge` and `footprint`, §10 (e) and (f), and
-    /// since stop 22 `arc_chain`).
+    /// since stop 22 `arc_chain`, since stop 23 `same_turn_windows`).
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
@@ -213,7 +212,7 @@ impl Params {
         merge_collinear: true,
         max_alpha_sd_deg: 5.0 / 3.0,
         grazing_noise: 0.0,
-        same_turn_windows: false,
+        same_turn_windows: true,
         fit_sigma: 0.0,
         per_turn: false,
         bridge_merge: true,
@@ -223,10 +222,17 @@ impl Params {
         arc_max_turn_deg: 40.0,
     };
 
-    /// The defaults of stop 21: [`Params::DEFAULT`] without dropping arcs.
+    /// The defaults of stop 22: [`Params::DEFAULT`] with the windows of
+    /// §2–6 (consecutive beams) in every mode.
+    pub const STOP22: Params = Params {
+        same_turn_windows: false,
+        ..Params::DEFAULT
+    };
+
+    /// The defaults of stop 21: [`Params::STOP22`] without dropping arcs.
     pub const STOP21: Params = Params {
         arc_chain: 0,
-        ..Params::DEFAULT
+        ..Params::STOP22
     };
 
     /// The defaults before §10 (e) and (f) (up to stop 20): ALGORITHM.md v2
@@ -300,8 +306,8 @@ pub enum ParamError {
     /// `arc_chain` must be 0 or ≥ 2, and `0 ≤ arc_min_turn_deg ≤
     /// arc_max_turn_deg ≤ 180`.
     Arc,
-    /// An ALGORITHM.md §10 option (`same_turn_windows`, `grazing_noise`,
-    /// `fit_sigma`, `per_turn`; named by `option`) has a non-default value, but this
+    /// An ALGORITHM.md §10 option (`grazing_noise`, `fit_sigma`,
+    /// `per_turn`; named by `option`) has a non-default value, but this
     /// build of the core leaves the §10 options out (feature `section10`
     /// off, as in the firmware).
     NotInBuild {
@@ -490,9 +496,7 @@ impl Params {
         }
         if !cfg!(feature = "section10") {
             // Never a silent difference: a §10 option this build leaves out.
-            let option = if self.same_turn_windows {
-                Some("same_turn_windows")
-            } else if self.grazing_noise != 0.0 {
+            let option = if self.grazing_noise != 0.0 {
                 Some("grazing_noise")
             } else if self.fit_sigma != 0.0 {
                 Some("fit_sigma")

@@ -25,8 +25,9 @@ use crate::pipeline::segmentation::{EdgeList, Segmenter};
 use crate::pipeline::smoothing::{
     smoothing_pass, usable, usable_windows, WindowSink, WINDOW_WORDS,
 };
-#[cfg(feature = "section10")]
-use crate::pipeline::smoothing::{smoothing_pass_strided, usable_windows_strided};
+use crate::pipeline::smoothing::{
+    interleaved_turns, smoothing_pass_strided, usable_windows_strided,
+};
 use crate::pipeline::split::split_before_reject;
 
 /// All working memory of the pipeline, reused frame after frame.
@@ -224,7 +225,7 @@ impl Extractor {
     where
         F: FnMut(u16, &[f32], &[f32]),
     {
-        use crate::pipeline::turns::{interleaved_turns, turn_frame, TurnsMerged};
+        use crate::pipeline::turns::{turn_frame, TurnsMerged};
         if !params.per_turn {
             return false;
         }
@@ -361,32 +362,23 @@ impl ScaleSpace<'_> {
     ) {
         let (beams, raw) = (frame.beams(), frame.ranges());
         let ok = &mut *self.window_ok;
-        #[cfg(feature = "section10")]
         if stride != 1 {
             usable_windows_strided(beams, raw, params.max_range, stride, windows, ok);
             return;
         }
-        let _ = stride; // always 1 without the §10 options
         usable_windows(beams, raw, params.max_range, windows, ok);
     }
 }
 
-/// The window stride (§10 proposal): the number of interleaved mirror
-/// turns (`1°/step`: 2 at 0.5°, 4 at 0.25°, the LMS's interleaved modes)
-/// with `Params::same_turn_windows`, else 1. Other steps have no
-/// interleave to follow (and so no strided pass to carry in flash).
-#[cfg(not(feature = "section10"))]
-fn window_stride(_: &Params, _: Geometry) -> usize {
-    1
-}
-
-/// [`window_stride`] with the §10 options built in.
-#[cfg(feature = "section10")]
+/// The window stride: the number of interleaved mirror turns (`1°/step`:
+/// 2 at 0.5°, 4 at 0.25°, the LMS's interleaved modes) with
+/// `Params::same_turn_windows` (the default), else 1. Other steps have no
+/// interleave to follow.
 fn window_stride(params: &Params, geometry: Geometry) -> usize {
     if !params.same_turn_windows {
         return 1;
     }
-    crate::pipeline::turns::interleaved_turns(geometry.step)
+    interleaved_turns(geometry.step)
 }
 
 /// The window filter for windows `step` apart (rad): §3, with the §10
@@ -401,8 +393,8 @@ fn window_filter(params: &Params, step: f32) -> WindowFilter {
     filter
 }
 
-/// One smoothing pass: §4 as specified unless a §10 option is on (a
-/// stride above 1 or the grazing term: the strided passes).
+/// One smoothing pass: §4 as specified at stride 1, the same-turn pass
+/// at a stride above 1 (or with the §10 grazing term).
 #[inline(always)]
 fn run_pass(
     filter: &WindowFilter,
@@ -412,16 +404,13 @@ fn run_pass(
     d: &mut dyn WindowSink,
 ) {
     #[cfg(feature = "section10")]
-    if stride != 1 || filter.grazing_on() {
-        match stride {
-            2 => smoothing_pass_strided::<2>(filter, ok, r, d),
-            4 => smoothing_pass_strided::<4>(filter, ok, r, d),
-            _ => smoothing_pass_strided::<1>(filter, ok, r, d),
-        }
-        return;
+    let grazing = filter.grazing_on();
+    #[cfg(not(feature = "section10"))]
+    let grazing = false;
+    match (stride, grazing) {
+        (1, false) => smoothing_pass(filter, ok, r, d),
+        _ => smoothing_pass_strided(filter, stride, ok, r, d),
     }
-    let _ = stride; // always 1 without the §10 options
-    smoothing_pass(filter, ok, r, d);
 }
 
 /// Beams of `frame` that are valid and below `max_range`, and valid beams

@@ -65,10 +65,15 @@ pub fn segment<const S: usize, L: EdgeList>(
 
 /// [`segment`] for windows of stride `stride` (§10 proposal): window `i`
 /// is beams `i, i + stride, i + 2·stride` with middle beam `i + stride`. A
-/// run of windows `i..=k` covers the middle beams of its windows and one
-/// beam either side, `i + stride − 1 ..= k + stride + 1` (so two segments
-/// share at most one point, as in §6); the edge point of a breaking window
-/// is its middle beam. `stride = 1` is §6.
+/// run of windows `i..=k` is kept if it holds at least `min_points − 2`
+/// windows (as many as §6 asks at stride 1) and covers the beams of its
+/// windows, `i ..= k + 2·stride`, except where that reaches into a
+/// neighbour: its first beam is at least the previous kept segment's last
+/// (the two share at most one point, as in §6) and its last at most
+/// `j + stride − 1` for a next run from window `j` (the first beam of that
+/// run's middle beams). So a corner point is shared as in §6 and a jump
+/// leaves none. The edge point of a breaking window is its middle beam.
+/// `stride = 1` is §6.
 // Never inlined: the §10 option must not grow the extractor's stack frame.
 #[inline(never)]
 pub fn segment_strided<const S: usize, L: EdgeList>(
@@ -95,6 +100,10 @@ pub struct Segmenter<'a, const S: usize, L: EdgeList> {
     tau: f32,
     min_points: u16,
     run_start: Option<usize>,
+    /// The last closed run, its last beam not yet bounded by the next run.
+    pending: Option<Segment>,
+    /// Last beam of the last kept segment.
+    kept_last: Option<u16>,
     counts: SegmentationCounts,
     invalid: u16,
     segments: &'a mut Vec<Segment, S>,
@@ -118,6 +127,8 @@ impl<'a, const S: usize, L: EdgeList> Segmenter<'a, S, L> {
             tau,
             min_points,
             run_start: None,
+            pending: None,
+            kept_last: None,
             counts: SegmentationCounts::default(),
             invalid: 0,
             segments,
@@ -136,7 +147,11 @@ impl<'a, const S: usize, L: EdgeList> Segmenter<'a, S, L> {
             self.counts.edge_overflow = self.counts.edge_overflow.saturating_add(1);
         }
         match (breaks, self.run_start) {
-            (false, None) => self.run_start = Some(i),
+            (false, None) => {
+                // The closed run ends before this run's middle beams.
+                self.emit_pending((i + self.stride - 1) as u16);
+                self.run_start = Some(i);
+            }
             (true, Some(start)) => self.close(start, i),
             _ => {}
         }
@@ -152,20 +167,39 @@ impl<'a, const S: usize, L: EdgeList> Segmenter<'a, S, L> {
         if let Some(start) = self.run_start.take() {
             self.close(start, windows);
         }
+        self.emit_pending(u16::MAX);
         self.counts
     }
 
-    /// The run of windows `start..end` as a segment.
+    /// The run of windows `start..end`: every beam of its windows, from
+    /// the last kept segment's last beam on; kept back until the next run
+    /// bounds its end.
     fn close(&mut self, start: usize, end: usize) {
         self.run_start = None;
-        let seg = Segment {
-            first: (start + self.stride - 1) as u16,
-            last: (end + self.stride) as u16,
+        // As many windows as §6 asks of a run at stride 1.
+        if end - start + 2 < self.min_points as usize {
+            self.counts.short_segments = self.counts.short_segments.saturating_add(1);
+            return;
+        }
+        let first = start as u16;
+        self.pending = Some(Segment {
+            first: self.kept_last.map_or(first, |last| first.max(last)),
+            last: (end + 2 * self.stride - 1) as u16,
+        });
+    }
+
+    /// Keep or drop the closed run, its last beam at most `bound`.
+    fn emit_pending(&mut self, bound: u16) {
+        let Some(mut seg) = self.pending.take() else {
+            return;
         };
+        seg.last = seg.last.min(bound);
         if seg.points() < self.min_points as usize {
             self.counts.short_segments = self.counts.short_segments.saturating_add(1);
         } else if self.segments.push(seg).is_err() {
             self.counts.segment_overflow = self.counts.segment_overflow.saturating_add(1);
+        } else {
+            self.kept_last = Some(seg.last);
         }
     }
 }
@@ -237,7 +271,7 @@ mod tests {
     }
 
     #[test]
-    fn strided_runs_cover_their_middle_beams_and_one_more() {
+    fn strided_runs_cover_their_windows_up_to_their_neighbours() {
         let mut segs: Vec<Segment, 8> = Vec::new();
         let mut edges: Vec<u16, 16> = Vec::new();
         // Stride 2: windows span 5 beams. A jump between beams 9 and 10
@@ -248,15 +282,15 @@ mod tests {
         }
         let c = segment_strided(&d, 2, 9.0, 5, &mut segs, &mut edges);
         assert_eq!(c, SegmentationCounts::default());
-        // Runs 0..=5 and 10..=19: middles 2..=7 and 12..=21, one beam more
-        // either side; beams 9 and 10 (the jump) in neither.
+        // Runs 0..=5 and 10..=19: every beam of their windows, 0..=9 and
+        // 10..=23; the jump between beams 9 and 10 is in neither.
         assert_eq!(
             segs.as_slice(),
             &[
-                Segment { first: 1, last: 8 },
+                Segment { first: 0, last: 9 },
                 Segment {
-                    first: 11,
-                    last: 22
+                    first: 10,
+                    last: 23
                 }
             ]
         );
@@ -267,6 +301,35 @@ mod tests {
         d1[7] = 50.0;
         segment_strided(&d1, 2, 9.0, 5, &mut segs, &mut edges);
         assert_eq!(segs[0].last, segs[1].first);
+        // A corner at beam 10 breaks the windows 7..=9 (beam 10 strictly
+        // inside): both segments end on it, as at stride 1.
+        let mut dc = [0.0f32; 20];
+        for x in &mut dc[7..=9] {
+            *x = 50.0;
+        }
+        segment_strided(&dc, 2, 9.0, 5, &mut segs, &mut edges);
+        assert_eq!((segs[0].last, segs[1].first), (10, 10));
+        // Two breaking windows 8 and 9: the runs' windows reach over each
+        // other (beams 8..=11); the earlier run keeps them up to the later
+        // run's first middle beam, 11, and the two share that one point.
+        let mut d2 = [0.0f32; 20];
+        d2[8] = 50.0;
+        d2[9] = 50.0;
+        segment_strided(&d2, 2, 9.0, 5, &mut segs, &mut edges);
+        assert_eq!((segs[0].last, segs[1].first), (11, 11));
+        // A run of two windows (7..=8) is too short (min_points 5 asks for
+        // three) and dropped; the run before it still ends before its
+        // middle beams, at 8.
+        let mut d3 = [0.0f32; 20];
+        for i in [6, 9] {
+            d3[i] = 50.0;
+        }
+        let c = segment_strided(&d3, 2, 9.0, 5, &mut segs, &mut edges);
+        assert_eq!(c.short_segments, 1);
+        assert_eq!(segs.as_slice(), &[
+            Segment { first: 0, last: 8 },
+            Segment { first: 10, last: 23 }
+        ]);
         // Stride 1 is §6.
         let mut s1: Vec<Segment, 8> = Vec::new();
         let mut e1: Vec<u16, 16> = Vec::new();

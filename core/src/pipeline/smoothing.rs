@@ -103,8 +103,7 @@ fn usable_spans(
     }
 }
 
-#[cfg(feature = "section10")]
-/// [`usable_windows`] for windows of stride `stride` (§10 proposal), into
+/// [`usable_windows`] for windows of stride `stride` (same-turn windows), into
 /// the same bitset (the first `windows` windows): window
 /// `i` needs every beam of `i..=i + 2·stride` usable, so that a segment
 /// (a run of windows) never spans an unusable beam. `stride = 1` is
@@ -208,17 +207,13 @@ pub fn smoothing_pass(
         // 0 here (its estimates, finite or 0, then add 0 to every point).
         let mut ok = ok; // bit 0: the next window
         let d = &mut block.d[..m];
-        for (w, d) in block.third_weight[2..].iter_mut().zip(d.iter_mut()) {
+        for d in d.iter_mut() {
             if ok & 1 == 0 {
                 *d = f32::INFINITY;
             }
             ok >>= 1;
-            *w = if *d < f32::INFINITY {
-                weight(*d) / 3.0
-            } else {
-                0.0
-            };
         }
+        third_weights(d, &mut block.third_weight[2..]);
         sink.windows(start, d);
         // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
         let Some(points) = ranges.get_mut(start..start + m) else {
@@ -248,11 +243,10 @@ pub fn smoothing_pass(
     }
 }
 
-#[cfg(feature = "section10")]
 /// The weights `w/3` (eq. 11) of windows with `D` in `d` (0 for `+inf`).
 ///
-/// One function for every pass (§4 and the strided ones of §10's
-/// proposal): `expf` then has one call site and is inlined into it. With a
+/// One function for every pass (§4 and the strided same-turn passes):
+/// `expf` then has one call site and is inlined into it. With a
 /// call site in each pass it was not inlined at all (+0.13 M instructions
 /// per scan on the M4F).
 #[inline(never)]
@@ -307,17 +301,28 @@ fn filter_block(filter: &WindowFilter, ranges: &[f32], block: &mut Block, m: usi
     }
 }
 
-#[cfg(feature = "section10")]
 /// Largest window stride of [`smoothing_pass_strided`] (the 0.25° modes'
 /// four interleaved mirror turns).
 pub const MAX_STRIDE: usize = 4;
 
-#[cfg(feature = "section10")]
+/// Mirror turns interleaved at bearing step `step` (rad): 2 at 0.5°, 4 at
+/// 0.25°, else 1 (no interleave to follow). The stride of same-turn windows
+/// (`Params::same_turn_windows`) and the turns of `Params::per_turn`.
+pub fn interleaved_turns(step: f32) -> usize {
+    let turns = (core::f32::consts::PI / 180.0) / step + 0.5;
+    if !(1.0..(MAX_STRIDE + 1) as f32).contains(&turns) {
+        return 1;
+    }
+    match turns as usize {
+        k @ (2 | 4) => k,
+        _ => 1,
+    }
+}
+
 /// Slots before a block's first window: the windows of the previous block
 /// a point still needs (`2·stride` of them).
 const CARRY: usize = 2 * MAX_STRIDE;
 
-#[cfg(feature = "section10")]
 /// Per-block working storage. Slots `CARRY − 2·K .. CARRY` of
 /// `third_weight` and `posterior` carry the last `2·K` windows of the
 /// previous block.
@@ -326,30 +331,31 @@ struct StridedBlock {
     posterior: [[f32; BLOCK + CARRY]; 3],
 }
 
-#[cfg(feature = "section10")]
-/// [`smoothing_pass`] with windows of stride `K` (ALGORITHM.md §10
-/// proposal, `Params::same_turn_windows`): window `i` is beams
+/// [`smoothing_pass`] with windows of stride `K` (same-turn windows,
+/// `Params::same_turn_windows`, the default since stop 23 in the
+/// interleaved 0.5° and 0.25° modes; docs/ALGORITHM-v3-section10.md
+/// §10.9): window `i` is beams
 /// `i, i+K, i+2K` (the filter built for the angle `K·γ`), point `j` is
 /// blended from windows `j, j−K, j−2K` in that order; there are `n − 2K`
 /// windows (the sink hears of no window beyond them; `window_ok` bits
 /// beyond them are ignored). `K = 1` is §4 exactly. `K` above [`MAX_STRIDE`] does nothing.
-// Never inlined: the §10 options must not change how the default pass
-// is compiled into the extractor.
+// Never inlined: one copy per stride, called once per pass.
 #[inline(never)]
-pub fn smoothing_pass_strided<const K: usize>(
+pub fn smoothing_pass_strided(
     filter: &WindowFilter,
+    k: usize,
     window_ok: &[u32],
     ranges: &mut [f32],
     sink: &mut dyn WindowSink,
 ) {
-    if K == 0 || K > MAX_STRIDE {
+    if k == 0 || k > MAX_STRIDE {
         return;
     }
-    let windows = (window_ok.len() * BLOCK).min(ranges.len().saturating_sub(2 * K));
+    let windows = (window_ok.len() * BLOCK).min(ranges.len().saturating_sub(2 * k));
     if windows == 0 {
         return;
     }
-    let n = windows + 2 * K;
+    let n = windows + 2 * k;
     let mut block = StridedBlock {
         third_weight: [0.0; BLOCK + CARRY],
         posterior: [[0.0; BLOCK + CARRY]; 3],
@@ -359,14 +365,14 @@ pub fn smoothing_pass_strided<const K: usize>(
     while start < windows {
         let m = BLOCK.min(windows - start);
         let (Some(points), Some(&ok), Some(d)) = (
-            ranges.get(start..start + m + 2 * K),
+            ranges.get(start..start + m + 2 * k),
             window_ok.get(start / BLOCK),
             d_block.get_mut(..m),
         ) else {
             break; // not reached: `windows` fits all three slices
         };
         // The filter on every window of the block (§2–3).
-        filter_block_strided::<K>(filter, points, ok, &mut block, d);
+        filter_block_strided(filter, k, points, ok, &mut block, d);
         // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
         third_weights(d, &mut block.third_weight[CARRY..]);
         sink.windows(start, d);
@@ -375,13 +381,13 @@ pub fn smoothing_pass_strided<const K: usize>(
             break; // not reached, as above
         };
         for (t, point) in points.iter_mut().enumerate() {
-            *point = blend_strided::<K>(&block, *point, t + CARRY);
+            *point = blend_strided(&block, k, *point, t + CARRY);
         }
         // Carry the last 2K windows into the slots before CARRY.
-        for slot in CARRY - 2 * K..CARRY {
+        for slot in CARRY - 2 * k..CARRY {
             block.third_weight[slot] = block.third_weight[m + slot];
-            for k in 0..3 {
-                block.posterior[k][slot] = block.posterior[k][m + slot];
+            for row in &mut block.posterior {
+                row[slot] = row[m + slot];
             }
         }
         start += m;
@@ -389,32 +395,30 @@ pub fn smoothing_pass_strided<const K: usize>(
     // Points n−2K … n−1 have no window starting at them. The slots before
     // CARRY hold windows n−4K … n−2K−1; the slots from CARRY on stand for
     // absent windows.
-    for w in &mut block.third_weight[CARRY..CARRY + 2 * K] {
+    for w in &mut block.third_weight[CARRY..CARRY + 2 * k] {
         *w = 0.0;
     }
-    for t in 0..2 * K {
-        if let Some(point) = ranges.get_mut(n - 2 * K + t) {
-            *point = blend_strided::<K>(&block, *point, CARRY + t);
+    for t in 0..2 * k {
+        if let Some(point) = ranges.get_mut(n - 2 * k + t) {
+            *point = blend_strided(&block, k, *point, CARRY + t);
         }
     }
 }
 
-#[cfg(feature = "section10")]
 /// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2K`):
 /// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − K`,
 /// `j − 2K`, added in that order. Absent or invalid windows have weight 0
 /// and estimate 0.
 #[inline]
-fn blend_strided<const K: usize>(block: &StridedBlock, d: f32, slot: usize) -> f32 {
+fn blend_strided(block: &StridedBlock, k: usize, d: f32, slot: usize) -> f32 {
     let w = &block.third_weight;
     let x = &block.posterior;
-    let (s1, s2) = (slot - K, slot - 2 * K);
+    let (s1, s2) = (slot - k, slot - 2 * k);
     let weight_sum = w[slot] + w[s1] + w[s2];
     let estimate_sum = w[slot] * x[0][slot] + w[s1] * x[1][s1] + w[s2] * x[2][s2];
     (1.0 - weight_sum) * d + estimate_sum
 }
 
-#[cfg(feature = "section10")]
 /// The window filter on `m` consecutive windows of stride `K`, `ranges`
 /// holding their `m + 2K` points. Writes `D` (or `+inf`) and the estimates
 /// (or 0) of window `t` into `d[t]` and slot `t + CARRY` of the block.
@@ -423,16 +427,17 @@ fn blend_strided<const K: usize>(block: &StridedBlock, d: f32, slot: usize) -> f
 /// masked afterwards. The arithmetic per window is exactly that of
 /// [`WindowFilter::update`].
 #[inline]
-fn filter_block_strided<const K: usize>(
+fn filter_block_strided(
     filter: &WindowFilter,
+    k: usize,
     ranges: &[f32],
     ok: u32,
     block: &mut StridedBlock,
     d: &mut [f32],
 ) {
-    let m = d.len().min(ranges.len().saturating_sub(2 * K)).min(BLOCK);
+    let m = d.len().min(ranges.len().saturating_sub(2 * k)).min(BLOCK);
     // Exactly the block's points: `t + 2K < m + 2K` below needs no check.
-    let Some(ranges) = ranges.get(..m + 2 * K) else {
+    let Some(ranges) = ranges.get(..m + 2 * k) else {
         return;
     };
     // The block's flags unpacked (bit t: window t): the loop stays free of
@@ -441,24 +446,25 @@ fn filter_block_strided<const K: usize>(
     for (t, w) in window_ok.iter_mut().enumerate() {
         *w = (ok >> t) & 1 != 0;
     }
-    filter_windows::<K>(filter, ranges, &window_ok, block, d, m);
+    filter_windows(filter, k, ranges, &window_ok, block, d, m);
 }
 
-#[cfg(feature = "section10")]
 /// The loop of [`filter_block_strided`]; the filter's grazing switch picks
 /// the window's `R` (ALGORITHM.md §3, or with the grazing term of §10's
-/// proposal), a branch per window (this pass is off the default path, and
+/// proposal, feature `section10`), a branch per window (only with the
+/// grazing term built in, and
 /// one loop instead of two keeps its flash small).
 #[inline(always)]
-fn filter_windows<const K: usize>(
+fn filter_windows(
     filter: &WindowFilter,
+    k: usize,
     ranges: &[f32],
     window_ok: &[bool; BLOCK],
     block: &mut StridedBlock,
     d: &mut [f32],
     m: usize,
 ) {
-    let (Some(mids), Some(lasts), Some(d)) = (ranges.get(K..), ranges.get(2 * K..), d.get_mut(..m))
+    let (Some(mids), Some(lasts), Some(d)) = (ranges.get(k..), ranges.get(2 * k..), d.get_mut(..m))
     else {
         return;
     };
@@ -469,15 +475,19 @@ fn filter_windows<const K: usize>(
         .iter_mut()
         .zip(post1[CARRY..].iter_mut())
         .zip(post2[CARRY..].iter_mut());
+    #[cfg(feature = "section10")]
     let grazing = filter.grazing_on();
     let windows = ranges.iter().zip(mids).zip(lasts).zip(window_ok);
     for ((((&a, &b), &c), &ok), (dt, ((p0, p1), p2))) in windows.zip(d.iter_mut().zip(posts)) {
         let z = Vec3([a, b, c]);
+        #[cfg(feature = "section10")]
         let (est, valid) = if grazing {
             filter.update_grazing_unchecked(z)
         } else {
             filter.update_unchecked(z)
         };
+        #[cfg(not(feature = "section10"))]
+        let (est, valid) = filter.update_unchecked(z);
         let keep = valid & ok;
         *dt = if keep { est.mahalanobis } else { f32::INFINITY };
         *p0 = if keep { est.posterior.0[0] } else { 0.0 };
@@ -503,7 +513,6 @@ mod tests {
         r
     }
 
-    #[cfg(feature = "section10")]
     #[test]
     fn stride_two_is_two_independent_sub_scans_bit_for_bit() {
         let n = 41;
@@ -511,7 +520,7 @@ mod tests {
         let mut all = wall(n);
         let ok = [u32::MAX; 2]; // every window usable (the bitset of usable_windows)
         let mut d = [0.0f32; 39];
-        smoothing_pass_strided::<2>(&filter, &ok, &mut all[..n], &mut &mut d[..]);
+        smoothing_pass_strided(&filter, 2, &ok, &mut all[..n], &mut &mut d[..]);
         // The same pass on the even and on the odd beams alone (stride 1).
         let raw = wall(n);
         for parity in 0..2 {
@@ -536,7 +545,6 @@ mod tests {
         }
     }
 
-    #[cfg(feature = "section10")]
     #[test]
     fn stride_one_is_the_spec_pass() {
         let n = 41;
@@ -545,12 +553,11 @@ mod tests {
         let ok = [u32::MAX; 2];
         let (mut da, mut db) = ([0.0f32; 39], [0.0f32; 39]);
         smoothing_pass(&filter, &ok, &mut a[..n], &mut &mut da[..]);
-        smoothing_pass_strided::<1>(&filter, &ok, &mut b[..n], &mut &mut db[..]);
+        smoothing_pass_strided(&filter, 1, &ok, &mut b[..n], &mut &mut db[..]);
         assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits));
         assert_eq!(da.map(f32::to_bits), db.map(f32::to_bits));
     }
 
-    #[cfg(feature = "section10")]
     #[test]
     fn strided_windows_need_every_beam_of_their_span() {
         use crate::frame::{Frame, Invalid, Variant};

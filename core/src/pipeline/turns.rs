@@ -29,21 +29,7 @@ use crate::features::{Features, Line, Segment, Stats, MAX_LINES, MAX_SEGMENTS};
 use crate::frame::{Beam, Frame, Geometry, MAX_BEAMS};
 use crate::maths::{cos_sin, wrap_angle};
 use crate::params::{TURN_FUSE_ALPHA_DEG, TURN_FUSE_R};
-use crate::pipeline::smoothing::MAX_STRIDE;
-
-/// Mirror turns interleaved at bearing step `step` (rad): 2 at 0.5°, 4 at
-/// 0.25°, else 1 (no interleave to follow). The stride of same-turn windows
-/// (`Params::same_turn_windows`) and the turns of `Params::per_turn`.
-pub fn interleaved_turns(step: f32) -> usize {
-    let turns = (core::f32::consts::PI / 180.0) / step + 0.5;
-    if !(1.0..(MAX_STRIDE + 1) as f32).contains(&turns) {
-        return 1;
-    }
-    match turns as usize {
-        k @ (2 | 4) => k,
-        _ => 1,
-    }
-}
+pub use crate::pipeline::smoothing::interleaved_turns;
 
 /// Turn `t` of `k` of `frame` as a frame of its own: its beam `i` is the
 /// frame's beam `k·i + t`, at bearing step `k·γ`. `None` if that leaves
