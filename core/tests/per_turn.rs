@@ -50,9 +50,10 @@ fn a_turn_is_every_kth_beam_with_its_status() {
 fn an_offset_wall_is_one_line_per_turn_and_broken_at_once() {
     // 2 cm between the turns, σ = 1 cm, ripple ±5 mm, incidences up to 75°.
     let frame = interleaved_wall(0.2, 2.0, 0.02, 0.005);
+    // The windows of §2–6 over both turns (the defaults up to stop 22).
     let spec = Params {
         sigma: 0.01,
-        ..Params::DEFAULT
+        ..Params::STOP22
     };
     let valid = frame.beams().iter().filter(|b| b.is_valid()).count();
     let mut ex = Extractor::new();
@@ -63,6 +64,14 @@ fn an_offset_wall_is_one_line_per_turn_and_broken_at_once() {
         longest + 50 < valid,
         "the whole scan at once: longest line {longest} of {valid} beams"
     );
+    // Same-turn windows (the defaults) do not break it either.
+    let same_turn = Params {
+        same_turn_windows: true,
+        ..spec
+    };
+    let f = ex.run(&frame, &same_turn.validate().unwrap()).clone();
+    assert_eq!(f.lines().len(), 1, "{:?}", f.lines());
+    assert!(covered(&f.lines()[0]) + 8 >= valid);
     let f = ex.run(&frame, &per_turn(spec).validate().unwrap()).clone();
     assert_eq!(f.lines().len(), 1, "{:?}", f.lines());
     let l = f.lines()[0];

@@ -112,10 +112,18 @@ pub struct ParamArgs {
     pub footprint: Option<f32>,
     /// Merge consecutive lines only across invalid beams (or at most three
     /// valid ones), as ALGORITHM.md v2 §7.6, not across
-    /// rejected segments (ALGORITHM.md §10 (e)); with --footprint 0 the
-    /// defaults before both (`Params::V2`)
+    /// rejected segments (ALGORITHM.md §10 (e)); with --footprint 0,
+    /// --no-same-turn-windows and --arc-chain 0 the defaults up to stop 20
+    /// (`Params::V2`)
     #[arg(long)]
     pub no_bridge_merge: bool,
+    /// Windows of consecutive beams over both mirror turns in the
+    /// interleaved 0.5° and 0.25° modes, as ALGORITHM.md v2 §2–6, instead
+    /// of windows of one turn (ALGORITHM.md §10 (c),
+    /// docs/ALGORITHM-v3-section10.md §10.9); with --arc-chain 0 the
+    /// defaults of stop 21 (`Params::STOP21`)
+    #[arg(long)]
+    pub no_same_turn_windows: bool,
     /// Fewest consecutive touching lines, turning the same way by
     /// --arc-turn-deg each, that are taken for an arc (a pillar, a curved
     /// wall) and dropped; 0 keeps every line, as ALGORITHM.md v2 [default: 3]
@@ -185,6 +193,7 @@ impl ParamArgs {
             per_turn: self.per_turn || d.per_turn,
             footprint: self.footprint.unwrap_or(d.footprint),
             bridge_merge: !self.no_bridge_merge && d.bridge_merge,
+            same_turn_windows: !self.no_same_turn_windows && d.same_turn_windows,
             arc_chain: self.arc_chain.unwrap_or(d.arc_chain),
             arc_min_turn_deg: self.arc_turn_deg.map_or(d.arc_min_turn_deg, |t| t.0),
             arc_max_turn_deg: self.arc_turn_deg.map_or(d.arc_max_turn_deg, |t| t.1),

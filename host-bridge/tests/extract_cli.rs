@@ -372,42 +372,48 @@ fn without_arc_counter(json: &[u8]) -> Vec<u8> {
 /// `extract LOG` (defaults) on every shared log gives exactly the JSON it
 /// gave when these digests were pinned (FNV-1a-64 of stdout): no field, no
 /// bit of any float may change. Re-pin only for an intended change (last:
-/// the lines of arcs dropped, `--arc-chain`, stop 22; see
-/// tools/feature-bits/tests/digests.rs). The digests before it are what
-/// `--arc-chain 0` gives (stop 21) and `--arc-chain 0 --footprint 0
-/// --no-bridge-merge` (v2), bit for bit once the counter `rejected_arc`
-/// that stop 22 added to every record's `stats` is taken out of the text.
+/// same-turn windows, stop 23; see tools/feature-bits/tests/digests.rs).
+/// The digests before it are what `--no-same-turn-windows` gives (stop 22),
+/// with `--arc-chain 0` (stop 21) and with `--footprint 0
+/// --no-bridge-merge` too (v2), the last two bit for bit once the counter
+/// `rejected_arc` that stop 22 added to every record's `stats` is taken
+/// out of the text.
 #[test]
 fn extract_json_of_every_shared_log_is_pinned() {
-    // (log stem, defaults, `--arc-chain 0`, and with `--footprint 0
-    // --no-bridge-merge`)
-    const PINNED: [(&str, u64, u64, u64); 7] = [
+    // (log stem, defaults, `--no-same-turn-windows`, with `--arc-chain 0`,
+    // and with `--footprint 0 --no-bridge-merge`)
+    const PINNED: [(&str, u64, u64, u64, u64); 7] = [
         (
             "acapulco-corrected",
+            0xc40701c7d173c357,
             0xc40701c7d173c357,
             0xc3929d878ccb4e2c,
             0x57c75f8ec1c303b5,
         ),
         (
             "belgioioso-corrected",
+            0x03bc000342dd023f,
             0xe6b583dc85e6a459,
             0xf040b3b3779f54d2,
             0x8278d002b8a1be54,
         ),
         (
             "csail-corrected",
+            0xb3029015d77101f1,
             0xa727593897fecdd7,
             0x58b0bf50f0e89679,
             0xb7f8a060b9e10ff7,
         ),
         (
             "freiburg-101-corrected",
+            0x3713b2d4413a1599,
             0x86d65186b7903ee6,
             0x9e0878902dbd72e4,
             0x1320a15056d12c34,
         ),
         (
             "freiburg-campus-corrected",
+            0x4e6480e3fa6c3c3a,
             0x91a67e96d6d10d7c,
             0xcecb39abe31b6188,
             0xe9180309d1d94bfd,
@@ -415,30 +421,41 @@ fn extract_json_of_every_shared_log_is_pinned() {
         (
             "intel-corrected",
             0x739aa99c0dab50e2,
+            0x739aa99c0dab50e2,
             0x3c92353e51c89fd0,
             0xb01af4ea833f3820,
         ),
         (
             "orebro-corrected",
             0x23de0131a1d3b95d,
+            0x23de0131a1d3b95d,
             0xd80fb2ca8bb9f702,
             0x80d2cbbb04049e68,
         ),
     ];
     let mut wrong = Vec::new();
-    let stop21 = ["--arc-chain", "0"];
-    let v2 = ["--arc-chain", "0", "--footprint", "0", "--no-bridge-merge"];
-    for (stem, pinned, pinned_stop21, pinned_v2) in PINNED {
+    let stop22 = ["--no-same-turn-windows"];
+    let stop21 = ["--no-same-turn-windows", "--arc-chain", "0"];
+    let v2 = [
+        "--no-same-turn-windows",
+        "--arc-chain",
+        "0",
+        "--footprint",
+        "0",
+        "--no-bridge-merge",
+    ];
+    for (stem, pinned, pinned_stop22, pinned_stop21, pinned_v2) in PINNED {
         let path = data(&format!("{stem}.log.gz"));
         let path = path.to_str().unwrap();
-        for (flags, pinned) in [
-            (&[][..], pinned),
-            (&stop21[..], pinned_stop21),
-            (&v2[..], pinned_v2),
+        for (flags, pinned, counter) in [
+            (&[][..], pinned, true),
+            (&stop22[..], pinned_stop22, true),
+            (&stop21[..], pinned_stop21, false),
+            (&v2[..], pinned_v2, false),
         ] {
             let out = run(&[&["extract", path][..], flags].concat());
             assert!(out.status.success(), "{stem}: {}", common::stderr(&out));
-            let text = if flags.is_empty() {
+            let text = if counter {
                 std::borrow::Cow::Borrowed(&out.stdout[..])
             } else {
                 std::borrow::Cow::Owned(without_arc_counter(&out.stdout))
@@ -462,7 +479,8 @@ fn extract_json_of_every_shared_log_is_pinned() {
     );
 }
 
-/// `--footprint` and `--no-bridge-merge` reach the core; a bad footprint
+/// `--footprint`, `--no-bridge-merge` and `--no-same-turn-windows` reach
+/// the core (CSAIL is a 0.5° log); a bad footprint
 /// is refused with the reason.
 #[test]
 fn footprint_and_bridge_flags_apply() {
@@ -474,7 +492,11 @@ fn footprint_and_bridge_flags_apply() {
         feature_bits::digest_of(&out.stdout[..]).unwrap()
     };
     let default = digest(&[]);
-    for flags in [&["--footprint", "0.005"][..], &["--no-bridge-merge"][..]] {
+    for flags in [
+        &["--footprint", "0.005"][..],
+        &["--no-bridge-merge"][..],
+        &["--no-same-turn-windows"][..],
+    ] {
         assert_ne!(digest(flags), default, "{flags:?} changed nothing");
     }
     assert_eq!(

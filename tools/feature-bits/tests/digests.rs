@@ -26,6 +26,11 @@
 //! other bit of every frame is as pinned. The new defaults have their own
 //! digests.
 //!
+//! Stop 23: the defaults take same-turn windows (`Params::same_turn_windows`,
+//! ALGORITHM.md §10 (c)) in the interleaved 0.5° modes. Stop 22's digests
+//! are checked as they were, at `Params::STOP22`; the new defaults have
+//! their own.
+//!
 //! To re-pin after an intended change of results (say why in the commit):
 //! `cargo run --release -p feature-bits -- LOG` and FNV-1a-64 its output
 //! (`feature_bits::digest_of`), or read the digests this test prints.
@@ -75,6 +80,19 @@ fn log(stem: &str) -> PathBuf {
 /// 30 passes.
 #[cfg(not(feature = "libm-trig"))]
 const PINNED: [(&str, u64, usize); 7] = [
+    ("acapulco-corrected", 0x24ed53cce9a29316, 861),
+    ("belgioioso-corrected", 0x0f542a73d70e73f6, 395),
+    ("csail-corrected", 0x8372f25d92119e0f, 406),
+    ("freiburg-101-corrected", 0x468465920012b5ca, 292),
+    ("freiburg-campus-corrected", 0xb3085d57aaab0ecf, 2008),
+    ("intel-corrected", 0xad71a8bdfa4237b8, 910),
+    ("orebro-corrected", 0xee57028d62c2f364, 237),
+];
+
+/// The same at `Params::STOP22` (the defaults of stop 22: the windows of
+/// §2–6 in every mode).
+#[cfg(not(feature = "libm-trig"))]
+const PINNED_STOP22: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x24ed53cce9a29316, 861),
     ("belgioioso-corrected", 0x2743f09b450eb760, 395),
     ("csail-corrected", 0x58173c8a6729017c, 406),
@@ -213,6 +231,17 @@ fn feature_bits_of_every_shared_log_are_pinned() {
 
 #[cfg(not(feature = "libm-trig"))]
 #[test]
+fn feature_bits_of_every_shared_log_at_stop_22_are_pinned() {
+    let wrong = check_pins(&PINNED_STOP22, &lms_core::Params::STOP22, false);
+    assert!(
+        wrong.is_empty(),
+        "stop-22 results changed:\n{}",
+        wrong.join("\n")
+    );
+}
+
+#[cfg(not(feature = "libm-trig"))]
+#[test]
 fn feature_bits_of_every_shared_log_at_stop_21_are_pinned() {
     let wrong = check_pins(&PINNED_STOP21, &lms_core::Params::STOP21, true);
     assert!(
@@ -253,16 +282,17 @@ fn a_changed_bit_changes_the_digest() {
 /// values. (Örebro has no range beyond its limit: its digest is the one at
 /// `Params::default`.) `host-bridge`'s
 /// `extract_cli::per_data_defaults_match_the_pinned_feature_bits` checks
-/// that its `defaults::for_log` gives these same parameters. The last two
-/// columns are the digests with `Params::STOP21` and `Params::V2`
-/// otherwise (pinned at stop 21 and up to stop 20), without the
-/// `rejected_arc` counter ([`WithoutArcCounter`]).
+/// that its `defaults::for_log` gives these same parameters. The last three
+/// columns are the digests with `Params::STOP22`, `Params::STOP21` and
+/// `Params::V2` otherwise (pinned at stops 22 and 21 and up to stop 20),
+/// the last two without the `rejected_arc` counter ([`WithoutArcCounter`]).
 #[cfg(not(feature = "libm-trig"))]
-const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
+const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64, u64); 7] = [
     (
         "acapulco-corrected",
         0.030000001,
         50.0,
+        0x456597c9d8b236ef,
         0x456597c9d8b236ef,
         0xcfa1b3384b29e6f2,
         0xbb10e8ac21ee7a2d,
@@ -271,6 +301,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "belgioioso-corrected",
         0.01,
         81.83,
+        0x83c298339b898bde,
         0xc2c8950c6374724d,
         0xcf25f846ba026f7e,
         0x537d9d69c2ff323b,
@@ -279,6 +310,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "csail-corrected",
         0.01,
         81.83,
+        0x1260fdc77c4813ce,
         0xeed794a1b8ba1c99,
         0x5498b108e1913fa7,
         0xd99b305f2acf4ee8,
@@ -287,6 +319,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "freiburg-101-corrected",
         0.01,
         81.83,
+        0xa97491fb87532cc7,
         0x47dce9c54f84e796,
         0x466d8dff9805249e,
         0x7ef20b88b6223797,
@@ -295,6 +328,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "freiburg-campus-corrected",
         0.01,
         81.83,
+        0xfcb4894debcb7e29,
         0x43b22e4e673cb55e,
         0x9e88244309cea3ee,
         0xbe0ab76a3c025330,
@@ -304,6 +338,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         0.01,
         81.83,
         0xe3cf0b3e0d27c2db,
+        0xe3cf0b3e0d27c2db,
         0xe90a374b585ed343,
         0x5d105f0e8dcf1438,
     ),
@@ -311,6 +346,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
         "orebro-corrected",
         0.005,
         32.759,
+        0xee57028d62c2f364,
         0xee57028d62c2f364,
         0xd4588364ce8a1fd3,
         0xb82e116bd3e06034,
@@ -321,12 +357,16 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64); 7] = [
 #[test]
 fn feature_bits_at_the_per_data_defaults_are_pinned() {
     let mut wrong = Vec::new();
-    for (stem, sigma, max_range, pin, pin_stop21, pin_v2) in PINNED_PER_DATA {
+    for (stem, sigma, max_range, pin, pin_stop22, pin_stop21, pin_v2) in PINNED_PER_DATA {
         let path = log(stem);
         let params = per_data_params(&path).unwrap();
+        let stop22 = lms_core::Params {
+            same_turn_windows: false,
+            ..params
+        };
         let stop21 = lms_core::Params {
             arc_chain: 0,
-            ..params
+            ..stop22
         };
         let v2 = lms_core::Params {
             bridge_merge: false,
@@ -341,26 +381,27 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
                 ..lms_core::Params::V2
             }
         );
-        let (d, d_without, _) = digests(&path, &params);
+        let (d, _, _) = digests(&path, &params);
+        let (d22, d22_without, _) = digests(&path, &stop22);
         let (_, d21, _) = digests(&path, &stop21);
-        // No line of these logs is taken for an arc: but for the counter,
-        // the defaults give the features of stop 21, bit for bit.
+        // No line of these logs is taken for an arc at stop 22: but for the
+        // counter, stop 22 gives the features of stop 21, bit for bit.
         assert_eq!(
-            d_without, pin_stop21,
+            d22_without, pin_stop21,
             "{stem}: a line of a real log dropped as an arc"
         );
         let (_, d2, _) = digests(&path, &v2);
         println!(
-            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d21:016x}, 0x{d2:016x}),",
+            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d22:016x}, 0x{d21:016x}, 0x{d2:016x}),",
             params.sigma, params.max_range
         );
-        if (params.sigma, params.max_range, d, d21, d2)
-            != (sigma, max_range, pin, pin_stop21, pin_v2)
+        if (params.sigma, params.max_range, d, d22, d21, d2)
+            != (sigma, max_range, pin, pin_stop22, pin_stop21, pin_v2)
         {
             wrong.push(format!(
-                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, stop 21 0x{d21:016x}, v2 \
-                 0x{d2:016x}; pinned {sigma}, {max_range}, 0x{pin:016x}, 0x{pin_stop21:016x}, \
-                 0x{pin_v2:016x}",
+                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, stop 22 0x{d22:016x}, stop 21 \
+                 0x{d21:016x}, v2 0x{d2:016x}; pinned {sigma}, {max_range}, 0x{pin:016x}, \
+                 0x{pin_stop22:016x}, 0x{pin_stop21:016x}, 0x{pin_v2:016x}",
                 params.sigma, params.max_range
             ));
         }
