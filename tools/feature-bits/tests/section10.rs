@@ -24,14 +24,7 @@ fn grazing_wall() -> Frame {
 
 #[test]
 fn each_option_is_refused_by_name_or_changes_the_result() {
-    let options: [(&str, Params); 4] = [
-        (
-            "same_turn_windows",
-            Params {
-                same_turn_windows: true,
-                ..Params::DEFAULT
-            },
-        ),
+    let options: [(&str, Params); 3] = [
         (
             "grazing_noise",
             Params {
@@ -80,4 +73,25 @@ fn each_option_is_refused_by_name_or_changes_the_result() {
             (result, built) => panic!("{name}: {result:?} with section10 built in: {built}"),
         }
     }
+}
+
+#[test]
+fn same_turn_windows_are_in_every_build_and_can_be_switched_off() {
+    // The default since stop 23 (ALGORITHM.md §10 (c)): built with and
+    // without the other §10 options, and `Params::STOP22` (windows of
+    // consecutive beams) validates in both and changes the result.
+    assert!(Params::DEFAULT.same_turn_windows);
+    let frame = grazing_wall();
+    let mut ex = Extractor::new();
+    let mut trace = Trace::new();
+    let default = ex
+        .run_traced(&frame, &Params::DEFAULT.validate().unwrap(), &mut trace)
+        .clone();
+    let default_d = trace.mahalanobis().to_vec();
+    let stop22 = Params::STOP22.validate().expect("STOP22 in every build");
+    let got = ex.run_traced(&frame, &stop22, &mut trace);
+    assert!(
+        got.segments() != default.segments() && trace.mahalanobis() != &default_d[..],
+        "same-turn windows change nothing on the grazing wall"
+    );
 }
