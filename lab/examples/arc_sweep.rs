@@ -2,13 +2,15 @@
 //! docs/ALGORITHM-v3-section10.md §10.8): the defaults, the defaults of stop
 //! 21 (no arcs dropped), and other chain lengths and turn windows, on the
 //! realistic synthetic scenes (100 scans per family and σ₀) and the real
-//! logs' map truth (every 5th frame), pooled.
+//! logs' map truth (every 5th frame), pooled. Measured at stop 22: every
+//! variant runs on windows of consecutive beams (`same_turn_windows:
+//! false`, `Params::STOP22`; `tau_sweep` measures same-turn windows).
 //!
 //! `cargo run --release -p lms-lab --example arc_sweep -- [EVERY] [SCANS]`
 
 use anyhow::Result;
 use lms_core::Params;
-use lms_lab::sweep::{print_sweep, Adjust};
+use lms_lab::sweep::{print_sweep_over, Adjust};
 
 /// The variants, each applied to the defaults (the per-data defaults on
 /// real logs, σ₀ on synthetic scenes).
@@ -43,5 +45,9 @@ fn variants() -> Vec<(&'static str, Adjust)> {
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
-    print_sweep(&variants(), every, scans)
+    let stop22 = |p| Params {
+        same_turn_windows: false,
+        ..p
+    };
+    print_sweep_over(stop22, &variants(), every, scans)
 }

@@ -4,13 +4,15 @@
 //! the realistic synthetic scenes (100 scans per family and σ₀) and the
 //! real logs' map truth, pooled (`docs/ALGORITHM-v3-section10.md` §10.7).
 //! Measured at stop 21, before the lines of arcs were dropped: every
-//! variant has `arc_chain: 0` (`arc_sweep` measures that step).
+//! variant has `arc_chain: 0` (`arc_sweep` measures that step), and all
+//! run on stop 22's windows of consecutive beams (`same_turn_windows:
+//! false`; `tau_sweep` measures same-turn windows).
 //!
 //! `cargo run --release -p lms-lab --example footprint_sweep -- [EVERY] [SCANS]`
 
 use anyhow::Result;
 use lms_core::Params;
-use lms_lab::sweep::{print_sweep, Adjust};
+use lms_lab::sweep::{print_sweep_over, Adjust};
 
 /// The variants, each applied to the defaults (the per-data defaults on
 /// real logs, σ₀ on synthetic scenes).
@@ -69,5 +71,9 @@ fn variants() -> Vec<(&'static str, Adjust)> {
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
-    print_sweep(&variants(), every, scans)
+    let stop22 = |p| Params {
+        same_turn_windows: false,
+        ..p
+    };
+    print_sweep_over(stop22, &variants(), every, scans)
 }

@@ -1,9 +1,10 @@
-//! The segmentation gate τ (§6) on the defaults, with and without
-//! same-turn windows (ALGORITHM.md §10 (c), `Params::same_turn_windows`):
-//! split before reject finds the corners that a larger τ no longer marks,
-//! so τ trades edges in the windows for splits in §7. Realistic synthetic
-//! scenes (100 scans per family and σ₀) and the real logs' map truth (every
-//! 5th frame), pooled (docs/ALGORITHM-v3-section10.md §10.8).
+//! Same-turn windows (ALGORITHM.md §10 (c), `Params::same_turn_windows`,
+//! the default since stop 23) against stop 22's windows of consecutive
+//! beams, each with the segmentation gate τ (§6) from 9 to 25: split
+//! before reject finds the corners that a larger τ no longer marks, so τ
+//! trades edges in the windows for splits in §7. Realistic synthetic
+//! scenes (`SCANS` per family and σ₀) and the real logs' map truth (every
+//! `EVERY`-th frame), pooled (docs/ALGORITHM-v3-section10.md §10.9).
 //!
 //! `cargo run --release -p lms-lab --example tau_sweep -- [EVERY] [SCANS]`
 
@@ -15,36 +16,24 @@ use lms_lab::sweep::{print_sweep, Adjust};
 /// real logs, σ₀ on synthetic scenes).
 fn variants() -> Vec<(&'static str, Adjust)> {
     vec![
-        ("defaults (τ = 9)", |p| p),
-        ("τ = 12", |p| Params { tau: 12.0, ..p }),
-        ("τ = 16", |p| Params { tau: 16.0, ..p }),
-        ("τ = 20", |p| Params { tau: 20.0, ..p }),
-        ("τ = 25", |p| Params { tau: 25.0, ..p }),
-        ("same-turn windows", |p| Params {
-            same_turn_windows: true,
+        ("stop 22: consecutive windows (τ = 9)", |p| Params {
+            same_turn_windows: false,
             ..p
         }),
-        ("same-turn windows, τ = 16", |p| Params {
-            same_turn_windows: true,
+        ("consecutive windows, τ = 16", |p| Params {
+            same_turn_windows: false,
             tau: 16.0,
             ..p
         }),
-        ("same-turn windows, τ = 20", |p| Params {
-            same_turn_windows: true,
-            tau: 20.0,
-            ..p
-        }),
-        ("same-turn windows, τ = 25", |p| Params {
-            same_turn_windows: true,
+        ("consecutive windows, τ = 25", |p| Params {
+            same_turn_windows: false,
             tau: 25.0,
             ..p
         }),
-        ("same-turn windows, τ = 30", |p| Params {
-            same_turn_windows: true,
-            tau: 30.0,
-            ..p
-        }),
-        ("τ = 30", |p| Params { tau: 30.0, ..p }),
+        ("defaults: same-turn windows (τ = 9)", |p| p),
+        ("same-turn windows, τ = 12", |p| Params { tau: 12.0, ..p }),
+        ("same-turn windows, τ = 16", |p| Params { tau: 16.0, ..p }),
+        ("same-turn windows, τ = 25", |p| Params { tau: 25.0, ..p }),
     ]
 }
 

@@ -75,8 +75,9 @@ pub fn sample(
 }
 
 /// The methods: ALGORITHM.md v1's defaults, v2's (`Params::V2`), stop
-/// 21's (§10 (e), (f): `Params::STOP21`), the defaults (those and the lines
-/// of arcs dropped), §10 options on them, split-and-merge.
+/// 21's (§10 (e), (f): `Params::STOP21`), stop 22's (and the lines of arcs
+/// dropped: `Params::STOP22`), the defaults (and same-turn windows, §10
+/// (c)), §10 options on them, split-and-merge.
 pub fn methods() -> Vec<Method> {
     vec![
         Method::with("v1 defaults (Params::V1)", Kind::Core, |p| Params {
@@ -93,6 +94,12 @@ pub fn methods() -> Vec<Method> {
                 ..Params::STOP21
             }
         }),
+        Method::with("stop-22 defaults (Params::STOP22)", Kind::Core, |p| {
+            Params {
+                sigma: p.sigma,
+                ..Params::STOP22
+            }
+        }),
         Method::with("defaults (Params::default)", Kind::Core, |p| Params {
             sigma: p.sigma,
             ..Params::default()
@@ -102,31 +109,20 @@ pub fn methods() -> Vec<Method> {
             grazing_noise: 0.5,
             ..Params::default()
         }),
-        Method::with("defaults + same-turn windows", Kind::Core, |p| Params {
+        Method::with("defaults + fit σ = 1.5σ", Kind::Core, |p| Params {
             sigma: p.sigma,
-            same_turn_windows: true,
+            fit_sigma: 1.5 * p.sigma,
             ..Params::default()
         }),
-        Method::with("defaults + same-turn, fit σ = 1.5σ", Kind::Core, |p| {
-            Params {
-                sigma: p.sigma,
-                same_turn_windows: true,
-                fit_sigma: 1.5 * p.sigma,
-                ..Params::default()
-            }
-        }),
-        Method::with("defaults + same-turn, fit σ = 2σ", Kind::Core, |p| {
-            Params {
-                sigma: p.sigma,
-                same_turn_windows: true,
-                fit_sigma: 2.0 * p.sigma,
-                ..Params::default()
-            }
-        }),
-        Method::with("defaults, fit σ = 2σ", Kind::Core, |p| Params {
+        Method::with("defaults + fit σ = 2σ", Kind::Core, |p| Params {
             sigma: p.sigma,
             fit_sigma: 2.0 * p.sigma,
             ..Params::default()
+        }),
+        Method::with("stop-22 defaults, fit σ = 2σ", Kind::Core, |p| Params {
+            sigma: p.sigma,
+            fit_sigma: 2.0 * p.sigma,
+            ..Params::STOP22
         }),
         Method::with("defaults + per turn (§10 d)", Kind::Core, |p| Params {
             sigma: p.sigma,

@@ -33,8 +33,10 @@
 //! ([`no_flag_params`]: the defaults — ALGORITHM.md v2's `split_depth = 8`,
 //! `fit_shared_points = false`, since stop 21 the footprint weights and
 //! the merge across rejected segments of §10 (e), (f), since stop 22 the
-//! lines of arcs dropped — with σ and `max_range` from the data); `stop 21`
-//! is the same without dropping arcs ([`Params::STOP21`]); `v2` the same
+//! lines of arcs dropped, since stop 23 same-turn windows (§10 (c)) — with
+//! σ and `max_range` from the data); `stop 22` is the same with windows of
+//! consecutive beams ([`Params::STOP22`]); `stop 21` without dropping arcs
+//! either ([`Params::STOP21`]); `v2` the same
 //! with [`Params::V2`]'s footprint and merge (the defaults up to stop 20);
 //! `v1` is
 //! [`Params::V1`], the defaults before v2; `σ by unit` is 10 mm for
@@ -143,10 +145,15 @@ impl RealMethod {
 }
 
 /// Name of the no-flags method.
-pub const NO_FLAGS: &str = "defaults, no flags (per data; footprint + bridge + arcs)";
+pub const NO_FLAGS: &str =
+    "defaults, no flags (per data; footprint + bridge + arcs + same-turn windows)";
+/// Name of the no-flags method with the defaults of stop 22
+/// (`Params::STOP22`: windows of consecutive beams over both turns).
+pub const STOP22_NO_FLAGS: &str = "stop-22 defaults, no flags (--no-same-turn-windows)";
 /// Name of the no-flags method with the defaults of stop 21
-/// (`Params::STOP21`: no lines of arcs dropped).
-pub const STOP21_NO_FLAGS: &str = "stop-21 defaults, no flags (--arc-chain 0)";
+/// (`Params::STOP21`: no lines of arcs dropped either).
+pub const STOP21_NO_FLAGS: &str =
+    "stop-21 defaults, no flags (--no-same-turn-windows --arc-chain 0)";
 /// Name of the no-flags method with the defaults up to stop 20
 /// (`Params::V2`: no footprint weights, no merge across rejected segments).
 pub const V2_NO_FLAGS: &str = "v2 defaults, no flags (per data)";
@@ -177,8 +184,17 @@ pub fn methods() -> Vec<RealMethod> {
     let own = SigmaChoice::Base;
     vec![
         m(NO_FLAGS, Core, NoFlags, own),
-        g(STOP21_NO_FLAGS, |p| Params { arc_chain: 0, ..p }),
+        g(STOP22_NO_FLAGS, |p| Params {
+            same_turn_windows: false,
+            ..p
+        }),
+        g(STOP21_NO_FLAGS, |p| Params {
+            same_turn_windows: false,
+            arc_chain: 0,
+            ..p
+        }),
         g(V2_NO_FLAGS, |p| Params {
+            same_turn_windows: false,
             footprint: 0.0,
             bridge_merge: false,
             arc_chain: 0,
@@ -199,26 +215,16 @@ pub fn methods() -> Vec<RealMethod> {
             grazing_noise: 0.5,
             ..p
         }),
-        g("no flags + same-turn windows", |p| Params {
-            same_turn_windows: true,
-            ..p
-        }),
-        g("no flags + same-turn + ρ = 0.5", |p| Params {
-            same_turn_windows: true,
-            grazing_noise: 0.5,
-            ..p
-        }),
-        g("same-turn, fit σ = 1.5σ", |p| Params {
-            same_turn_windows: true,
+        g("no flags + fit σ = 1.5σ", |p| Params {
             fit_sigma: 1.5 * p.sigma,
             ..p
         }),
-        g("same-turn, fit σ = 2σ", |p| Params {
-            same_turn_windows: true,
+        g("no flags + fit σ = 2σ", |p| Params {
             fit_sigma: 2.0 * p.sigma,
             ..p
         }),
         g("fit σ = 2σ (windows as v2)", |p| Params {
+            same_turn_windows: false,
             fit_sigma: 2.0 * p.sigma,
             ..p
         }),
@@ -228,6 +234,7 @@ pub fn methods() -> Vec<RealMethod> {
         }),
         g("v2 + per turn", |p| Params {
             per_turn: true,
+            same_turn_windows: false,
             footprint: 0.0,
             bridge_merge: false,
             arc_chain: 0,

@@ -23,9 +23,21 @@ pub type Adjust = fn(Params) -> Params;
 /// (`scans` per family and σ₀) and the real logs' map-truth figures
 /// (every `every`-th frame, pooled), as Markdown tables.
 pub fn print_sweep(variants: &[(&'static str, Adjust)], every: usize, scans: usize) -> Result<()> {
+    print_sweep_over(|p| p, variants, every, scans)
+}
+
+/// [`print_sweep`] with every variant applied to `base(defaults)` instead
+/// of the defaults: an older stop's sweep on that stop's defaults (e.g.
+/// `Params { same_turn_windows: false, ..p }` for stop 22's).
+pub fn print_sweep_over(
+    base: Adjust,
+    variants: &[(&'static str, Adjust)],
+    every: usize,
+    scans: usize,
+) -> Result<()> {
     let names: Vec<&str> = variants.iter().map(|v| v.0).collect();
     print_sweep_with(&names, every, scans, &|k, ex, frame, params| {
-        run_core(ex, frame, &(variants[k].1)(*params))
+        run_core(ex, frame, &(variants[k].1)(base(*params)))
     })
 }
 
@@ -42,9 +54,9 @@ pub fn print_sweep_with(
 ) -> Result<()> {
     let mut ex = Extractor::new();
     println!(
-        "| σ₀ | method | TruePos | FalsePos | off arcs | σΔα/CRB | σΔr/CRB | gross | lines/scan |"
+        "| σ₀ | method | TruePos | FalsePos | off arcs | σΔα/CRB | σΔr/CRB | gross | lines/scan | corners found | corners false |"
     );
-    println!("|:---|:---|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for sigma in SIGMAS {
         let model = realistic_model(sigma);
         let gates = Gates {
@@ -70,7 +82,7 @@ pub fn print_sweep_with(
         for (name, t) in names.iter().zip(&tallies) {
             let s = t.summary();
             println!(
-                "| {} mm | {name} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.3} | {:.2} |",
+                "| {} mm | {name} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.3} | {:.2} | {:.3} | {:.3} |",
                 sigma * 1e3,
                 s.true_pos,
                 s.false_pos,
@@ -78,7 +90,9 @@ pub fn print_sweep_with(
                 s.crb_alpha,
                 s.crb_r,
                 s.outliers,
-                s.lines_per_scan
+                s.lines_per_scan,
+                s.corner_rate,
+                s.corner_false_pos
             );
         }
     }

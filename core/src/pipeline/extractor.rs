@@ -23,10 +23,10 @@ use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{EdgeList, Segmenter};
 use crate::pipeline::smoothing::{
-    smoothing_pass, usable, usable_windows, WindowSink, WINDOW_WORDS,
+    interleaved_turns, smoothing_pass_strided, usable_windows_strided,
 };
 use crate::pipeline::smoothing::{
-    interleaved_turns, smoothing_pass_strided, usable_windows_strided,
+    smoothing_pass, usable, usable_windows, WindowSink, WINDOW_WORDS,
 };
 use crate::pipeline::split::split_before_reject;
 

@@ -65,8 +65,8 @@ pub fn segment<const S: usize, L: EdgeList>(
 
 /// [`segment`] for windows of stride `stride` (§10 proposal): window `i`
 /// is beams `i, i + stride, i + 2·stride` with middle beam `i + stride`. A
-/// run of windows `i..=k` is kept if it holds at least `min_points − 2`
-/// windows (as many as §6 asks at stride 1) and covers the beams of its
+/// run of windows `i..=k` is kept if it holds at least `min_points − 3`
+/// windows (at stride 1: `min_points − 2`, §6) and covers the beams of its
 /// windows, `i ..= k + 2·stride`, except where that reaches into a
 /// neighbour: its first beam is at least the previous kept segment's last
 /// (the two share at most one point, as in §6) and its last at most
@@ -176,8 +176,7 @@ impl<'a, const S: usize, L: EdgeList> Segmenter<'a, S, L> {
     /// bounds its end.
     fn close(&mut self, start: usize, end: usize) {
         self.run_start = None;
-        // As many windows as §6 asks of a run at stride 1.
-        if end - start + 2 < self.min_points as usize {
+        if end - start < self.windows_needed() {
             self.counts.short_segments = self.counts.short_segments.saturating_add(1);
             return;
         }
@@ -186,6 +185,16 @@ impl<'a, const S: usize, L: EdgeList> Segmenter<'a, S, L> {
             first: self.kept_last.map_or(first, |last| first.max(last)),
             last: (end + 2 * self.stride - 1) as u16,
         });
+    }
+
+    /// Fewest windows a kept run holds: `min_points − 2` at stride 1 (§6:
+    /// `min_points` beams); `min_points − 3` at a larger stride, whose run
+    /// covers `2·stride` beams more than it has windows (at the default 5:
+    /// two windows, one of each turn at stride 2, six beams; three lost 3×
+    /// more clean corners, docs/ALGORITHM-v3-section10.md §10.9).
+    fn windows_needed(&self) -> usize {
+        let spare = if self.stride > 1 { 3 } else { 2 };
+        (self.min_points as usize).saturating_sub(spare).max(1)
     }
 
     /// Keep or drop the closed run, its last beam at most `bound`.
@@ -317,19 +326,40 @@ mod tests {
         d2[9] = 50.0;
         segment_strided(&d2, 2, 9.0, 5, &mut segs, &mut edges);
         assert_eq!((segs[0].last, segs[1].first), (11, 11));
-        // A run of two windows (7..=8) is too short (min_points 5 asks for
-        // three) and dropped; the run before it still ends before its
-        // middle beams, at 8.
+        // A run of one window (7) is too short (min_points 5 asks for two
+        // at stride 2) and dropped; the run before it still ends before
+        // its middle beams, at 8.
         let mut d3 = [0.0f32; 20];
-        for i in [6, 9] {
+        for i in [6, 8] {
             d3[i] = 50.0;
         }
         let c = segment_strided(&d3, 2, 9.0, 5, &mut segs, &mut edges);
         assert_eq!(c.short_segments, 1);
-        assert_eq!(segs.as_slice(), &[
-            Segment { first: 0, last: 8 },
-            Segment { first: 10, last: 23 }
-        ]);
+        assert_eq!(
+            segs.as_slice(),
+            &[
+                Segment { first: 0, last: 8 },
+                Segment { first: 9, last: 23 }
+            ]
+        );
+        // A run of two windows (6..=7) between two double breaks is kept:
+        // beams 7..=11, one shared with each neighbour.
+        let mut d4 = [0.0f32; 20];
+        for i in [4, 5, 8, 9] {
+            d4[i] = 50.0;
+        }
+        segment_strided(&d4, 2, 9.0, 5, &mut segs, &mut edges);
+        assert_eq!(
+            segs.as_slice(),
+            &[
+                Segment { first: 0, last: 7 },
+                Segment { first: 7, last: 11 },
+                Segment {
+                    first: 11,
+                    last: 23
+                }
+            ]
+        );
         // Stride 1 is §6.
         let mut s1: Vec<Segment, 8> = Vec::new();
         let mut e1: Vec<u16, 16> = Vec::new();
