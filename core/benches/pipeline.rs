@@ -5,7 +5,9 @@
 //! with and without per-turn extraction (`Params::per_turn`, §10 (d)); and
 //! at 30 passes with `Params::V2` (no footprint weights, no merge across
 //! rejected segments: the defaults up to stop 20), at 5 and 10 mm, for the
-//! cost of §10 (e), (f) as a ratio on the same machine.
+//! cost of §10 (e), (f) as a ratio on the same machine; and at 10 mm with
+//! `Params::STOP22` (windows of consecutive beams), for the cost of
+//! same-turn windows (§10 (a), the default since stop 23).
 //!
 //! One benchmark iteration runs every frame of the log once (406 frames), so
 //! the reported time is for the whole log and the throughput is in frames
@@ -62,6 +64,13 @@ fn pipeline(c: &mut Criterion) {
                 Params {
                     per_turn: true,
                     ..cm
+                },
+            ),
+            (
+                BenchmarkId::new("stop22_sigma_10mm", 30),
+                Params {
+                    sigma: 0.01,
+                    ..Params::STOP22
                 },
             ),
             (BenchmarkId::new("v2", 30), Params::V2),

@@ -80,7 +80,7 @@ pub struct Params {
     /// otherwise a non-default value fails validation
     /// ([`ParamError::NotInBuild`]).
     pub grazing_noise: f32,
-    /// Same-turn windows (ALGORITHM.md §10 (c), the default since stop 23,
+    /// Same-turn windows (ALGORITHM.md §10 (a), the default since stop 23,
     /// `docs/ALGORITHM-v3-section10.md` §10.9): in the modes that
     /// interleave mirror turns (0.5°: two, 0.25°: four), window `i` is the
     /// beams `i, i+k, i+2k` of one turn (`k` turns, the filter's angle

@@ -1,4 +1,4 @@
-//! `Params::same_turn_windows` (ALGORITHM.md §10 (c), the default since
+//! `Params::same_turn_windows` (ALGORITHM.md §10 (a), the default since
 //! stop 23, docs/ALGORITHM-v3-section10.md §10.9): in a 0.5° mode the two
 //! mirror turns are offset (platform motion in 13.3 ms); windows of one
 //! turn do not break on the offset, windows of §2 do. In 1° modes nothing

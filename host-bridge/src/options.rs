@@ -119,7 +119,7 @@ pub struct ParamArgs {
     pub no_bridge_merge: bool,
     /// Windows of consecutive beams over both mirror turns in the
     /// interleaved 0.5° and 0.25° modes, as ALGORITHM.md v2 §2–6, instead
-    /// of windows of one turn (ALGORITHM.md §10 (c),
+    /// of windows of one turn (ALGORITHM.md §10 (a),
     /// docs/ALGORITHM-v3-section10.md §10.9); with --arc-chain 0 the
     /// defaults of stop 21 (`Params::STOP21`)
     #[arg(long)]

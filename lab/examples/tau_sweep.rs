@@ -1,4 +1,4 @@
-//! Same-turn windows (ALGORITHM.md §10 (c), `Params::same_turn_windows`,
+//! Same-turn windows (ALGORITHM.md §10 (a), `Params::same_turn_windows`,
 //! the default since stop 23) against stop 22's windows of consecutive
 //! beams, each with the segmentation gate τ (§6) from 9 to 25: split
 //! before reject finds the corners that a larger τ no longer marks, so τ

@@ -33,7 +33,7 @@
 //! ([`no_flag_params`]: the defaults — ALGORITHM.md v2's `split_depth = 8`,
 //! `fit_shared_points = false`, since stop 21 the footprint weights and
 //! the merge across rejected segments of §10 (e), (f), since stop 22 the
-//! lines of arcs dropped, since stop 23 same-turn windows (§10 (c)) — with
+//! lines of arcs dropped, since stop 23 same-turn windows (§10 (a)) — with
 //! σ and `max_range` from the data); `stop 22` is the same with windows of
 //! consecutive beams ([`Params::STOP22`]); `stop 21` without dropping arcs
 //! either ([`Params::STOP21`]); `v2` the same

@@ -27,7 +27,7 @@
 //! digests.
 //!
 //! Stop 23: the defaults take same-turn windows (`Params::same_turn_windows`,
-//! ALGORITHM.md §10 (c)) in the interleaved 0.5° modes. Stop 22's digests
+//! ALGORITHM.md §10 (a)) in the interleaved 0.5° modes. Stop 22's digests
 //! are checked as they were, at `Params::STOP22`; the new defaults have
 //! their own.
 //!
