@@ -267,24 +267,47 @@ fn positive_definite(c: &Sym2) -> bool {
 
 /// Maximal runs of windows with `D < tau` (the segments before `min_points`
 /// and capacity), and breaking finite windows (edge points).
-fn count_runs(d: &[f32], tau: f32, min_points: u16) -> (usize, usize, usize) {
-    let (mut long, mut short, mut edges) = (0, 0, 0);
-    let mut run = 0usize;
-    for &x in d.iter().chain([f32::INFINITY].iter()) {
+/// Runs of non-breaking windows in `d` at window stride `stride`: (kept
+/// segments, short runs, edge points), as §6 counts them — at stride 1 a
+/// run of `m` windows covers `m + 2` points; at a larger stride (same-turn
+/// windows, docs/ALGORITHM-v3-section10.md §10.2 (a)) it needs
+/// `min_points − 3` windows, covers the beams of its windows from the last
+/// kept segment's last beam to the next run's first middle beam less one,
+/// and must still hold `min_points` beams.
+fn count_runs(d: &[f32], tau: f32, min_points: u16, stride: usize) -> (usize, usize, usize) {
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    let (mut edges, mut start) = (0, None);
+    for (i, &x) in d.iter().chain([f32::INFINITY].iter()).enumerate() {
         if x < tau {
-            run += 1;
+            start.get_or_insert(i);
         } else {
             if x.is_finite() {
                 edges += 1;
             }
-            if run > 0 {
-                if run + 2 < usize::from(min_points) {
-                    short += 1;
-                } else {
-                    long += 1;
-                }
+            if let Some(s) = start.take() {
+                runs.push((s, i));
             }
-            run = 0;
+        }
+    }
+    let min_points = usize::from(min_points);
+    let needed = min_points
+        .saturating_sub(if stride > 1 { 3 } else { 2 })
+        .max(1);
+    let (mut long, mut short) = (0, 0);
+    let mut kept_last: Option<usize> = None;
+    for (k, &(s, e)) in runs.iter().enumerate() {
+        if e - s < needed {
+            short += 1;
+            continue;
+        }
+        let first = kept_last.map_or(s, |l| s.max(l));
+        let next = runs.get(k + 1).map_or(usize::MAX, |r| r.0 + stride - 1);
+        let last = (e + 2 * stride - 1).min(next);
+        if last + 1 < first + min_points {
+            short += 1;
+        } else {
+            long += 1;
+            kept_last = Some(last);
         }
     }
     (long, short, edges)
@@ -343,7 +366,12 @@ fn check(frame: &Frame, params: &Params) -> Result<(), TestCaseError> {
         prop_assert!(w[1].first >= w[0].last, "segments overlap: {:?}", w);
     }
     // Counts add up: segments, edge points.
-    let (long, short, edges) = count_runs(d, params.tau, params.min_points);
+    let stride = if params.same_turn_windows {
+        lms_core::pipeline::smoothing::interleaved_turns(frame.geometry().step)
+    } else {
+        1
+    };
+    let (long, short, edges) = count_runs(d, params.tau, params.min_points, stride);
     prop_assert_eq!(usize::from(f.stats().short_segments), short);
     // Split before reject turns one segment into two per split, drops short
     // halves and pieces that still fail.
