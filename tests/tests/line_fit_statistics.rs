@@ -169,9 +169,9 @@ fn wall_fit_spread_matches_the_reported_covariance_and_the_cramer_rao_bound() {
 
 /// An arc of radius 1 m whose centre is 2 m straight ahead: a strongly curved
 /// surface seen over ±30°. Whatever the segmentation makes of it, no line
-/// may be accepted on it: a straight fit to the arc's segment has a huge
-/// `chi2` (§7.4), and the extractor's accepted lines include none that covers
-/// the arc.
+/// may be accepted across it: a straight fit to the arc's segment has a
+/// huge `chi2` (§7.4), and the extractor's accepted lines include none that
+/// covers the arc (a short one at a tangent end at most).
 #[test]
 fn an_arc_is_not_accepted_as_a_line() {
     let variant = Variant::Fov180Res50;
@@ -240,34 +240,86 @@ fn an_arc_is_not_accepted_as_a_line() {
         );
         // It is the straightness test that rejects it: the smoothing alone
         // does not break the arc into lines (measured: one segment over the
-        // whole arc); v2's split before reject finds a circle explains it
-        // and drops it (`split_rejected`), v1 rejects its line by chi2.
+        // whole arc, with same-turn windows up to two 5-beam pieces at its
+        // tangent ends beside it); v2's split before reject finds a circle
+        // explains it and drops it (`split_rejected`), v1 rejects its line
+        // by chi2.
         let s = f.stats();
         assert!(
             s.rejected_chi2 + s.split_rejected >= 1,
             "no line rejected: {s:?}"
         );
         assert_eq!(s.splits, 0, "an arc cut into a polyline: {s:?}");
-        assert!(
-            f.lines().is_empty(),
-            "lines accepted on an arc: {:?}",
-            f.lines()
-                .iter()
-                .map(|l| (l.first, l.last, l.chi2))
-                .collect::<Vec<_>>()
-        );
-        for (first, last, chi2) in seg_chi2 {
-            if let Some(c) = chi2 {
-                assert!(
-                    c > params.max_chi2,
-                    "segment {first}..={last} passes chi2 ({c})"
-                );
-            }
+        // No line across the arc. Same-turn windows (the default since stop
+        // 23) may leave a few beams at a tangent end, where the arc meets
+        // the beams at grazing incidence, as a segment of their own, and
+        // its line can pass: allowed there only, and short (the frequency
+        // is bounded by `arcs_leave_lines_at_their_tangent_ends_rarely`).
+        for l in f.lines() {
+            let at_an_end = usize::from(l.first) <= lo + 10 || usize::from(l.last) + 10 >= hi;
+            assert!(
+                at_an_end && l.length() < 0.5,
+                "line {}..={} ({} m, chi2 {}) across the arc {lo}..={hi}",
+                l.first,
+                l.last,
+                l.length(),
+                l.chi2
+            );
         }
+        // A segment's own line fails chi2, or (a few beams at a tangent end
+        // of the arc, which same-turn windows leave as segments of their
+        // own) its line is dropped by a counted gate: too uncertain to use
+        // (`max_alpha_sd_deg`, with the footprint weights at near-grazing
+        // incidence), too short, or part of an arc.
+        let passing = seg_chi2
+            .iter()
+            .filter(|(_, _, fit)| fit.is_some_and(|c| c <= params.max_chi2))
+            .count();
+        let gated = usize::from(s.rejected_wide + s.rejected_short + s.rejected_arc);
+        assert!(
+            passing <= gated + f.lines().len(),
+            "{passing} segments pass chi2, {gated} lines dropped by the gates: {seg_chi2:?}"
+        );
     }
     // ±30° at 0.5°: about 120 beams see the arc.
     assert!(
         (115..=121).contains(&arc_beams),
         "{arc_beams} beams on the arc"
     );
+}
+
+/// The arc of [`an_arc_is_not_accepted_as_a_line`] over 200 noise draws: how
+/// often a short line at a tangent end is accepted. Measured: 22 of these 200
+/// frames with the defaults' same-turn windows (the tangent end cut off as a
+/// segment of its own; longest 0.38 m); on another 200 draws 15, against 2 with
+/// windows of consecutive beams (`Params::STOP22`). On the realistic synthetic
+/// scenes the false lines on arcs still fell with same-turn windows
+/// (docs/ALGORITHM-v3-section10.md §10.9). Asserted: at most 30 of 200
+/// frames, every such line under 0.5 m.
+#[test]
+fn arcs_leave_lines_at_their_tangent_ends_rarely() {
+    let variant = Variant::Fov180Res50;
+    let g = variant.geometry();
+    let noise = Normal::new(0.0, SIGMA).unwrap();
+    let params = Params::default().validate().unwrap();
+    let mut ex = Extractor::new();
+    let (mut frames_with_lines, mut longest) = (0, 0.0f32);
+    for seed in 0..200u64 {
+        let mut rng = ChaCha8Rng::seed_from_u64(1000 + seed);
+        let ranges: Vec<f32> = (0..variant.beams())
+            .map(|j| {
+                synth::cast_circle([2.0, 0.0], 1.0, g.bearing(j) as f64)
+                    .map_or(0.0, |d| (d + noise.sample(&mut rng)) as f32)
+            })
+            .collect();
+        let f = ex.run(&Frame::from_metres(g, &ranges).unwrap(), &params);
+        frames_with_lines += usize::from(!f.lines().is_empty());
+        longest = f.lines().iter().map(|l| l.length()).fold(longest, f32::max);
+    }
+    eprintln!("arc: lines in {frames_with_lines} of 200 frames, longest {longest} m");
+    assert!(
+        frames_with_lines <= 25,
+        "lines on the arc in {frames_with_lines} of 200 frames"
+    );
+    assert!(longest < 0.5, "a line of {longest} m on the arc");
 }

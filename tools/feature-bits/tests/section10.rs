@@ -7,7 +7,7 @@
 //! both builds.
 
 use lms_core::params::SECTION10_BUILT;
-use lms_core::{Extractor, Frame, ParamError, Params, Trace, Variant};
+use lms_core::{Extractor, Features, Frame, ParamError, Params, Trace, Variant};
 
 /// A corridor wall seen at grazing incidence, with a 12 mm offset between
 /// the two interleaved mirror turns: every §10 option changes its result.
@@ -20,6 +20,17 @@ fn grazing_wall() -> Frame {
         frame.set_metres(j, if c > 0.2 { (1.2 + turn) / c } else { 0.0 });
     }
     frame
+}
+
+/// The grazing wall, and the defaults' features and `D` on it.
+fn defaults_on_the_grazing_wall() -> (Frame, Features, Vec<f32>) {
+    let frame = grazing_wall();
+    let (mut ex, mut trace) = (Extractor::new(), Trace::new());
+    let default = ex
+        .run_traced(&frame, &Params::DEFAULT.validate().unwrap(), &mut trace)
+        .clone();
+    let default_d = trace.mahalanobis().to_vec();
+    (frame, default, default_d)
 }
 
 #[test]
@@ -47,13 +58,8 @@ fn each_option_is_refused_by_name_or_changes_the_result() {
             },
         ),
     ];
-    let frame = grazing_wall();
-    let mut ex = Extractor::new();
+    let (frame, default, default_d) = defaults_on_the_grazing_wall();
     let mut trace = Trace::new();
-    let default = ex
-        .run_traced(&frame, &Params::DEFAULT.validate().unwrap(), &mut trace)
-        .clone();
-    let default_d = trace.mahalanobis().to_vec();
     assert!(!default.lines().is_empty());
     for (name, params) in options {
         match (params.validate(), SECTION10_BUILT) {
@@ -81,13 +87,8 @@ fn same_turn_windows_are_in_every_build_and_can_be_switched_off() {
     // without the other §10 options, and `Params::STOP22` (windows of
     // consecutive beams) validates in both and changes the result.
     const { assert!(Params::DEFAULT.same_turn_windows) };
-    let frame = grazing_wall();
-    let mut ex = Extractor::new();
-    let mut trace = Trace::new();
-    let default = ex
-        .run_traced(&frame, &Params::DEFAULT.validate().unwrap(), &mut trace)
-        .clone();
-    let default_d = trace.mahalanobis().to_vec();
+    let (frame, default, default_d) = defaults_on_the_grazing_wall();
+    let (mut ex, mut trace) = (Extractor::new(), Trace::new());
     let stop22 = Params::STOP22.validate().expect("STOP22 in every build");
     let got = ex.run_traced(&frame, &stop22, &mut trace);
     assert!(
