@@ -137,9 +137,15 @@ fn compare(case: &Case, worst_by_pass: &mut [WorstAt; 2]) -> Vec<String> {
         // `segments()` are the pieces it fits, not §6's segments; the split
         // is checked against the evaluation's f64 prototype instead
         // (lab/tests/split_before_reject.rs).
+        // The reference implements §2's windows of consecutive beams:
+        // same-turn windows (the default since stop 23) are off here. Their
+        // pass is two such passes, one per turn, bit for bit (lms-core's
+        // `stride_two_is_two_independent_sub_scans_bit_for_bit`), so this
+        // comparison covers their arithmetic too.
         let params = Params {
             iterations: passes,
             split_depth: 0,
+            same_turn_windows: false,
             ..case.params
         };
         let mut ex = Extractor::new();

@@ -2,6 +2,12 @@
 //! corners and jumps, noise reduction on walls, and the paper's Fig. 2 claim
 //! that the line-model mask keeps a corner where a Gaussian mask moves it.
 //!
+//! The edge-point tests check §2–6 as written, windows of consecutive beams
+//! (`Params::STOP22`): the defaults' same-turn windows (since stop 23)
+//! span five beams in the 0.5° and 0.25° modes and mark the beams of one
+//! turn around a vertex (`core/tests/same_turn.rs`, and the segments in
+//! `core/src/pipeline/segmentation.rs`).
+//!
 //! # Edge points against the truth: what "exactly" can mean
 //!
 //! The scene's ground truth (`TrueScan::true_edge_points`) names the middle
@@ -130,7 +136,7 @@ fn noise_free_edge_points_are_the_true_corners_and_jumps() {
                     &frame,
                     &Params {
                         iterations,
-                        ..Params::default()
+                        ..Params::STOP22
                     }
                     .validate()
                     .unwrap(),
@@ -196,7 +202,7 @@ fn noisy_edge_points_find_every_corner_and_jump() {
         for seed in 0..SEEDS {
             let frame = frame_of(variant, &truth, &noise, seed);
             let mut trace = lms_core::Trace::new();
-            ex.run_traced(&frame, &lms_core::ValidParams::DEFAULT, &mut trace);
+            ex.run_traced(&frame, &Params::STOP22.validate().unwrap(), &mut trace);
             let edges: Vec<usize> = ex.features().edges().iter().map(|e| e as usize).collect();
             let d = trace.mahalanobis();
             let at = format!("{variant:?} seed {seed}: edges {edges:?}, truth {true_edges:?}");
