@@ -1,0 +1,51 @@
+//! The defaults' other parameters one at a time, on the defaults of stop 23
+//! (same-turn windows): the footprint κ, `max_chi2`, `min_points`,
+//! `merge_gap_beams`, `corner_gap`, the passes and `max_alpha_sd_deg`.
+//! Realistic synthetic scenes (`SCANS` per family and σ₀) and the real logs'
+//! map truth (every 5th frame), pooled (docs/ALGORITHM-v3-section10.md
+//! §10.9). None wins every column.
+//!
+//! `cargo run --release -p lms-lab --example param_sweep -- [SCANS]`
+
+use anyhow::Result;
+use lms_core::Params;
+use lms_lab::sweep::{print_sweep, Adjust};
+
+fn main() -> Result<()> {
+    let scans: usize = std::env::args().nth(1).map_or(Ok(100), |s| s.parse())?;
+    let v: Vec<(&'static str, Adjust)> = vec![
+        ("defaults", |p| p),
+        ("κ 2 mrad", |p| Params {
+            footprint: 0.002,
+            ..p
+        }),
+        ("κ 4 mrad", |p| Params {
+            footprint: 0.004,
+            ..p
+        }),
+        ("max_chi2 3", |p| Params { max_chi2: 3.0, ..p }),
+        ("max_chi2 5", |p| Params { max_chi2: 5.0, ..p }),
+        ("min_points 6", |p| Params { min_points: 6, ..p }),
+        ("merge_gap 6", |p| Params {
+            merge_gap_beams: 6,
+            ..p
+        }),
+        ("corner_gap 0.3", |p| Params {
+            corner_gap: 0.3,
+            ..p
+        }),
+        ("iterations 20", |p| Params {
+            iterations: 20,
+            ..p
+        }),
+        ("iterations 40", |p| Params {
+            iterations: 40,
+            ..p
+        }),
+        ("max σα 1.25°", |p| Params {
+            max_alpha_sd_deg: 1.25,
+            ..p
+        }),
+    ];
+    print_sweep(&v, 5, scans)
+}
