@@ -149,6 +149,14 @@ pub struct Params {
     /// Largest turn between consecutive lines of an arc (degrees): a
     /// sharper one is a corner. Default 40.
     pub arc_max_turn_deg: f32,
+    /// Work bound of split before reject per frame, in beams: the sum of
+    /// the beams of the pieces it tests (each test is up to a weighted fit
+    /// over the piece). A piece that would take the sum past it is not
+    /// tested: it goes to §7 whole, which fits it once and applies the χ²
+    /// gate, as v1 does. Bounds the MCU's instructions per scan whatever
+    /// the data (docs/ALGORITHM-v3-section10.md §10.9). Default 542 (one
+    /// and a half 361-beam scans); 0 is no bound (up to stop 22).
+    pub split_budget: u16,
 }
 
 /// Pairing gate of [`Params::per_turn`] on |Δα| between two turns' lines
@@ -192,7 +200,8 @@ impl Params {
     /// The defaults, usable in `const` contexts: ALGORITHM.md v2 with the
     /// project's measured additions (`merge_collinear`, `max_alpha_sd_deg`,
     /// since stop 21 `bridge_merge` and `footprint`, §10 (e) and (f), and
-    /// since stop 22 `arc_chain`, since stop 23 `same_turn_windows`).
+    /// since stop 22 `arc_chain`, since stop 23 `same_turn_windows` and
+    /// `split_budget`).
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
@@ -220,12 +229,15 @@ impl Params {
         arc_chain: 3,
         arc_min_turn_deg: 5.0,
         arc_max_turn_deg: 40.0,
+        split_budget: 542,
     };
 
     /// The defaults of stop 22: [`Params::DEFAULT`] with the windows of
-    /// §2–6 (consecutive beams) in every mode.
+    /// §2–6 (consecutive beams) in every mode, and no work bound on split
+    /// before reject.
     pub const STOP22: Params = Params {
         same_turn_windows: false,
+        split_budget: 0,
         ..Params::DEFAULT
     };
 
@@ -394,6 +406,7 @@ impl ValidParams {
         arc_chain: 0,
         arc_min_turn_deg: 0.0,
         arc_max_turn_deg: 0.0,
+        split_budget: 0,
     });
 
     /// The parameters.

@@ -469,6 +469,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 arc_chain: (raw[10] >> 24) as u8,
                 arc_min_turn_deg: f32::from_bits(raw[8] ^ raw[10]),
                 arc_max_turn_deg: f32::from_bits(limits[0] ^ raw[3]),
+                split_budget: (raw[11] >> 8) as u16,
             }
         }
         PARAMS_SANE => Params {
@@ -529,6 +530,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
             },
             arc_min_turn_deg: unit(raw[8].rotate_left(8)) * 20.0,
             arc_max_turn_deg: 20.0 + unit(raw[9].rotate_left(8)) * 160.0,
+            split_budget: (raw[11] >> 16) as u16 % 2048,
         },
         _ => Params {
             iterations: 1 + (raw[2] % 40) as u16,

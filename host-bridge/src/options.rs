@@ -120,8 +120,8 @@ pub struct ParamArgs {
     /// Windows of consecutive beams over both mirror turns in the
     /// interleaved 0.5° and 0.25° modes, as ALGORITHM.md v2 §2–6, instead
     /// of windows of one turn (ALGORITHM.md §10 (a),
-    /// docs/ALGORITHM-v3-section10.md §10.9); with --arc-chain 0 the
-    /// defaults of stop 21 (`Params::STOP21`)
+    /// docs/ALGORITHM-v3-section10.md §10.9); with --split-budget 0 the
+    /// defaults of stop 22, and --arc-chain 0 too those of stop 21
     #[arg(long)]
     pub no_same_turn_windows: bool,
     /// Fewest consecutive touching lines, turning the same way by
@@ -133,6 +133,11 @@ pub struct ParamArgs {
     /// (degrees) [default: 5,40]
     #[arg(long, value_name = "MIN,MAX", value_parser = arc_turns_parser)]
     pub arc_turn_deg: Option<(f32, f32)>,
+    /// Work bound of split before reject per frame, in beams tested (a
+    /// piece past it goes to the chi2 gate whole, as v1); 0 for no bound,
+    /// as up to stop 22 [default: 542]
+    #[arg(long, value_name = "BEAMS")]
+    pub split_budget: Option<u16>,
 }
 
 /// `--arc-chain`: 0 or at least 2.
@@ -197,6 +202,7 @@ impl ParamArgs {
             arc_chain: self.arc_chain.unwrap_or(d.arc_chain),
             arc_min_turn_deg: self.arc_turn_deg.map_or(d.arc_min_turn_deg, |t| t.0),
             arc_max_turn_deg: self.arc_turn_deg.map_or(d.arc_max_turn_deg, |t| t.1),
+            split_budget: self.split_budget.unwrap_or(d.split_budget),
             ..d
         };
         p.validate()

@@ -373,14 +373,16 @@ fn without_arc_counter(json: &[u8]) -> Vec<u8> {
 /// gave when these digests were pinned (FNV-1a-64 of stdout): no field, no
 /// bit of any float may change. Re-pin only for an intended change (last:
 /// same-turn windows, stop 23; see tools/feature-bits/tests/digests.rs).
-/// The digests before it are what `--no-same-turn-windows` gives (stop 22),
+/// The digests before it are what `--no-same-turn-windows --split-budget 0`
+/// gives (stop 22),
 /// with `--arc-chain 0` (stop 21) and with `--footprint 0
 /// --no-bridge-merge` too (v2), the last two bit for bit once the counter
 /// `rejected_arc` that stop 22 added to every record's `stats` is taken
 /// out of the text.
 #[test]
 fn extract_json_of_every_shared_log_is_pinned() {
-    // (log stem, defaults, `--no-same-turn-windows`, with `--arc-chain 0`,
+    // (log stem, defaults, `--no-same-turn-windows --split-budget 0`, with
+    // `--arc-chain 0`,
     // and with `--footprint 0 --no-bridge-merge`)
     const PINNED: [(&str, u64, u64, u64, u64); 7] = [
         (
@@ -392,28 +394,28 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "belgioioso-corrected",
-            0x45fccde88efbdbb6,
+            0xe5cd3416cf912913,
             0xe6b583dc85e6a459,
             0xf040b3b3779f54d2,
             0x8278d002b8a1be54,
         ),
         (
             "csail-corrected",
-            0xf04ac094e2c7af05,
+            0x83fc1a76c6ce7327,
             0xa727593897fecdd7,
             0x58b0bf50f0e89679,
             0xb7f8a060b9e10ff7,
         ),
         (
             "freiburg-101-corrected",
-            0x33aeba2d8a4d2adb,
+            0x18db85e23d9855b4,
             0x86d65186b7903ee6,
             0x9e0878902dbd72e4,
             0x1320a15056d12c34,
         ),
         (
             "freiburg-campus-corrected",
-            0x550350918b7dfb70,
+            0x9e9f56de6baafb1e,
             0x91a67e96d6d10d7c,
             0xcecb39abe31b6188,
             0xe9180309d1d94bfd,
@@ -434,10 +436,18 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
     ];
     let mut wrong = Vec::new();
-    let stop22 = ["--no-same-turn-windows"];
-    let stop21 = ["--no-same-turn-windows", "--arc-chain", "0"];
+    let stop22 = ["--no-same-turn-windows", "--split-budget", "0"];
+    let stop21 = [
+        "--no-same-turn-windows",
+        "--split-budget",
+        "0",
+        "--arc-chain",
+        "0",
+    ];
     let v2 = [
         "--no-same-turn-windows",
+        "--split-budget",
+        "0",
         "--arc-chain",
         "0",
         "--footprint",

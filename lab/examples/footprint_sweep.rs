@@ -73,6 +73,7 @@ fn main() -> Result<()> {
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
     let stop22 = |p| Params {
         same_turn_windows: false,
+        split_budget: 0,
         ..p
     };
     print_sweep_over(stop22, &variants(), every, scans)

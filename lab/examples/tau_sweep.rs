@@ -18,15 +18,18 @@ fn variants() -> Vec<(&'static str, Adjust)> {
     vec![
         ("stop 22: consecutive windows (τ = 9)", |p| Params {
             same_turn_windows: false,
+            split_budget: 0,
             ..p
         }),
         ("consecutive windows, τ = 16", |p| Params {
             same_turn_windows: false,
+            split_budget: 0,
             tau: 16.0,
             ..p
         }),
         ("consecutive windows, τ = 25", |p| Params {
             same_turn_windows: false,
+            split_budget: 0,
             tau: 25.0,
             ..p
         }),

@@ -149,11 +149,12 @@ pub const NO_FLAGS: &str =
     "defaults, no flags (per data; footprint + bridge + arcs + same-turn windows)";
 /// Name of the no-flags method with the defaults of stop 22
 /// (`Params::STOP22`: windows of consecutive beams over both turns).
-pub const STOP22_NO_FLAGS: &str = "stop-22 defaults, no flags (--no-same-turn-windows)";
+pub const STOP22_NO_FLAGS: &str =
+    "stop-22 defaults, no flags (--no-same-turn-windows --split-budget 0)";
 /// Name of the no-flags method with the defaults of stop 21
 /// (`Params::STOP21`: no lines of arcs dropped either).
 pub const STOP21_NO_FLAGS: &str =
-    "stop-21 defaults, no flags (--no-same-turn-windows --arc-chain 0)";
+    "stop-21 defaults, no flags (--no-same-turn-windows --split-budget 0 --arc-chain 0)";
 /// Name of the no-flags method with the defaults up to stop 20
 /// (`Params::V2`: no footprint weights, no merge across rejected segments).
 pub const V2_NO_FLAGS: &str = "v2 defaults, no flags (per data)";
@@ -186,15 +187,18 @@ pub fn methods() -> Vec<RealMethod> {
         m(NO_FLAGS, Core, NoFlags, own),
         g(STOP22_NO_FLAGS, |p| Params {
             same_turn_windows: false,
+            split_budget: 0,
             ..p
         }),
         g(STOP21_NO_FLAGS, |p| Params {
             same_turn_windows: false,
+            split_budget: 0,
             arc_chain: 0,
             ..p
         }),
         g(V2_NO_FLAGS, |p| Params {
             same_turn_windows: false,
+            split_budget: 0,
             footprint: 0.0,
             bridge_merge: false,
             arc_chain: 0,
@@ -225,6 +229,7 @@ pub fn methods() -> Vec<RealMethod> {
         }),
         g("fit σ = 2σ (windows as v2)", |p| Params {
             same_turn_windows: false,
+            split_budget: 0,
             fit_sigma: 2.0 * p.sigma,
             ..p
         }),
@@ -235,6 +240,7 @@ pub fn methods() -> Vec<RealMethod> {
         g("v2 + per turn", |p| Params {
             per_turn: true,
             same_turn_windows: false,
+            split_budget: 0,
             footprint: 0.0,
             bridge_merge: false,
             arc_chain: 0,

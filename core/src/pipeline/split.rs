@@ -321,6 +321,7 @@ pub fn split_before_reject<B: BearingTable>(
 ) {
     let depth = params.split_depth.min(MAX_SPLIT_DEPTH);
     let trim = !params.fit_shared_points;
+    let (bounded, mut budget) = (params.split_budget > 0, usize::from(params.split_budget));
     let mut out: Vec<Segment, MAX_SEGMENTS> = Vec::new();
     // Depth-first, left half on top: at most one entry per level plus one.
     // Each entry: the piece, its level, whether its first / last beam is
@@ -335,6 +336,17 @@ pub fn split_before_reject<B: BearingTable>(
         let _ = todo.push((segment, 0, shared));
         while let Some((piece, level, shared)) = todo.pop() {
             let tested = if trim { trimmed(piece, shared) } else { piece };
+            // The work bound: an untested piece goes to §7 whole (one fit,
+            // the χ² gate), as in v1.
+            if bounded {
+                let Some(left) = budget.checked_sub(tested.points()) else {
+                    if out.push(piece).is_err() {
+                        stats.segment_overflow = stats.segment_overflow.saturating_add(1);
+                    }
+                    continue;
+                };
+                budget = left;
+            }
             if !not_straight(scan, tested, params.line_sigma()) {
                 if out.push(piece).is_err() {
                     stats.segment_overflow = stats.segment_overflow.saturating_add(1);
@@ -438,6 +450,36 @@ mod tests {
             "{c:?}"
         );
         assert!((c.angle_deg - 90.0).abs() < 0.1);
+    }
+
+    #[test]
+    fn past_the_work_bound_a_segment_goes_to_the_chi2_gate_whole() {
+        // The corner frame's one segment (290 beams) is tested, then its
+        // halves: a bound of the segment's beams lets the first test run
+        // and no more, so the failing segment is not split (v1: rejected
+        // by χ²); a bound below it tests nothing.
+        let frame = corner_frame();
+        let base = Params {
+            sigma: SIGMA,
+            split_depth: 8,
+            ..Params::V1
+        };
+        let mut ex = Extractor::new();
+        let whole = ex.run(&frame, &base.validate().unwrap()).clone();
+        assert_eq!((whole.stats.splits, whole.lines.len()), (1, 2));
+        let beams = whole.segments.iter().map(|s| s.points()).sum::<usize>() - 1;
+        for budget in [1, beams as u16] {
+            let bounded = Params {
+                split_budget: budget,
+                ..base
+            };
+            let f = ex.run(&frame, &bounded.validate().unwrap());
+            assert_eq!(f.stats.splits, u16::from(budget > 1), "{:?}", f.stats);
+            if budget == 1 {
+                assert_eq!(f.stats.rejected_chi2, 1, "{:?}", f.stats);
+                assert!(f.lines.is_empty());
+            }
+        }
     }
 
     #[test]

@@ -138,6 +138,7 @@ fn any_params() -> Params {
         arc_chain: black_box(3),
         arc_min_turn_deg: any_f32(),
         arc_max_turn_deg: any_f32(),
+        split_budget: black_box(1083),
     }
 }
 
