@@ -221,15 +221,24 @@ fn three_beams_and_the_largest_frame_run() {
     assert!((f.lines()[0].r - 3.0).abs() < 1e-3 && f.lines()[0].alpha.abs() < 1e-3);
     assert!(f.corners().is_empty());
 
-    // 401 beams of alternating near/far ranges: every window breaks, no
-    // segment, and nothing panics.
+    // 401 beams of alternating near/far ranges: every window of §2
+    // (consecutive beams) breaks, no segment, and nothing panics. Same-turn
+    // windows (the defaults) see one constant range per turn and hold
+    // segments over both turns (past the split's work bound they reach §7
+    // whole), but no line fits both turns' beams.
     let zigzag: Vec<f32> = (0..401)
         .map(|j| if j % 2 == 0 { 1.0 } else { 80.0 })
         .collect();
     let zz = Frame::from_metres(g, &zigzag).unwrap();
-    ex.run(&zz, &params.validate().unwrap());
+    let spec_windows = Params {
+        same_turn_windows: false,
+        ..params
+    };
+    ex.run(&zz, &spec_windows.validate().unwrap());
     let f = ex.features();
     assert!(f.segments().is_empty() && f.lines().is_empty());
+    ex.run(&zz, &params.validate().unwrap());
+    assert!(ex.features().lines().is_empty());
 
     // Mixed: a single valid beam between invalid ones, and the maximum
     // number of passes.
