@@ -167,6 +167,21 @@ fn wall_fit_spread_matches_the_reported_covariance_and_the_cramer_rao_bound() {
     );
 }
 
+/// The arc of radius 1 m, centre 2 m ahead, at 180°/0.5° with range noise
+/// `SIGMA` drawn from `seed`.
+fn arc_frame(seed: u64) -> Frame {
+    let g = Variant::Fov180Res50.geometry();
+    let noise = Normal::new(0.0, SIGMA).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let ranges: Vec<f32> = (0..Variant::Fov180Res50.beams())
+        .map(|j| {
+            synth::cast_circle([2.0, 0.0], 1.0, g.bearing(j) as f64)
+                .map_or(0.0, |d| (d + noise.sample(&mut rng)) as f32)
+        })
+        .collect();
+    Frame::from_metres(g, &ranges).unwrap()
+}
+
 /// An arc of radius 1 m whose centre is 2 m straight ahead: a strongly curved
 /// surface seen over ±30°. Whatever the segmentation makes of it, no line
 /// may be accepted across it: a straight fit to the arc's segment has a
@@ -175,19 +190,10 @@ fn wall_fit_spread_matches_the_reported_covariance_and_the_cramer_rao_bound() {
 #[test]
 fn an_arc_is_not_accepted_as_a_line() {
     let variant = Variant::Fov180Res50;
-    let g = variant.geometry();
-    let noise = Normal::new(0.0, SIGMA).unwrap();
     let params = Params::default();
     let mut arc_beams = 0;
     for seed in 0..5u64 {
-        let mut rng = ChaCha8Rng::seed_from_u64(77 + seed);
-        let ranges: Vec<f32> = (0..variant.beams())
-            .map(|j| {
-                synth::cast_circle([2.0, 0.0], 1.0, g.bearing(j) as f64)
-                    .map_or(0.0, |d| (d + noise.sample(&mut rng)) as f32)
-            })
-            .collect();
-        let frame = Frame::from_metres(g, &ranges).unwrap();
+        let frame = arc_frame(77 + seed);
         let valid: Vec<usize> = (0..frame.len())
             .filter(|&j| frame.beams()[j].is_valid())
             .collect();
@@ -298,21 +304,11 @@ fn an_arc_is_not_accepted_as_a_line() {
 /// frames, every such line under 0.5 m.
 #[test]
 fn arcs_leave_lines_at_their_tangent_ends_rarely() {
-    let variant = Variant::Fov180Res50;
-    let g = variant.geometry();
-    let noise = Normal::new(0.0, SIGMA).unwrap();
     let params = Params::default().validate().unwrap();
     let mut ex = Extractor::new();
     let (mut frames_with_lines, mut longest) = (0, 0.0f32);
     for seed in 0..200u64 {
-        let mut rng = ChaCha8Rng::seed_from_u64(1000 + seed);
-        let ranges: Vec<f32> = (0..variant.beams())
-            .map(|j| {
-                synth::cast_circle([2.0, 0.0], 1.0, g.bearing(j) as f64)
-                    .map_or(0.0, |d| (d + noise.sample(&mut rng)) as f32)
-            })
-            .collect();
-        let f = ex.run(&Frame::from_metres(g, &ranges).unwrap(), &params);
+        let f = ex.run(&arc_frame(1000 + seed), &params);
         frames_with_lines += usize::from(!f.lines().is_empty());
         longest = f.lines().iter().map(|l| l.length()).fold(longest, f32::max);
     }
