@@ -113,8 +113,8 @@ pub struct ParamArgs {
     /// Merge consecutive lines only across invalid beams (or at most three
     /// valid ones), as ALGORITHM.md v2 §7.6, not across
     /// rejected segments (ALGORITHM.md §10 (e)); with --footprint 0,
-    /// --no-same-turn-windows and --arc-chain 0 the defaults up to stop 20
-    /// (`Params::V2`)
+    /// --no-same-turn-windows, --split-budget 0 and --arc-chain 0 the
+    /// defaults up to stop 20 (`Params::V2`)
     #[arg(long)]
     pub no_bridge_merge: bool,
     /// Windows of consecutive beams over both mirror turns in the
