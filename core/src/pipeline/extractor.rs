@@ -23,10 +23,8 @@ use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{EdgeList, Segmenter};
 use crate::pipeline::smoothing::{
-    interleaved_turns, smoothing_pass_strided, usable_windows_strided,
-};
-use crate::pipeline::smoothing::{
-    smoothing_pass, usable, usable_windows, WindowSink, WINDOW_WORDS,
+    interleaved_turns, smoothing_pass, smoothing_pass_strided, usable, usable_windows,
+    usable_windows_strided, WindowSink, WINDOW_WORDS,
 };
 use crate::pipeline::split::split_before_reject;
 

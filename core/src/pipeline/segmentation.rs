@@ -74,7 +74,8 @@ pub fn segment<const S: usize, L: EdgeList>(
 /// run's middle beams). So a corner point is shared as in §6 and a jump
 /// leaves none. The edge point of a breaking window is its middle beam.
 /// `stride = 1` is §6.
-// Never inlined: the §10 option must not grow the extractor's stack frame.
+// Never inlined: the slice form is for tools and tests; the extractor feeds
+// a `Segmenter` window by window.
 #[inline(never)]
 pub fn segment_strided<const S: usize, L: EdgeList>(
     mahalanobis: &[f32],

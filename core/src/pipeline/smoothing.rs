@@ -327,23 +327,25 @@ pub fn interleaved_turns(step: f32) -> usize {
 /// a point still needs (`2·stride` of them).
 const CARRY: usize = 2 * MAX_STRIDE;
 
-/// Per-block working storage. Slots `CARRY − 2·K .. CARRY` of
-/// `third_weight` and `posterior` carry the last `2·K` windows of the
+/// Per-block working storage. Slots `CARRY − 2·k .. CARRY` of
+/// `third_weight` and `posterior` carry the last `2·k` windows of the
 /// previous block.
 struct StridedBlock {
     third_weight: [f32; BLOCK + CARRY],
     posterior: [[f32; BLOCK + CARRY]; 3],
 }
 
-/// [`smoothing_pass`] with windows of stride `K` (same-turn windows,
+/// [`smoothing_pass`] with windows of stride `k` (same-turn windows,
 /// `Params::same_turn_windows`, the default since stop 23 in the
 /// interleaved 0.5° and 0.25° modes; docs/ALGORITHM-v3-section10.md
 /// §10.9): window `i` is beams
-/// `i, i+K, i+2K` (the filter built for the angle `K·γ`), point `j` is
-/// blended from windows `j, j−K, j−2K` in that order; there are `n − 2K`
+/// `i, i+k, i+2k` (the filter built for the angle `k·γ`), point `j` is
+/// blended from windows `j, j−k, j−2k` in that order; there are `n − 2k`
 /// windows (the sink hears of no window beyond them; `window_ok` bits
-/// beyond them are ignored). `K = 1` is §4 exactly. `K` above [`MAX_STRIDE`] does nothing.
-// Never inlined: one copy per stride, called once per pass.
+/// beyond them are ignored). `k = 1` is §4 exactly. `k` above [`MAX_STRIDE`] does nothing.
+// Never inlined, and `k` a run-time value: one copy for every stride in
+// flash (two const-generic copies cost 1 KB more for 2 % fewer
+// instructions), its block on the stack only while it runs.
 #[inline(never)]
 pub fn smoothing_pass_strided(
     filter: &WindowFilter,
@@ -387,7 +389,7 @@ pub fn smoothing_pass_strided(
         for (t, point) in points.iter_mut().enumerate() {
             *point = blend_strided(&block, k, *point, t + CARRY);
         }
-        // Carry the last 2K windows into the slots before CARRY.
+        // Carry the last 2k windows into the slots before CARRY.
         for slot in CARRY - 2 * k..CARRY {
             block.third_weight[slot] = block.third_weight[m + slot];
             for row in &mut block.posterior {
@@ -396,8 +398,8 @@ pub fn smoothing_pass_strided(
         }
         start += m;
     }
-    // Points n−2K … n−1 have no window starting at them. The slots before
-    // CARRY hold windows n−4K … n−2K−1; the slots from CARRY on stand for
+    // Points n−2k … n−1 have no window starting at them. The slots before
+    // CARRY hold windows n−4k … n−2k−1; the slots from CARRY on stand for
     // absent windows.
     for w in &mut block.third_weight[CARRY..CARRY + 2 * k] {
         *w = 0.0;
@@ -409,9 +411,9 @@ pub fn smoothing_pass_strided(
     }
 }
 
-/// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2K`):
-/// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − K`,
-/// `j − 2K`, added in that order. Absent or invalid windows have weight 0
+/// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2k`):
+/// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − k`,
+/// `j − 2k`, added in that order. Absent or invalid windows have weight 0
 /// and estimate 0.
 #[inline]
 fn blend_strided(block: &StridedBlock, k: usize, d: f32, slot: usize) -> f32 {
@@ -423,8 +425,8 @@ fn blend_strided(block: &StridedBlock, k: usize, d: f32, slot: usize) -> f32 {
     (1.0 - weight_sum) * d + estimate_sum
 }
 
-/// The window filter on `m` consecutive windows of stride `K`, `ranges`
-/// holding their `m + 2K` points. Writes `D` (or `+inf`) and the estimates
+/// The window filter on `m` consecutive windows of stride `k`, `ranges`
+/// holding their `m + 2k` points. Writes `D` (or `+inf`) and the estimates
 /// (or 0) of window `t` into `d[t]` and slot `t + CARRY` of the block.
 ///
 /// Branch-free over the windows: every window is computed, invalid ones are
@@ -440,7 +442,7 @@ fn filter_block_strided(
     d: &mut [f32],
 ) {
     let m = d.len().min(ranges.len().saturating_sub(2 * k)).min(BLOCK);
-    // Exactly the block's points: `t + 2K < m + 2K` below needs no check.
+    // Exactly the block's points: `t + 2k < m + 2k` below needs no check.
     let Some(ranges) = ranges.get(..m + 2 * k) else {
         return;
     };

@@ -321,7 +321,8 @@ pub fn split_before_reject<B: BearingTable>(
 ) {
     let depth = params.split_depth.min(MAX_SPLIT_DEPTH);
     let trim = !params.fit_shared_points;
-    let (bounded, mut budget) = (params.split_budget > 0, usize::from(params.split_budget));
+    // The work bound (beams left to test), if any.
+    let mut budget = (params.split_budget > 0).then_some(usize::from(params.split_budget));
     let mut out: Vec<Segment, MAX_SEGMENTS> = Vec::new();
     // Depth-first, left half on top: at most one entry per level plus one.
     // Each entry: the piece, its level, whether its first / last beam is
@@ -336,18 +337,19 @@ pub fn split_before_reject<B: BearingTable>(
         let _ = todo.push((segment, 0, shared));
         while let Some((piece, level, shared)) = todo.pop() {
             let tested = if trim { trimmed(piece, shared) } else { piece };
-            // The work bound: an untested piece goes to §7 whole (one fit,
-            // the χ² gate), as in v1.
-            if bounded {
-                let Some(left) = budget.checked_sub(tested.points()) else {
-                    if out.push(piece).is_err() {
-                        stats.segment_overflow = stats.segment_overflow.saturating_add(1);
+            // Past the work bound a piece is not tested: it goes to §7
+            // whole (one fit, the χ² gate), as in v1.
+            let over_budget = match budget {
+                Some(left) => match left.checked_sub(tested.points()) {
+                    Some(rest) => {
+                        budget = Some(rest);
+                        false
                     }
-                    continue;
-                };
-                budget = left;
-            }
-            if !not_straight(scan, tested, params.line_sigma()) {
+                    None => true,
+                },
+                None => false,
+            };
+            if over_budget || !not_straight(scan, tested, params.line_sigma()) {
                 if out.push(piece).is_err() {
                     stats.segment_overflow = stats.segment_overflow.saturating_add(1);
                 }
