@@ -10,6 +10,7 @@
 
 use anyhow::Result;
 use lms_core::Params;
+use lms_lab::realtruth::on_data;
 use lms_lab::sweep::{print_sweep_over, Adjust};
 
 /// The variants, each applied to the defaults (the per-data defaults on
@@ -45,10 +46,5 @@ fn variants() -> Vec<(&'static str, Adjust)> {
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
-    let stop22 = |p| Params {
-        same_turn_windows: false,
-        split_budget: 0,
-        ..p
-    };
-    print_sweep_over(stop22, &variants(), every, scans)
+    print_sweep_over(|p| on_data(Params::STOP22, p), &variants(), every, scans)
 }

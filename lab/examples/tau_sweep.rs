@@ -10,28 +10,23 @@
 
 use anyhow::Result;
 use lms_core::Params;
+use lms_lab::realtruth::on_data;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 /// The variants, each applied to the defaults (the per-data defaults on
 /// real logs, σ₀ on synthetic scenes).
 fn variants() -> Vec<(&'static str, Adjust)> {
     vec![
-        ("stop 22: consecutive windows (τ = 9)", |p| Params {
-            same_turn_windows: false,
-            split_budget: 0,
-            ..p
+        ("stop 22: consecutive windows (τ = 9)", |p| {
+            on_data(Params::STOP22, p)
         }),
         ("consecutive windows, τ = 16", |p| Params {
-            same_turn_windows: false,
-            split_budget: 0,
             tau: 16.0,
-            ..p
+            ..on_data(Params::STOP22, p)
         }),
         ("consecutive windows, τ = 25", |p| Params {
-            same_turn_windows: false,
-            split_budget: 0,
             tau: 25.0,
-            ..p
+            ..on_data(Params::STOP22, p)
         }),
         ("defaults: same-turn windows (τ = 9)", |p| p),
         ("same-turn windows, τ = 12", |p| Params { tau: 12.0, ..p }),

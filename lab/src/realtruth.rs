@@ -80,6 +80,18 @@ pub fn no_flag_params(path: &Path) -> Result<Params> {
     }
 }
 
+/// `preset` (an older stop's defaults, say) on the data of `data`: its σ
+/// and range limit, the only fields in which the per-data defaults
+/// ([`no_flag_params`]) and the synthetic scenes' σ₀ differ from
+/// [`Params::DEFAULT`].
+pub fn on_data(preset: Params, data: Params) -> Params {
+    Params {
+        sigma: data.sigma,
+        max_range: data.max_range,
+        ..preset
+    }
+}
+
 /// Which parameters a method starts from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Base {
@@ -185,25 +197,9 @@ pub fn methods() -> Vec<RealMethod> {
     let own = SigmaChoice::Base;
     vec![
         m(NO_FLAGS, Core, NoFlags, own),
-        g(STOP22_NO_FLAGS, |p| Params {
-            same_turn_windows: false,
-            split_budget: 0,
-            ..p
-        }),
-        g(STOP21_NO_FLAGS, |p| Params {
-            same_turn_windows: false,
-            split_budget: 0,
-            arc_chain: 0,
-            ..p
-        }),
-        g(V2_NO_FLAGS, |p| Params {
-            same_turn_windows: false,
-            split_budget: 0,
-            footprint: 0.0,
-            bridge_merge: false,
-            arc_chain: 0,
-            ..p
-        }),
+        g(STOP22_NO_FLAGS, |p| on_data(Params::STOP22, p)),
+        g(STOP21_NO_FLAGS, |p| on_data(Params::STOP21, p)),
+        g(V2_NO_FLAGS, |p| on_data(Params::V2, p)),
         m(V1_NO_FLAGS, Core, V1, own),
         m("v1, σ by unit (10 mm cm, 5 mm mm)", Core, V1, ByUnit),
         m("defaults, σ by unit", Core, NoFlags, ByUnit),
@@ -228,10 +224,8 @@ pub fn methods() -> Vec<RealMethod> {
             ..p
         }),
         g("fit σ = 2σ (windows as v2)", |p| Params {
-            same_turn_windows: false,
-            split_budget: 0,
             fit_sigma: 2.0 * p.sigma,
-            ..p
+            ..on_data(Params::STOP22, p)
         }),
         g(PER_TURN, |p| Params {
             per_turn: true,
@@ -239,12 +233,7 @@ pub fn methods() -> Vec<RealMethod> {
         }),
         g("v2 + per turn", |p| Params {
             per_turn: true,
-            same_turn_windows: false,
-            split_budget: 0,
-            footprint: 0.0,
-            bridge_merge: false,
-            arc_chain: 0,
-            ..p
+            ..on_data(Params::V2, p)
         }),
         m(ORACLE, Oracle, NoFlags, own),
     ]

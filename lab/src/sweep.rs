@@ -28,7 +28,7 @@ pub fn print_sweep(variants: &[(&'static str, Adjust)], every: usize, scans: usi
 
 /// [`print_sweep`] with every variant applied to `base(defaults)` instead
 /// of the defaults: an older stop's sweep on that stop's defaults (e.g.
-/// `Params { same_turn_windows: false, ..p }` for stop 22's).
+/// `|p| realtruth::on_data(Params::STOP22, p)` for stop 22's).
 pub fn print_sweep_over(
     base: Adjust,
     variants: &[(&'static str, Adjust)],
