@@ -157,6 +157,17 @@ pub struct Params {
     /// the data (docs/ALGORITHM-v3-section10.md §10.9). Default 542 (one
     /// and a half 361-beam scans); 0 is no bound (up to stop 22).
     pub split_budget: u16,
+    /// Anchor gate of the merges (χ²₂; beyond ALGORITHM.md, issue 14,
+    /// docs/ALGORITHM-v3-section10.md §10.10): §7.6 and §10 (e) merge two
+    /// lines only if the union line stays within this Mahalanobis distance
+    /// of the larger line's own parameters, under that line's covariance
+    /// scaled by its own χ² per point where that is above 1
+    /// (`crate::pipeline::merge`). A long line does not take in a short
+    /// piece at a bend that moves its α by many of its own σ (on the
+    /// realistic synthetic scenes σΔα/CRB 1.43 → 1.15 at 10 mm, 2.21 → 1.25
+    /// at 20 mm). Default [`DEFAULT_MERGE_ANCHOR_GATE`] (χ²₂ at 99.9 %);
+    /// `+inf` is no test (stop 23 and before).
+    pub merge_anchor_gate: f32,
 }
 
 /// Pairing gate of [`Params::per_turn`] on |Δα| between two turns' lines
@@ -172,6 +183,12 @@ pub const TURN_FUSE_R: f32 = 0.1;
 /// on the real logs' map truth and the realistic synthetic scenes
 /// (`cargo run --release -p lms-lab --example footprint_sweep`).
 pub const DEFAULT_FOOTPRINT: f32 = 0.003;
+
+/// The default [`Params::merge_anchor_gate`]: the 99.9 % quantile of χ²
+/// with two degrees of freedom, as split before reject's straightness test
+/// takes 99.9 % (measured against 4.61–13.8 and per part:
+/// `cargo run --release -p lms-lab --example merge_anchor_sweep`).
+pub const DEFAULT_MERGE_ANCHOR_GATE: f32 = 13.815_51;
 
 /// Largest incidence (degrees) the grazing term of
 /// [`Params::grazing_noise`] follows; a window whose outer ranges differ
@@ -201,7 +218,7 @@ impl Params {
     /// project's measured additions (`merge_collinear`, `max_alpha_sd_deg`,
     /// since stop 21 `bridge_merge` and `footprint`, §10 (e) and (f), and
     /// since stop 22 `arc_chain`, since stop 23 `same_turn_windows` and
-    /// `split_budget`).
+    /// `split_budget`, since stop 24 `merge_anchor_gate`).
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
@@ -230,15 +247,23 @@ impl Params {
         arc_min_turn_deg: 5.0,
         arc_max_turn_deg: 40.0,
         split_budget: 542,
+        merge_anchor_gate: DEFAULT_MERGE_ANCHOR_GATE,
     };
 
-    /// The defaults of stop 22: [`Params::DEFAULT`] with the windows of
+    /// The defaults of stop 23: [`Params::DEFAULT`] with no anchor gate on
+    /// the merges.
+    pub const STOP23: Params = Params {
+        merge_anchor_gate: f32::INFINITY,
+        ..Params::DEFAULT
+    };
+
+    /// The defaults of stop 22: [`Params::STOP23`] with the windows of
     /// §2–6 (consecutive beams) in every mode, and no work bound on split
     /// before reject.
     pub const STOP22: Params = Params {
         same_turn_windows: false,
         split_budget: 0,
-        ..Params::DEFAULT
+        ..Params::STOP23
     };
 
     /// The defaults of stop 21: [`Params::STOP22`] without dropping arcs.
@@ -309,6 +334,8 @@ pub enum ParamError {
     MaxRange,
     /// `max_alpha_sd_deg` must be > 0 (`+inf` allowed).
     MaxAlphaSd,
+    /// `merge_anchor_gate` must be > 0 (`+inf` allowed).
+    MergeAnchorGate,
     /// `grazing_noise` must be finite and ≥ 0.
     GrazingNoise,
     /// `fit_sigma` must be finite and ≥ 0.
@@ -351,6 +378,7 @@ impl fmt::Display for ParamError {
             ParamError::SplitDepth => "split_depth must be at most 16",
             ParamError::MaxRange => "max_range must be > 0 (metres; inf for no limit)",
             ParamError::MaxAlphaSd => "max_alpha_sd_deg must be > 0 (degrees; inf for no limit)",
+            ParamError::MergeAnchorGate => "merge_anchor_gate must be > 0 (chi-square, 2 dof; inf for no test)",
             ParamError::GrazingNoise => "grazing_noise must be finite and >= 0",
             ParamError::FitSigma => "fit_sigma must be finite and >= 0 (metres; 0: sigma)",
             ParamError::Footprint => "footprint must be finite and >= 0 (radians; 0: off)",
@@ -407,6 +435,7 @@ impl ValidParams {
         arc_min_turn_deg: 0.0,
         arc_max_turn_deg: 0.0,
         split_budget: 0,
+        merge_anchor_gate: 0.0,
     });
 
     /// The parameters.
@@ -491,6 +520,9 @@ impl Params {
         }
         if !(self.max_alpha_sd_deg > 0.0) {
             return Err(ParamError::MaxAlphaSd);
+        }
+        if !(self.merge_anchor_gate > 0.0) {
+            return Err(ParamError::MergeAnchorGate);
         }
         if !non_neg(self.grazing_noise) {
             return Err(ParamError::GrazingNoise);

@@ -148,12 +148,14 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             any::<bool>(),
             prop_oneof![Just(0.0f32), 0.0f32..0.02],
         ),
-        // Arcs dropped (issue 14 item 6); the split's work bound.
+        // Arcs dropped (issue 14 item 6); the split's work bound; the
+        // merges' anchor gate.
         (
             prop_oneof![Just(0u8), 2u8..=8],
             0.0f32..20.0,
             20.0f32..=180.0,
             prop_oneof![Just(0u16), 1u16..2000],
+            prop_oneof![Just(f32::INFINITY), 0.5f32..50.0],
         ),
     )
         .prop_map(|(a, b, c, d, e, f)| Params {
@@ -185,6 +187,7 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             arc_min_turn_deg: f.1,
             arc_max_turn_deg: f.2,
             split_budget: f.3,
+            merge_anchor_gate: f.4,
         })
 }
 

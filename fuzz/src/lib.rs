@@ -470,6 +470,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 arc_min_turn_deg: f32::from_bits(raw[8] ^ raw[10]),
                 arc_max_turn_deg: f32::from_bits(limits[0] ^ raw[3]),
                 split_budget: (raw[11] >> 8) as u16,
+                merge_anchor_gate: f32::from_bits(raw[6] ^ limits[1]),
             }
         }
         PARAMS_SANE => Params {
@@ -531,6 +532,11 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
             arc_min_turn_deg: unit(raw[8].rotate_left(8)) * 20.0,
             arc_max_turn_deg: 20.0 + unit(raw[9].rotate_left(8)) * 160.0,
             split_budget: (raw[11] >> 16) as u16 % 2048,
+            merge_anchor_gate: if raw[6] & 0x100 == 0 {
+                f32::INFINITY
+            } else {
+                0.5 + unit(raw[6].rotate_left(12)) * 50.0
+            },
         },
         _ => Params {
             iterations: 1 + (raw[2] % 40) as u16,

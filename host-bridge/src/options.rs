@@ -138,6 +138,19 @@ pub struct ParamArgs {
     /// as up to stop 22 [default: 542]
     #[arg(long, value_name = "BEAMS")]
     pub split_budget: Option<u16>,
+    /// Anchor gate of the merges (chi-square, 2 dof): two lines merge only
+    /// if the union line stays within it of the larger line's own
+    /// parameters; inf for no test, as up to stop 23 [default: 13.8155]
+    #[arg(long, value_name = "CHI2", value_parser = anchor_gate_parser)]
+    pub merge_anchor_gate: Option<f32>,
+}
+
+/// `--merge-anchor-gate`: > 0, or `inf`.
+fn anchor_gate_parser(s: &str) -> std::result::Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(g) if g > 0.0 => Ok(g),
+        _ => Err("give a chi-square gate > 0 (e.g. 13.8), or inf for no test".into()),
+    }
 }
 
 /// `--arc-chain`: 0 or at least 2.
@@ -203,6 +216,7 @@ impl ParamArgs {
             arc_min_turn_deg: self.arc_turn_deg.map_or(d.arc_min_turn_deg, |t| t.0),
             arc_max_turn_deg: self.arc_turn_deg.map_or(d.arc_max_turn_deg, |t| t.1),
             split_budget: self.split_budget.unwrap_or(d.split_budget),
+            merge_anchor_gate: self.merge_anchor_gate.unwrap_or(d.merge_anchor_gate),
             ..d
         };
         p.validate()

@@ -32,7 +32,9 @@ pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16
 
 /// §7.6: merge `prev` and `next` if only invalid beams (or at most
 /// `merge_gap_beams` valid ones) lie between them, their parameters agree
-/// within `merge_gate`, and the refit of the union passes `max_chi2`.
+/// within `merge_gate`, and the refit of the union passes `max_chi2` (and,
+/// beyond §7.6, stays within `merge_anchor_gate` of the larger line's own
+/// parameters: [`anchored`]).
 pub fn try_merge<B: BearingTable>(
     bearings: B,
     raw: &[f32],
@@ -67,7 +69,26 @@ pub fn try_merge<B: BearingTable>(
     let merged = fit_piece(&scan, prev.first, next.last, sigma).ok()?;
     // A bridge (§10 (e)): each line's own beams must fit the union line.
     let fits = |part: &Line| part_chi2(part, &merged).is_some_and(|c| c <= params.max_chi2);
-    (merged.chi2 <= params.max_chi2 && (vouched || (fits(prev) && fits(next)))).then_some(merged)
+    let larger = if next.points > prev.points { next } else { prev };
+    (merged.chi2 <= params.max_chi2
+        && (vouched || (fits(prev) && fits(next)))
+        && anchored(larger, &merged, params.merge_anchor_gate))
+    .then_some(merged)
+}
+
+/// Whether the union line `merged` stays within `gate` (χ²₂) of `larger`'s
+/// own parameters: `Δᵀ Σ⁻¹ Δ ≤ gate · max(1, χ²)` with `Σ`, `χ²` (per
+/// point) those of `larger`'s own fit, so a part whose beams scatter more
+/// than `σ` says has its covariance scaled up by that excess (beyond
+/// ALGORITHM.md; issue 14, docs/ALGORITHM-v3-section10.md §10.10). A merge
+/// must not move the better-determined line off its own evidence: §7.6's
+/// χ² per point of the union is an average, and a long line with a short
+/// piece at a 5–25° bend passes it while its α moves many σ. `+inf`: no
+/// test (§7.6 as written, stop 23 and before).
+fn anchored(larger: &Line, merged: &Line, gate: f32) -> bool {
+    gate == f32::INFINITY
+        || mahalanobis(&larger.cov, larger, merged)
+            .is_some_and(|d| d <= gate * larger.chi2.max(1.0))
 }
 
 /// χ² per point of the beams `part` was fitted to about `line` (§10 (e)),

@@ -139,6 +139,7 @@ fn any_params() -> Params {
         arc_min_turn_deg: any_f32(),
         arc_max_turn_deg: any_f32(),
         split_budget: black_box(1083),
+        merge_anchor_gate: any_f32(),
     }
 }
 
