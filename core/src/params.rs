@@ -378,7 +378,9 @@ impl fmt::Display for ParamError {
             ParamError::SplitDepth => "split_depth must be at most 16",
             ParamError::MaxRange => "max_range must be > 0 (metres; inf for no limit)",
             ParamError::MaxAlphaSd => "max_alpha_sd_deg must be > 0 (degrees; inf for no limit)",
-            ParamError::MergeAnchorGate => "merge_anchor_gate must be > 0 (chi-square, 2 dof; inf for no test)",
+            ParamError::MergeAnchorGate => {
+                "merge_anchor_gate must be > 0 (chi-square, 2 dof; inf for no test)"
+            }
             ParamError::GrazingNoise => "grazing_noise must be finite and >= 0",
             ParamError::FitSigma => "fit_sigma must be finite and >= 0 (metres; 0: sigma)",
             ParamError::Footprint => "footprint must be finite and >= 0 (radians; 0: off)",

@@ -372,21 +372,22 @@ fn without_arc_counter(json: &[u8]) -> Vec<u8> {
 /// `extract LOG` (defaults) on every shared log gives exactly the JSON it
 /// gave when these digests were pinned (FNV-1a-64 of stdout): no field, no
 /// bit of any float may change. Re-pin only for an intended change (last:
-/// same-turn windows, stop 23; see tools/feature-bits/tests/digests.rs).
-/// The digests before it are what `--no-same-turn-windows --split-budget 0`
-/// gives (stop 22),
+/// the merges' anchor gate, stop 24; see tools/feature-bits/tests/digests.rs).
+/// The digests before it are what `--merge-anchor-gate inf` gives (stop
+/// 23), with `--no-same-turn-windows --split-budget 0` too (stop 22),
 /// with `--arc-chain 0` (stop 21) and with `--footprint 0
 /// --no-bridge-merge` too (v2), the last two bit for bit once the counter
 /// `rejected_arc` that stop 22 added to every record's `stats` is taken
 /// out of the text.
 #[test]
 fn extract_json_of_every_shared_log_is_pinned() {
-    // (log stem, defaults, `--no-same-turn-windows --split-budget 0`, with
-    // `--arc-chain 0`,
+    // (log stem, defaults, `--merge-anchor-gate inf`, with
+    // `--no-same-turn-windows --split-budget 0`, with `--arc-chain 0`,
     // and with `--footprint 0 --no-bridge-merge`)
-    const PINNED: [(&str, u64, u64, u64, u64); 7] = [
+    const PINNED: [(&str, u64, u64, u64, u64, u64); 7] = [
         (
             "acapulco-corrected",
+            0x04250938a78912fa,
             0xc40701c7d173c357,
             0xc40701c7d173c357,
             0xc3929d878ccb4e2c,
@@ -394,6 +395,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "belgioioso-corrected",
+            0x1cdaad41b9c3c420,
             0xe5cd3416cf912913,
             0xe6b583dc85e6a459,
             0xf040b3b3779f54d2,
@@ -401,6 +403,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "csail-corrected",
+            0xc442749c490fd06d,
             0x83fc1a76c6ce7327,
             0xa727593897fecdd7,
             0x58b0bf50f0e89679,
@@ -408,6 +411,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "freiburg-101-corrected",
+            0x9a3e831e975cd1c0,
             0x18db85e23d9855b4,
             0x86d65186b7903ee6,
             0x9e0878902dbd72e4,
@@ -415,6 +419,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "freiburg-campus-corrected",
+            0x3a5cbe6cf9471008,
             0x9e9f56de6baafb1e,
             0x91a67e96d6d10d7c,
             0xcecb39abe31b6188,
@@ -422,6 +427,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "intel-corrected",
+            0x4abed1f79912e32e,
             0x739aa99c0dab50e2,
             0x739aa99c0dab50e2,
             0x3c92353e51c89fd0,
@@ -429,6 +435,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "orebro-corrected",
+            0x582be87adeaa59c8,
             0x23de0131a1d3b95d,
             0x23de0131a1d3b95d,
             0xd80fb2ca8bb9f702,
@@ -436,8 +443,17 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
     ];
     let mut wrong = Vec::new();
-    let stop22 = ["--no-same-turn-windows", "--split-budget", "0"];
+    let stop23 = ["--merge-anchor-gate", "inf"];
+    let stop22 = [
+        "--merge-anchor-gate",
+        "inf",
+        "--no-same-turn-windows",
+        "--split-budget",
+        "0",
+    ];
     let stop21 = [
+        "--merge-anchor-gate",
+        "inf",
         "--no-same-turn-windows",
         "--split-budget",
         "0",
@@ -445,6 +461,8 @@ fn extract_json_of_every_shared_log_is_pinned() {
         "0",
     ];
     let v2 = [
+        "--merge-anchor-gate",
+        "inf",
         "--no-same-turn-windows",
         "--split-budget",
         "0",
@@ -454,11 +472,12 @@ fn extract_json_of_every_shared_log_is_pinned() {
         "0",
         "--no-bridge-merge",
     ];
-    for (stem, pinned, pinned_stop22, pinned_stop21, pinned_v2) in PINNED {
+    for (stem, pinned, pinned_stop23, pinned_stop22, pinned_stop21, pinned_v2) in PINNED {
         let path = data(&format!("{stem}.log.gz"));
         let path = path.to_str().unwrap();
         for (flags, pinned, counter) in [
             (&[][..], pinned, true),
+            (&stop23[..], pinned_stop23, true),
             (&stop22[..], pinned_stop22, true),
             (&stop21[..], pinned_stop21, false),
             (&v2[..], pinned_v2, false),

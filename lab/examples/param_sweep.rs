@@ -1,5 +1,6 @@
 //! The defaults' other parameters one at a time, on the defaults of stop 23
-//! (same-turn windows): the footprint κ, `max_chi2`, `min_points`,
+//! (same-turn windows, `Params::STOP23`; the defaults now add the
+//! merges' anchor gate): the footprint κ, `max_chi2`, `min_points`,
 //! `merge_gap_beams`, `corner_gap`, the passes and `max_alpha_sd_deg`.
 //! Realistic synthetic scenes (`SCANS` per family and σ₀) and the real logs'
 //! map truth (every 5th frame), pooled (docs/ALGORITHM-v3-section10.md
@@ -9,7 +10,8 @@
 
 use anyhow::Result;
 use lms_core::Params;
-use lms_lab::sweep::{print_sweep, Adjust};
+use lms_lab::realtruth::on_data;
+use lms_lab::sweep::{print_sweep_over, Adjust};
 
 fn main() -> Result<()> {
     let scans: usize = std::env::args().nth(1).map_or(Ok(100), |s| s.parse())?;
@@ -47,5 +49,5 @@ fn main() -> Result<()> {
             ..p
         }),
     ];
-    print_sweep(&v, 5, scans)
+    print_sweep_over(|p| on_data(Params::STOP23, p), &v, 5, scans)
 }

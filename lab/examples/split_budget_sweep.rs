@@ -1,6 +1,6 @@
 //! The work bound of split before reject (`Params::split_budget`, beams
 //! tested per frame; docs/ALGORITHM-v3-section10.md §10.9): no bound and
-//! 1, 1.5, 2 and 3 scans' worth, on the defaults. Realistic synthetic
+//! 1, 1.5, 2 and 3 scans' worth, on stop 23's defaults (`Params::STOP23`). Realistic synthetic
 //! scenes (100 scans per family and σ₀) and the real logs' map truth
 //! (every 5th frame), pooled. The instructions it bounds are counted under
 //! QEMU (`tools/qemu-icount/pipeline.sh --replay
@@ -10,7 +10,8 @@
 
 use anyhow::Result;
 use lms_core::Params;
-use lms_lab::sweep::{print_sweep, Adjust};
+use lms_lab::realtruth::on_data;
+use lms_lab::sweep::{print_sweep_over, Adjust};
 fn main() -> Result<()> {
     let v: Vec<(&'static str, Adjust)> = vec![
         ("no bound", |p| Params {
@@ -34,5 +35,5 @@ fn main() -> Result<()> {
             ..p
         }),
     ];
-    print_sweep(&v, 5, 100)
+    print_sweep_over(|p| on_data(Params::STOP23, p), &v, 5, 100)
 }

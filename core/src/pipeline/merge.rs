@@ -69,7 +69,11 @@ pub fn try_merge<B: BearingTable>(
     let merged = fit_piece(&scan, prev.first, next.last, sigma).ok()?;
     // A bridge (§10 (e)): each line's own beams must fit the union line.
     let fits = |part: &Line| part_chi2(part, &merged).is_some_and(|c| c <= params.max_chi2);
-    let larger = if next.points > prev.points { next } else { prev };
+    let larger = if next.points > prev.points {
+        next
+    } else {
+        prev
+    };
     (merged.chi2 <= params.max_chi2
         && (vouched || (fits(prev) && fits(next)))
         && anchored(larger, &merged, params.merge_anchor_gate))

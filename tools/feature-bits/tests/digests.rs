@@ -31,6 +31,10 @@
 //! are checked as they were, at `Params::STOP22`; the new defaults have
 //! their own.
 //!
+//! Stop 24: the defaults gate the merges on the larger line's own
+//! parameters (`Params::merge_anchor_gate`). Stop 23's digests are checked
+//! as they were, at `Params::STOP23`; the new defaults have their own.
+//!
 //! To re-pin after an intended change of results (say why in the commit):
 //! `cargo run --release -p feature-bits -- LOG` and FNV-1a-64 its output
 //! (`feature_bits::digest_of`), or read the digests this test prints.
@@ -80,6 +84,19 @@ fn log(stem: &str) -> PathBuf {
 /// 30 passes.
 #[cfg(not(feature = "libm-trig"))]
 const PINNED: [(&str, u64, usize); 7] = [
+    ("acapulco-corrected", 0x3fd2675e26bb39dc, 861),
+    ("belgioioso-corrected", 0xf28b6fd292fad258, 395),
+    ("csail-corrected", 0x01a1b424f823e28e, 406),
+    ("freiburg-101-corrected", 0x92035cca9228953f, 292),
+    ("freiburg-campus-corrected", 0x8c773e3045a5a38e, 2008),
+    ("intel-corrected", 0xfc7b49087a123459, 910),
+    ("orebro-corrected", 0xe720b6fb012a9a3f, 237),
+];
+
+/// The same at `Params::STOP23` (the defaults of stop 23: no anchor gate on
+/// the merges).
+#[cfg(not(feature = "libm-trig"))]
+const PINNED_STOP23: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x24ed53cce9a29316, 861),
     ("belgioioso-corrected", 0xa0cb8ce620b6ffe5, 395),
     ("csail-corrected", 0x79584256c0057d1f, 406),
@@ -231,6 +248,17 @@ fn feature_bits_of_every_shared_log_are_pinned() {
 
 #[cfg(not(feature = "libm-trig"))]
 #[test]
+fn feature_bits_of_every_shared_log_at_stop_23_are_pinned() {
+    let wrong = check_pins(&PINNED_STOP23, &lms_core::Params::STOP23, false);
+    assert!(
+        wrong.is_empty(),
+        "stop-23 results changed:\n{}",
+        wrong.join("\n")
+    );
+}
+
+#[cfg(not(feature = "libm-trig"))]
+#[test]
 fn feature_bits_of_every_shared_log_at_stop_22_are_pinned() {
     let wrong = check_pins(&PINNED_STOP22, &lms_core::Params::STOP22, false);
     assert!(
@@ -273,6 +301,11 @@ fn a_changed_bit_changes_the_digest() {
     assert_eq!(a.0, PINNED[6].1);
 }
 
+/// (log stem, σ (m), `max_range` (m), digests: defaults, stop 23, stop 22,
+/// stop 21, v2).
+#[cfg(not(feature = "libm-trig"))]
+type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64);
+
 /// With the parameters `host-bridge extract LOG` uses when no flag is given
 /// (issue 14, item 4: σ and `max_range` from the survey of the log,
 /// [`per_data_params`]), 30 passes: (log stem, σ (m), `max_range` (m),
@@ -282,16 +315,18 @@ fn a_changed_bit_changes_the_digest() {
 /// values. (Örebro has no range beyond its limit: its digest is the one at
 /// `Params::default`.) `host-bridge`'s
 /// `extract_cli::per_data_defaults_match_the_pinned_feature_bits` checks
-/// that its `defaults::for_log` gives these same parameters. The last three
-/// columns are the digests with `Params::STOP22`, `Params::STOP21` and
-/// `Params::V2` otherwise (pinned at stops 22 and 21 and up to stop 20),
-/// the last two without the `rejected_arc` counter ([`WithoutArcCounter`]).
+/// that its `defaults::for_log` gives these same parameters. The last four
+/// columns are the digests with `Params::STOP23`, `Params::STOP22`,
+/// `Params::STOP21` and `Params::V2` otherwise (pinned at stops 23, 22 and
+/// 21 and up to stop 20), the last two without the `rejected_arc` counter
+/// ([`WithoutArcCounter`]).
 #[cfg(not(feature = "libm-trig"))]
-const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64, u64); 7] = [
+const PINNED_PER_DATA: [PerDataPin; 7] = [
     (
         "acapulco-corrected",
         0.030000001,
         50.0,
+        0xff362eae488123ab,
         0x456597c9d8b236ef,
         0x456597c9d8b236ef,
         0xcfa1b3384b29e6f2,
@@ -301,6 +336,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64, u64); 7] = [
         "belgioioso-corrected",
         0.01,
         81.83,
+        0xe5e1f9565a85f0bc,
         0x04407f65d761c00e,
         0xc2c8950c6374724d,
         0xcf25f846ba026f7e,
@@ -310,6 +346,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64, u64); 7] = [
         "csail-corrected",
         0.01,
         81.83,
+        0x606480a5affe6e1a,
         0x4373d6154e313a6d,
         0xeed794a1b8ba1c99,
         0x5498b108e1913fa7,
@@ -319,6 +356,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64, u64); 7] = [
         "freiburg-101-corrected",
         0.01,
         81.83,
+        0x733effa03681e055,
         0xb63357291e3ad9e8,
         0x47dce9c54f84e796,
         0x466d8dff9805249e,
@@ -328,6 +366,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64, u64); 7] = [
         "freiburg-campus-corrected",
         0.01,
         81.83,
+        0x590950feb4c2362a,
         0x1710d46adb43c02b,
         0x43b22e4e673cb55e,
         0x9e88244309cea3ee,
@@ -337,6 +376,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64, u64); 7] = [
         "intel-corrected",
         0.01,
         81.83,
+        0xf5959bee1126b7fc,
         0xe3cf0b3e0d27c2db,
         0xe3cf0b3e0d27c2db,
         0xe90a374b585ed343,
@@ -346,6 +386,7 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64, u64); 7] = [
         "orebro-corrected",
         0.005,
         32.759,
+        0xe720b6fb012a9a3f,
         0xee57028d62c2f364,
         0xee57028d62c2f364,
         0xd4588364ce8a1fd3,
@@ -357,13 +398,18 @@ const PINNED_PER_DATA: [(&str, f32, f32, u64, u64, u64, u64); 7] = [
 #[test]
 fn feature_bits_at_the_per_data_defaults_are_pinned() {
     let mut wrong = Vec::new();
-    for (stem, sigma, max_range, pin, pin_stop22, pin_stop21, pin_v2) in PINNED_PER_DATA {
+    for (stem, sigma, max_range, pin, pin_stop23, pin_stop22, pin_stop21, pin_v2) in PINNED_PER_DATA
+    {
         let path = log(stem);
         let params = per_data_params(&path).unwrap();
+        let stop23 = lms_core::Params {
+            merge_anchor_gate: f32::INFINITY,
+            ..params
+        };
         let stop22 = lms_core::Params {
             same_turn_windows: false,
             split_budget: 0,
-            ..params
+            ..stop23
         };
         let stop21 = lms_core::Params {
             arc_chain: 0,
@@ -383,6 +429,7 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
             }
         );
         let (d, _, _) = digests(&path, &params);
+        let (d23, _, _) = digests(&path, &stop23);
         let (d22, d22_without, _) = digests(&path, &stop22);
         let (_, d21, _) = digests(&path, &stop21);
         // No line of these logs is taken for an arc at stop 22: but for the
@@ -393,16 +440,20 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
         );
         let (_, d2, _) = digests(&path, &v2);
         println!(
-            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d22:016x}, 0x{d21:016x}, 0x{d2:016x}),",
+            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d23:016x}, 0x{d22:016x}, 0x{d21:016x}, \
+             0x{d2:016x}),",
             params.sigma, params.max_range
         );
-        if (params.sigma, params.max_range, d, d22, d21, d2)
-            != (sigma, max_range, pin, pin_stop22, pin_stop21, pin_v2)
+        if (params.sigma, params.max_range, d, d23, d22, d21, d2)
+            != (
+                sigma, max_range, pin, pin_stop23, pin_stop22, pin_stop21, pin_v2,
+            )
         {
             wrong.push(format!(
-                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, stop 22 0x{d22:016x}, stop 21 \
-                 0x{d21:016x}, v2 0x{d2:016x}; pinned {sigma}, {max_range}, 0x{pin:016x}, \
-                 0x{pin_stop22:016x}, 0x{pin_stop21:016x}, 0x{pin_v2:016x}",
+                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, stop 23 0x{d23:016x}, stop 22 \
+                 0x{d22:016x}, stop 21 0x{d21:016x}, v2 0x{d2:016x}; pinned {sigma}, \
+                 {max_range}, 0x{pin:016x}, 0x{pin_stop23:016x}, 0x{pin_stop22:016x}, \
+                 0x{pin_stop21:016x}, 0x{pin_v2:016x}",
                 params.sigma, params.max_range
             ));
         }
