@@ -113,15 +113,16 @@ pub struct ParamArgs {
     /// Merge consecutive lines only across invalid beams (or at most three
     /// valid ones), as ALGORITHM.md v2 §7.6, not across
     /// rejected segments (ALGORITHM.md §10 (e)); with --footprint 0,
-    /// --no-same-turn-windows, --split-budget 0 and --arc-chain 0 the
-    /// defaults up to stop 20 (`Params::V2`)
+    /// --merge-anchor-gate inf, --no-same-turn-windows, --split-budget 0 and
+    /// --arc-chain 0 the defaults up to stop 20 (`Params::V2`)
     #[arg(long)]
     pub no_bridge_merge: bool,
     /// Windows of consecutive beams over both mirror turns in the
     /// interleaved 0.5° and 0.25° modes, as ALGORITHM.md v2 §2–6, instead
     /// of windows of one turn (ALGORITHM.md §10 (a),
-    /// docs/ALGORITHM-v3-section10.md §10.9); with --split-budget 0 the
-    /// defaults of stop 22, and --arc-chain 0 too those of stop 21
+    /// docs/ALGORITHM-v3-section10.md §10.9); with --split-budget 0 and
+    /// --merge-anchor-gate inf the defaults of stop 22, and --arc-chain 0
+    /// too those of stop 21
     #[arg(long)]
     pub no_same_turn_windows: bool,
     /// Fewest consecutive touching lines, turning the same way by

@@ -508,7 +508,8 @@ fn extract_json_of_every_shared_log_is_pinned() {
     );
 }
 
-/// `--footprint`, `--no-bridge-merge` and `--no-same-turn-windows` reach
+/// `--footprint`, `--no-bridge-merge`, `--no-same-turn-windows` and
+/// `--merge-anchor-gate` reach
 /// the core (CSAIL is a 0.5° log); a bad footprint
 /// is refused with the reason.
 #[test]
@@ -525,6 +526,7 @@ fn footprint_and_bridge_flags_apply() {
         &["--footprint", "0.005"][..],
         &["--no-bridge-merge"][..],
         &["--no-same-turn-windows"][..],
+        &["--merge-anchor-gate", "inf"][..],
     ] {
         assert_ne!(digest(flags), default, "{flags:?} changed nothing");
     }
@@ -533,9 +535,24 @@ fn footprint_and_bridge_flags_apply() {
         default,
         "0.003 rad is the default"
     );
+    assert_eq!(
+        digest(&["--merge-anchor-gate", "13.81551"]),
+        default,
+        "chi2_2 at 99.9 % is the default"
+    );
     let bad = run(&[&args[..], &["--footprint=-0.001"]].concat());
     assert!(!bad.status.success());
     assert!(common::stderr(&bad).contains("footprint must be finite and >= 0"));
+    for gate in ["0", "-1", "nan", "wide"] {
+        let flag = format!("--merge-anchor-gate={gate}");
+        let bad = run(&[&args[..], &[flag.as_str()]].concat());
+        assert!(!bad.status.success(), "--merge-anchor-gate {gate} accepted");
+        assert!(
+            common::stderr(&bad).contains("give a chi-square gate > 0"),
+            "{gate}: {}",
+            common::stderr(&bad)
+        );
+    }
 }
 
 /// `extract LOG`'s parameters without flags (`defaults::for_log`) are the

@@ -2,7 +2,8 @@
 //! of two lines must stay within the gate (χ²₂) of the larger line's own
 //! parameters. Realistic synthetic scenes (`SCANS` per family and σ₀) and
 //! the real logs' map truth (every 5th frame), pooled
-//! (docs/ALGORITHM-v3-section10.md §10.10).
+//! (docs/ALGORITHM-v3-section10.md §10.10); per-turn extraction on the
+//! defaults for the README's table.
 //!
 //! `cargo run --release -p lms-lab --example merge_anchor_sweep -- [SCANS]`
 
@@ -32,6 +33,10 @@ fn main() -> Result<()> {
         }),
         ("anchor 100", |p| Params {
             merge_anchor_gate: 100.0,
+            ..p
+        }),
+        ("defaults + per turn (§10 d)", |p| Params {
+            per_turn: true,
             ..p
         }),
     ];

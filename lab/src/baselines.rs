@@ -254,7 +254,13 @@ pub fn split_and_merge(
             }
         }
     }
-    let (lines, corners) = features_from_segments(frame, tables, r, &segments, params);
+    // The peer's merge has no anchor gate (the core's since stop 24): its
+    // figures stay those measured before it.
+    let peer = Params {
+        merge_anchor_gate: f32::INFINITY,
+        ..*params
+    };
+    let (lines, corners) = features_from_segments(frame, tables, r, &segments, &peer);
     Extraction {
         segments,
         lines,
