@@ -364,6 +364,10 @@ pub struct PairError {
     pub resolvable: bool,
     /// Fraction of the piece's beam range covered by the line.
     pub coverage: f64,
+    /// Index of the line among the extracted lines.
+    pub line: usize,
+    /// Index of the piece in [`ScanTruth::pieces`].
+    pub piece: usize,
 }
 
 /// The lines of one scan against its truth.
@@ -470,6 +474,8 @@ pub fn score_lines(
             / span((p.first, p.last)) as f64;
         s.pairs.push(PairError {
             coverage,
+            line: e,
+            piece: t,
             d_alpha: e2[0],
             d_r: e2[1],
             crb_aa: sigma_crb[0],

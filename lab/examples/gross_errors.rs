@@ -1,0 +1,101 @@
+//! The gross errors of the defaults on the realistic synthetic scenes: the
+//! matched lines on resolvable pieces with `Δα²/CRB` or `Δr²/CRB` above
+//! 10.83 (χ²₁ at 99.9 %), which dominate σΔα/CRB (`lab/src/metrics.rs`).
+//! Each is classed by the noise-free hits of its beams: beams on another
+//! surface than the piece's (a wall past a corner, a pillar beside the
+//! wall), or every beam on the piece's own wall. `--stop23` runs
+//! `Params::STOP23` (no anchor gate on the merges), `--list` prints each.
+//! docs/ALGORITHM-v3-section10.md §10.10.
+//!
+//! `cargo run --release -p lms-lab --example gross_errors -- [SCANS] [--stop23] [--list]`
+
+use anyhow::Result;
+use lms_core::{Extractor, Params};
+use lms_lab::baselines::run_core;
+use lms_lab::metrics::{median, scan_truth, score_lines, Gates};
+use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
+use lms_lab::scenes::Family;
+
+/// χ²₁ at 99.9 %: the evaluation's gross-error limit.
+const GROSS: f64 = 10.83;
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let scans: usize = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
+        .map_or(Ok(100), |s| s.parse())?;
+    let base = if args.iter().any(|a| a == "--stop23") {
+        Params::STOP23
+    } else {
+        Params::DEFAULT
+    };
+    let list = args.iter().any(|a| a == "--list");
+    println!("| σ₀ | matched resolvable | gross | with beams on another surface | of those: on an arc | median such beams | all on the piece's wall |");
+    println!("|---|---:|---:|---:|---:|---:|---:|");
+    let mut ex = Extractor::new();
+    for sigma in SIGMAS {
+        let model = realistic_model(sigma);
+        let gates = Gates {
+            kappa: model.kappa,
+            ..Gates::default()
+        };
+        let params = Params {
+            sigma: sigma as f32,
+            ..base
+        };
+        let (mut pairs, mut gross, mut arc, mut own) = (0, 0, 0, 0);
+        let mut others = Vec::new();
+        for family in Family::ALL {
+            for k in 0..scans {
+                let s = sample(family, k, 1, &model, DELTA)?;
+                let truth = scan_truth(&s.truth, &s.scene, &params, sigma, &gates);
+                let x = run_core(&mut ex, &s.frame, &params);
+                let score = score_lines(&truth, &x.lines, s.frame.beams(), sigma, &gates);
+                for p in score.pairs.iter().filter(|p| p.resolvable) {
+                    pairs += 1;
+                    let (za, zr) = (p.d_alpha * p.d_alpha / p.crb_aa, p.d_r * p.d_r / p.crb_rr);
+                    if !(za > GROSS || zr > GROSS) {
+                        continue;
+                    }
+                    gross += 1;
+                    let (line, piece) = (&x.lines[p.line], &truth.pieces[p.piece]);
+                    let surface_of = |j: usize| s.truth.hits.get(j).copied().flatten();
+                    // The piece's wall: the surface of its middle beam's hit.
+                    let wall = surface_of((piece.first + piece.last) / 2).map(|h| h.surface);
+                    let beams = usize::from(line.first)..=usize::from(line.last);
+                    let foreign: Vec<usize> = beams
+                        .filter(|&j| s.frame.beams()[j].is_valid())
+                        .filter(|&j| surface_of(j).map(|h| h.surface) != wall)
+                        .collect();
+                    let on_arc = foreign.iter().any(|&j| truth.on_arc[j]);
+                    if foreign.is_empty() {
+                        own += 1;
+                    } else {
+                        others.push(foreign.len() as f64);
+                        arc += usize::from(on_arc);
+                    }
+                    if list {
+                        println!(
+                            "{} {k}: piece {}..{}, line {}..{}, z²α {za:.0}, z²r {zr:.0}, {} beams elsewhere{}",
+                            family.name(),
+                            piece.first,
+                            piece.last,
+                            line.first,
+                            line.last,
+                            foreign.len(),
+                            if on_arc { " (arc)" } else { "" }
+                        );
+                    }
+                }
+            }
+        }
+        println!(
+            "| {} mm | {pairs} | {gross} | {} | {arc} | {:.0} | {own} |",
+            sigma * 1e3,
+            others.len(),
+            median(&others)
+        );
+    }
+    Ok(())
+}
