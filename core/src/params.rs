@@ -168,6 +168,18 @@ pub struct Params {
     /// at 20 mm). Default [`DEFAULT_MERGE_ANCHOR_GATE`] (χ²₂ at 99.9 %);
     /// `+inf` is no test (stop 23 and before).
     pub merge_anchor_gate: f32,
+    /// The fits' χ² allows an offset between the interleaved mirror turns
+    /// (ALGORITHM.md §10.4, docs/ALGORITHM-v3-section10.md §10.11): in the
+    /// 0.5° (0.25°) modes the platform moves between the turns 13.3 ms
+    /// apart, and a wall's beams lie on two (four) parallel point sets a few
+    /// mm to cm apart. Each turn's weighted mean residual is taken out of
+    /// `Σe²` before §7.4's χ² gate, the straightness test of split before
+    /// reject and the merges' refits, with `turns − 1` fewer degrees of
+    /// freedom ([`crate::pipeline::line_fit::residual_dof`]); the line and
+    /// its covariance are the fit of all beams, as before. 1° modes are the
+    /// same either way. Default on since stop 24; `false` is §7 as written
+    /// (stop 23 and before).
+    pub turn_offsets: bool,
 }
 
 /// Pairing gate of [`Params::per_turn`] on |Δα| between two turns' lines
@@ -218,7 +230,7 @@ impl Params {
     /// project's measured additions (`merge_collinear`, `max_alpha_sd_deg`,
     /// since stop 21 `bridge_merge` and `footprint`, §10 (e) and (f), and
     /// since stop 22 `arc_chain`, since stop 23 `same_turn_windows` and
-    /// `split_budget`, since stop 24 `merge_anchor_gate`).
+    /// `split_budget`, since stop 24 `merge_anchor_gate` and `turn_offsets`).
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
@@ -248,12 +260,14 @@ impl Params {
         arc_max_turn_deg: 40.0,
         split_budget: 542,
         merge_anchor_gate: DEFAULT_MERGE_ANCHOR_GATE,
+        turn_offsets: true,
     };
 
     /// The defaults of stop 23: [`Params::DEFAULT`] with no anchor gate on
-    /// the merges.
+    /// the merges and no turn offsets in the fits' χ².
     pub const STOP23: Params = Params {
         merge_anchor_gate: f32::INFINITY,
+        turn_offsets: false,
         ..Params::DEFAULT
     };
 
@@ -438,6 +452,7 @@ impl ValidParams {
         arc_max_turn_deg: 0.0,
         split_budget: 0,
         merge_anchor_gate: 0.0,
+        turn_offsets: false,
     });
 
     /// The parameters.
@@ -541,21 +556,26 @@ impl Params {
         if self.arc_chain == 1 || !turns_ok {
             return Err(ParamError::Arc);
         }
-        if !cfg!(feature = "section10") {
-            // Never a silent difference: a §10 option this build leaves out.
-            let option = if self.grazing_noise != 0.0 {
-                Some("grazing_noise")
-            } else if self.fit_sigma != 0.0 {
-                Some("fit_sigma")
-            } else if self.per_turn {
-                Some("per_turn")
-            } else {
-                None
-            };
-            if let Some(option) = option {
-                return Err(ParamError::NotInBuild { option });
-            }
+        if let Some(option) = self.option_not_in_build() {
+            return Err(ParamError::NotInBuild { option });
         }
         Ok(ValidParams(*self))
+    }
+
+    /// The ALGORITHM.md §10 option set to a non-default value that this
+    /// build leaves out (feature `section10` off), if any: never a silent
+    /// difference.
+    const fn option_not_in_build(&self) -> Option<&'static str> {
+        if cfg!(feature = "section10") {
+            None
+        } else if self.grazing_noise != 0.0 {
+            Some("grazing_noise")
+        } else if self.fit_sigma != 0.0 {
+            Some("fit_sigma")
+        } else if self.per_turn {
+            Some("per_turn")
+        } else {
+            None
+        }
     }
 }

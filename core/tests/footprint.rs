@@ -58,6 +58,7 @@ fn weighted(phi: &[f64], ranges: &[f32], kappa: f32) -> Line {
         beams: &beams,
         max_range: f32::INFINITY,
         footprint: kappa,
+        turns: 1,
     };
     fit_piece(&scan, 0, (ranges.len() - 1) as u16, SIGMA).unwrap()
 }

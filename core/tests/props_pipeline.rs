@@ -188,6 +188,7 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             arc_max_turn_deg: f.2,
             split_budget: f.3,
             merge_anchor_gate: f.4,
+            turn_offsets: c.0 ^ e.0,
         })
 }
 

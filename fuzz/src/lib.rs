@@ -471,6 +471,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 arc_max_turn_deg: f32::from_bits(limits[0] ^ raw[3]),
                 split_budget: (raw[11] >> 8) as u16,
                 merge_anchor_gate: f32::from_bits(raw[6] ^ limits[1]),
+                turn_offsets: raw[6] & 0x10 != 0,
             }
         }
         PARAMS_SANE => Params {
@@ -532,6 +533,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
             arc_min_turn_deg: unit(raw[8].rotate_left(8)) * 20.0,
             arc_max_turn_deg: 20.0 + unit(raw[9].rotate_left(8)) * 160.0,
             split_budget: (raw[11] >> 16) as u16 % 2048,
+            turn_offsets: raw[6] & 0x10 != 0,
             merge_anchor_gate: if raw[6] & 0x100 == 0 {
                 f32::INFINITY
             } else {

@@ -144,6 +144,11 @@ pub struct ParamArgs {
     /// parameters; inf for no test, as up to stop 23 [default: 13.8155]
     #[arg(long, value_name = "CHI2", value_parser = anchor_gate_parser)]
     pub merge_anchor_gate: Option<f32>,
+    /// Fit χ² without the offsets between the interleaved mirror turns of
+    /// the 0.5° and 0.25° modes (ALGORITHM.md §7 as written); with
+    /// --merge-anchor-gate inf the defaults of stop 23
+    #[arg(long)]
+    pub no_turn_offsets: bool,
 }
 
 /// `--merge-anchor-gate`: > 0, or `inf`.
@@ -218,6 +223,7 @@ impl ParamArgs {
             arc_max_turn_deg: self.arc_turn_deg.map_or(d.arc_max_turn_deg, |t| t.1),
             split_budget: self.split_budget.unwrap_or(d.split_budget),
             merge_anchor_gate: self.merge_anchor_gate.unwrap_or(d.merge_anchor_gate),
+            turn_offsets: !self.no_turn_offsets && d.turn_offsets,
             ..d
         };
         p.validate()

@@ -372,16 +372,16 @@ fn without_arc_counter(json: &[u8]) -> Vec<u8> {
 /// `extract LOG` (defaults) on every shared log gives exactly the JSON it
 /// gave when these digests were pinned (FNV-1a-64 of stdout): no field, no
 /// bit of any float may change. Re-pin only for an intended change (last:
-/// the merges' anchor gate, stop 24; see tools/feature-bits/tests/digests.rs).
-/// The digests before it are what `--merge-anchor-gate inf` gives (stop
-/// 23), with `--no-same-turn-windows --split-budget 0` too (stop 22),
+/// the merges' anchor gate and the turns' offsets, stop 24; see
+/// tools/feature-bits/tests/digests.rs). The digests before it are what
+/// `--merge-anchor-gate inf --no-turn-offsets` gives (stop 23), with `--no-same-turn-windows --split-budget 0` too (stop 22),
 /// with `--arc-chain 0` (stop 21) and with `--footprint 0
 /// --no-bridge-merge` too (v2), the last two bit for bit once the counter
 /// `rejected_arc` that stop 22 added to every record's `stats` is taken
 /// out of the text.
 #[test]
 fn extract_json_of_every_shared_log_is_pinned() {
-    // (log stem, defaults, `--merge-anchor-gate inf`, with
+    // (log stem, defaults, `--merge-anchor-gate inf --no-turn-offsets`, with
     // `--no-same-turn-windows --split-budget 0`, with `--arc-chain 0`,
     // and with `--footprint 0 --no-bridge-merge`)
     const PINNED: [(&str, u64, u64, u64, u64, u64); 7] = [
@@ -395,7 +395,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "belgioioso-corrected",
-            0x1cdaad41b9c3c420,
+            0x0b4302b0290ca5d1,
             0xe5cd3416cf912913,
             0xe6b583dc85e6a459,
             0xf040b3b3779f54d2,
@@ -403,7 +403,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "csail-corrected",
-            0xc442749c490fd06d,
+            0xd6ad46dc5e78fb06,
             0x83fc1a76c6ce7327,
             0xa727593897fecdd7,
             0x58b0bf50f0e89679,
@@ -411,7 +411,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "freiburg-101-corrected",
-            0x9a3e831e975cd1c0,
+            0xead9bdb3cf37d669,
             0x18db85e23d9855b4,
             0x86d65186b7903ee6,
             0x9e0878902dbd72e4,
@@ -419,7 +419,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "freiburg-campus-corrected",
-            0x3a5cbe6cf9471008,
+            0x37ae5dcfab6bf12d,
             0x9e9f56de6baafb1e,
             0x91a67e96d6d10d7c,
             0xcecb39abe31b6188,
@@ -443,10 +443,11 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
     ];
     let mut wrong = Vec::new();
-    let stop23 = ["--merge-anchor-gate", "inf"];
+    let stop23 = ["--merge-anchor-gate", "inf", "--no-turn-offsets"];
     let stop22 = [
         "--merge-anchor-gate",
         "inf",
+        "--no-turn-offsets",
         "--no-same-turn-windows",
         "--split-budget",
         "0",
@@ -454,6 +455,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
     let stop21 = [
         "--merge-anchor-gate",
         "inf",
+        "--no-turn-offsets",
         "--no-same-turn-windows",
         "--split-budget",
         "0",
@@ -463,6 +465,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
     let v2 = [
         "--merge-anchor-gate",
         "inf",
+        "--no-turn-offsets",
         "--no-same-turn-windows",
         "--split-budget",
         "0",
@@ -508,8 +511,8 @@ fn extract_json_of_every_shared_log_is_pinned() {
     );
 }
 
-/// `--footprint`, `--no-bridge-merge`, `--no-same-turn-windows` and
-/// `--merge-anchor-gate` reach
+/// `--footprint`, `--no-bridge-merge`, `--no-same-turn-windows`,
+/// `--merge-anchor-gate` and `--no-turn-offsets` reach
 /// the core (CSAIL is a 0.5° log); a bad footprint
 /// is refused with the reason.
 #[test]
@@ -527,6 +530,7 @@ fn footprint_and_bridge_flags_apply() {
         &["--no-bridge-merge"][..],
         &["--no-same-turn-windows"][..],
         &["--merge-anchor-gate", "inf"][..],
+        &["--no-turn-offsets"][..],
     ] {
         assert_ne!(digest(flags), default, "{flags:?} changed nothing");
     }

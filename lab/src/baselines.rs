@@ -123,7 +123,8 @@ pub fn features_from_segments(
         }
         if params.merge {
             if let Some(prev) = lines.last() {
-                if let Some(merged) = try_merge(bearings, ranges, beams, prev, &line, params) {
+                // The baselines' fits have one turn (§7 as written).
+                if let Some(merged) = try_merge(bearings, ranges, beams, prev, &line, params, 1) {
                     if let Some(slot) = lines.last_mut() {
                         *slot = merged;
                     }

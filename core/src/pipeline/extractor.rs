@@ -194,6 +194,7 @@ impl Extractor {
             beams: frame.beams(),
             max_range: params.max_range,
             footprint: params.footprint,
+            turns: fit_turns(params, frame.geometry()),
         };
         if params.split_depth > 0 {
             split_before_reject(&scan, params, &mut f.segments, &mut stats);
@@ -425,6 +426,17 @@ fn count_usable(frame: &Frame, max_range: f32) -> (u16, u16) {
     (ok, beyond)
 }
 
+/// The interleaved turns whose offsets the fits' χ² allows
+/// ([`Params::turn_offsets`], §10.11): the scan's mirror turns (2 at 0.5°,
+/// 4 at 0.25°), or 1 (§7 as written).
+fn fit_turns(params: &Params, geometry: Geometry) -> u8 {
+    if params.turn_offsets {
+        interleaved_turns(geometry.step) as u8
+    } else {
+        1
+    }
+}
+
 /// §7: a line per segment, χ²-gated, merged with its predecessor where §7.6
 /// allows it, then judged on length (after merging, so that a wall cut by a
 /// no-echo beam is judged whole).
@@ -451,7 +463,8 @@ fn fit_lines<B: BearingTable>(
         // Merge with the previous candidate where §7.6 allows it.
         if params.merge {
             if let Some(prev) = f.lines.last() {
-                if let Some(merged) = try_merge(bearings, raw, beams, prev, &line, params) {
+                let turns = scan.turns;
+                if let Some(merged) = try_merge(bearings, raw, beams, prev, &line, params, turns) {
                     stats.merges = stats.merges.saturating_add(1);
                     if let Some(slot) = f.lines.last_mut() {
                         *slot = merged;

@@ -31,6 +31,9 @@ pub use crate::pipeline::bearings::BearingTable;
 pub const MAX_GN_STEPS: usize = 5;
 /// A Gauss–Newton step below this in α (rad) and in r (m) ends the iteration.
 pub const GN_STEP_TOLERANCE: f32 = 1e-6;
+/// Most interleaved mirror turns of a scan (the 0.25° modes: four).
+pub const MAX_TURNS: usize = 4;
+
 /// Lines whose every beam must satisfy `cos(phi_j − α) > MIN_INCIDENCE_COS`
 /// (the line must be seen from the front, not grazing); otherwise the fit fails.
 pub const MIN_INCIDENCE_COS: f32 = 1e-3;
@@ -85,6 +88,35 @@ pub struct RawScan<'a, B: BearingTable = Bearings<'a>> {
     /// (`θ_j = phi_j − α`), and the fits weight it by `σ²/σ_j²`. `0`: every
     /// beam `σ` (§7 as written).
     pub footprint: f32,
+    /// Interleaved mirror turns whose offsets the fits' χ² allows
+    /// ([`crate::Params::turn_offsets`], docs/ALGORITHM-v3-section10.md
+    /// §10.11): beam `j` belongs to turn `j mod turns`, each turn's weighted
+    /// mean residual is taken out of `Σe²` and the χ² has `turns − 1` fewer
+    /// degrees of freedom ([`residual_dof`]). The line `(α, r)` and its
+    /// covariance are the fit of all beams, as before. `1`: §7 as written;
+    /// only 2 and 4 (the LMS's interleaves) take effect, any other count
+    /// is 1.
+    pub turns: u8,
+}
+
+/// The degrees of freedom of a line fit's χ² over `points` beams of
+/// `turns` interleaved turns (see [`RawScan::turns`]): `m − 2`, and
+/// `m − 1 − turns` when the turns' offsets are taken out (`turns` of 2 to
+/// [`MAX_TURNS`] and more than two beams per turn); at least 1.
+pub fn residual_dof(points: u16, turns: u8) -> f32 {
+    let (m, k) = (u32::from(points), u32::from(turns));
+    let dof = if offsets_apply(points, turns) {
+        m - 1 - k
+    } else {
+        m.saturating_sub(2)
+    };
+    dof.max(1) as f32
+}
+
+/// Whether the turns' offsets are taken out of a fit of `points` beams.
+#[inline]
+fn offsets_apply(points: u16, turns: u8) -> bool {
+    matches!(turns, 2 | 4) && u32::from(points) > 2 * u32::from(turns)
 }
 
 /// Fit a line to the valid beams of `first..=last` of `ranges` (m), with
@@ -106,6 +138,7 @@ pub fn fit_line<B: BearingTable>(
         beams,
         max_range: f32::INFINITY,
         footprint: 0.0,
+        turns: 1,
     };
     fit_piece(&scan, first, last, sigma)
 }
@@ -129,11 +162,18 @@ pub fn fit_piece<B: BearingTable>(
         a if a <= -core::f32::consts::PI => core::f32::consts::PI,
         a => a,
     };
-    // 3.–4. Covariance and chi2 at the solution.
-    let (jtj, sum_e2) = span.normal_matrix_and_residual(ca, sa, r)?;
+    // 3.–4. Covariance and chi2 at the solution (the turns' offsets taken
+    // out of Σe² where `scan.turns` asks for it, §10.11).
+    let points = m.min(u16::MAX as u32) as u16;
+    let turns = if offsets_apply(points, scan.turns) {
+        scan.turns
+    } else {
+        1
+    };
+    let (jtj, sum_e2) = span.normal_matrix_and_residual(ca, sa, r, turns)?;
     let var = sigma * sigma;
     let cov = jtj.inverse_spd().ok_or(FitError::Degenerate)?.scale(var);
-    let chi2 = sum_e2 / (var * (m as f32 - 2.0));
+    let chi2 = sum_e2 / (var * residual_dof(points, turns));
     // 5. Endpoints: first and last valid points projected onto the line.
     Ok(Line {
         alpha,
@@ -141,7 +181,7 @@ pub fn fit_piece<B: BearingTable>(
         cov,
         first,
         last: (first as usize + span.ranges.len() - 1) as u16,
-        points: m.min(u16::MAX as u32) as u16,
+        points,
         chi2,
         endpoints: span.endpoints(ca, sa, r),
     })
@@ -203,12 +243,18 @@ impl<'a, B: BearingTable> Span<'a, B> {
     /// order, with `(ca, sa) = (cos α, sin α)` (`(1, 0)`: the bearings).
     #[inline]
     fn each_valid(&self, ca: f32, sa: f32, mut f: impl FnMut(f32, f32, f32)) {
-        let max_range = self.max_range;
+        self.each_valid_beam(ca, sa, |_, d, c, s| f(d, c, s));
+    }
+
+    /// [`Self::each_valid`] with the beam's index `j` in the scan first.
+    #[inline]
+    fn each_valid_beam(&self, ca: f32, sa: f32, mut f: impl FnMut(usize, f32, f32, f32)) {
+        let (max_range, lo) = (self.max_range, self.lo);
         let (ranges, beams) = (self.ranges, self.beams);
         self.bearings
-            .for_each_relative(self.lo, ranges, beams, (ca, sa), |_, d, b, c, s| {
+            .for_each_relative(lo, ranges, beams, (ca, sa), |i, d, b, c, s| {
                 if b.is_valid() && d < max_range {
-                    f(d, c, s);
+                    f(lo + i, d, c, s);
                 }
             });
     }
@@ -299,17 +345,22 @@ impl<'a, B: BearingTable> Span<'a, B> {
         Ok(Normal { ca, sa, r })
     }
 
-    /// §7.3–7.4: `JᵀJ` and `Σ e²` at the solution `(cos α, sin α, r)`.
+    /// §7.3–7.4: `JᵀJ` and `Σ e²` at the solution `(cos α, sin α, r)`;
+    /// with `turns` > 1 (§10.11) `Σ e²` less what each turn's weighted mean
+    /// residual `ē_t` explains beyond the common one,
+    /// `Σ_t W_t ē_t² − W ē²` (`W_t = Σ_t w_j`; never below 0).
     fn normal_matrix_and_residual(
         &self,
         ca: f32,
         sa: f32,
         r: f32,
+        turns: u8,
     ) -> Result<(Sym2, f32), FitError> {
         let mut jtj = Sym2::default();
         let mut sum_e2 = 0.0f32;
         let mut edge_on = false;
-        self.each_valid(ca, sa, |d, cd, sd| {
+        let mut per_turn = TurnSums::new(turns);
+        self.each_valid_beam(ca, sa, |j, d, cd, sd| {
             edge_on |= !(cd > MIN_INCIDENCE_COS);
             let inv_c = 1.0 / cd;
             let e = d - r * inv_c;
@@ -319,11 +370,12 @@ impl<'a, B: BearingTable> Span<'a, B> {
             jtj.b += w * (ja * inv_c);
             jtj.c += w * (inv_c * inv_c);
             sum_e2 += w * (e * e);
+            per_turn.add(j, w, e);
         });
         if edge_on {
             return Err(FitError::Degenerate);
         }
-        Ok((jtj, sum_e2))
+        Ok((jtj, per_turn.take_out_of(sum_e2)))
     }
 
     /// §7.5: the first and last valid points projected onto the line
@@ -341,6 +393,62 @@ impl<'a, B: BearingTable> Span<'a, B> {
         let first = beams.clone().find(valid).map_or(0, |(i, _)| i);
         let last = beams.rfind(valid).map_or(0, |(i, _)| i);
         [project(first), project(last)]
+    }
+}
+
+/// Per-turn sums of a weighted residual (§10.11): for turn `t = j mod
+/// turns` of beam `j`, `S_t = Σ w_j e_j` and `W_t = Σ w_j`. With one turn
+/// nothing is summed and nothing taken out.
+pub(crate) struct TurnSums {
+    e: [f32; MAX_TURNS],
+    w: [f32; MAX_TURNS],
+    /// `turns − 1` for 2 or 4 turns; 0: off.
+    mask: usize,
+}
+
+impl TurnSums {
+    /// Sums for `turns` interleaved turns (2 or 4; anything else: off).
+    #[inline]
+    pub(crate) fn new(turns: u8) -> Self {
+        TurnSums {
+            e: [0.0; MAX_TURNS],
+            w: [0.0; MAX_TURNS],
+            mask: if matches!(turns, 2 | 4) {
+                usize::from(turns) - 1
+            } else {
+                0
+            },
+        }
+    }
+
+    /// Add beam `j`'s weighted residual `w·e` and weight `w`.
+    #[inline(always)]
+    pub(crate) fn add(&mut self, j: usize, w: f32, e: f32) {
+        if self.mask != 0 {
+            let t = j & self.mask & (MAX_TURNS - 1);
+            self.e[t] += w * e;
+            self.w[t] += w;
+        }
+    }
+
+    /// `sum` (a weighted residual sum over the same beams) less what the
+    /// turns' offsets explain, `Σ_t S_t²/W_t − S²/W` over the turns with
+    /// weight (never below 0); `sum` itself when off.
+    #[inline(never)] // one copy for the fits and the straightness bound
+    pub(crate) fn take_out_of(&self, sum: f32) -> f32 {
+        if self.mask == 0 {
+            return sum;
+        }
+        let (mut within, mut s, mut w) = (0.0f32, 0.0f32, 0.0f32);
+        for (&se, &sw) in self.e.iter().zip(&self.w) {
+            if sw > 0.0 {
+                within += se * se / sw;
+                s += se;
+                w += sw;
+            }
+        }
+        let between = if w > 0.0 { within - s * s / w } else { 0.0 };
+        (sum - between).max(0.0)
     }
 }
 

@@ -8,7 +8,7 @@ use crate::frame::Beam;
 use crate::maths::wrap_angle;
 use crate::params::Params;
 use crate::pipeline::line_fit::{
-    fit_piece, mahalanobis, parameter_distance, BearingTable, RawScan,
+    fit_piece, mahalanobis, parameter_distance, residual_dof, BearingTable, RawScan,
 };
 use crate::pipeline::smoothing::usable;
 
@@ -34,7 +34,8 @@ pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16
 /// `merge_gap_beams` valid ones) lie between them, their parameters agree
 /// within `merge_gate`, and the refit of the union passes `max_chi2` (and,
 /// beyond §7.6, stays within `merge_anchor_gate` of the larger line's own
-/// parameters: [`anchored`]).
+/// parameters: [`anchored`]). `turns`: the fits' interleaved turns
+/// ([`RawScan::turns`]).
 pub fn try_merge<B: BearingTable>(
     bearings: B,
     raw: &[f32],
@@ -42,6 +43,7 @@ pub fn try_merge<B: BearingTable>(
     prev: &Line,
     next: &Line,
     params: &Params,
+    turns: u8,
 ) -> Option<Line> {
     let gap_start = prev.last as usize + 1;
     let gap_end = next.first as usize; // exclusive
@@ -64,11 +66,12 @@ pub fn try_merge<B: BearingTable>(
         beams,
         max_range,
         footprint: params.footprint,
+        turns,
     };
     let sigma = params.line_sigma();
     let merged = fit_piece(&scan, prev.first, next.last, sigma).ok()?;
     // A bridge (§10 (e)): each line's own beams must fit the union line.
-    let fits = |part: &Line| part_chi2(part, &merged).is_some_and(|c| c <= params.max_chi2);
+    let fits = |part: &Line| part_chi2(part, &merged, turns).is_some_and(|c| c <= params.max_chi2);
     let larger = if next.points > prev.points {
         next
     } else {
@@ -96,15 +99,15 @@ fn anchored(larger: &Line, merged: &Line, gate: f32) -> bool {
 }
 
 /// χ² per point of the beams `part` was fitted to about `line` (§10 (e)),
-/// from `part`'s own fit: its weighted residual sum, `chi2·(m − 2)` in
-/// units of σ², plus what it rises by when the parameters move from
+/// from `part`'s own fit: its weighted residual sum, `chi2·dof` in units of
+/// σ² (`dof` = [`residual_dof`], `m − 2` with one turn), plus what it rises by when the parameters move from
 /// `part`'s to `line`'s, `Δᵀ Σ⁻¹ Δ` (`Σ = σ²(JᵀWJ)⁻¹`, so exact for the
 /// range model linearised at `part`), over the `m` points. `None` if
 /// `part`'s covariance is not positive definite.
-fn part_chi2(part: &Line, line: &Line) -> Option<f32> {
+fn part_chi2(part: &Line, line: &Line, turns: u8) -> Option<f32> {
     let rise = mahalanobis(&part.cov, part, line)?;
     let m = f32::from(part.points);
-    Some((part.chi2 * (m - 2.0) + rise) / m)
+    Some((part.chi2 * residual_dof(part.points, turns) + rise) / m)
 }
 
 /// Whether `next` continues `prev` nearly collinearly: facing endpoints

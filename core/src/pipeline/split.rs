@@ -31,7 +31,7 @@ use heapless::Vec;
 
 use crate::features::{Segment, Stats, MAX_SEGMENTS};
 use crate::params::{Params, MAX_SPLIT_DEPTH};
-use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
+use crate::pipeline::line_fit::{fit_piece, residual_dof, BearingTable, RawScan, TurnSums};
 
 /// Upper 0.1 % quantile of χ² with `nu` degrees of freedom (Wilson–Hilferty:
 /// 1.8 % above the exact value at ν = 3, 0.6 % at ν = 10, 0.04 % at ν = 100).
@@ -80,7 +80,7 @@ fn not_straight<B: BearingTable>(scan: &RawScan<'_, B>, piece: Segment, sigma: f
     }
     match fit_piece(scan, piece.first, piece.last, sigma) {
         Ok(line) => {
-            let dof = f32::from(line.points.saturating_sub(2)).max(1.0);
+            let dof = residual_dof(line.points, scan.turns);
             line.chi2 * dof > chi2_quantile_999(dof)
         }
         Err(_) => true,
@@ -120,8 +120,13 @@ fn straightness_bounds<B: BearingTable>(
     let half_diff = (sxx - syy) / 2.0;
     let root = libm::sqrtf(half_diff * half_diff + sxy * sxy);
     let least = (sxx + syy) / 2.0 - root;
-    let limit = chi2_quantile_999(m as f32 - 2.0) * (sigma * sigma);
-    if least > limit && k2 == 0.0 {
+    let points = m.min(u32::from(u16::MAX)) as u16;
+    let limit = chi2_quantile_999(residual_dof(points, scan.turns)) * (sigma * sigma);
+    // The turns' offsets (§10.11) are taken out where they apply; then λ
+    // bounds nothing (the turns' own lines may lie closer than one line).
+    let offsets = residual_dof(points, scan.turns) < f32::from(points) - 2.0;
+    let mut per_turn = TurnSums::new(if offsets { scan.turns } else { 1 });
+    if least > limit && k2 == 0.0 && !offsets {
         return Bounds::Above; // the lower bound, without the weights only
     }
     // Normal of the smaller eigenvalue: (S − λ·I)·n = 0, from the row of
@@ -138,15 +143,18 @@ fn straightness_bounds<B: BearingTable>(
     }
     let (nx, ny) = (nx / norm, ny / norm);
     let (mut upper, mut edge_on) = (0.0f32, false);
-    scan.each_valid(piece, 1.0, 0.0, |_, d, c, s| {
+    scan.each_valid(piece, 1.0, 0.0, |j, d, c, s| {
         // |cos| of the incidence: the beam's direction against the normal.
         let incidence = libm::fabsf(c * nx + s * ny);
         edge_on |= !(incidence > MIN_UPPER_INCIDENCE);
         let e = ((d * c - cx) * nx + (d * s - cy) * ny) / incidence;
         // tan²θ = (1 − cos²θ)/cos²θ; the weight is exactly 1 for k = 0.
         let tan2 = (1.0 - incidence * incidence) / (incidence * incidence);
-        upper += (e * e) / (1.0 + k2 * (d * d) * tan2);
+        let spread = 1.0 + k2 * (d * d) * tan2;
+        upper += (e * e) / spread;
+        per_turn.add(j, 1.0 / spread, e);
     });
+    let upper = per_turn.take_out_of(upper);
     if edge_on {
         Bounds::Between
     } else if upper <= limit {

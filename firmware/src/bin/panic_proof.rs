@@ -140,6 +140,7 @@ fn any_params() -> Params {
         arc_max_turn_deg: any_f32(),
         split_budget: black_box(1083),
         merge_anchor_gate: any_f32(),
+        turn_offsets: black_box(true),
     }
 }
 
