@@ -77,8 +77,9 @@ pub fn sample(
 /// The methods: ALGORITHM.md v1's defaults, v2's (`Params::V2`), stop
 /// 21's (§10 (e), (f): `Params::STOP21`), stop 22's (and the lines of arcs
 /// dropped: `Params::STOP22`), stop 23's (and same-turn windows, §10 (a):
-/// `Params::STOP23`), the defaults (and the merges' anchor gate), §10
-/// options on them, split-and-merge.
+/// `Params::STOP23`), the defaults (and the merges' anchor gate and the
+/// turns' offsets out of the fits' χ²), §10 options on them,
+/// split-and-merge.
 pub fn methods() -> Vec<Method> {
     vec![
         Method::with("v1 defaults (Params::V1)", Kind::Core, |p| Params {

@@ -34,8 +34,9 @@
 //! `fit_shared_points = false`, since stop 21 the footprint weights and
 //! the merge across rejected segments of §10 (e), (f), since stop 22 the
 //! lines of arcs dropped, since stop 23 same-turn windows (§10 (a)), since
-//! stop 24 the merges' anchor gate — with σ and `max_range` from the data);
-//! `stop 23` is the same without the anchor gate ([`Params::STOP23`]);
+//! stop 24 the merges' anchor gate and the turns' offsets out of the fits'
+//! χ² — with σ and `max_range` from the data); `stop 23` is the same without
+//! both ([`Params::STOP23`]);
 //! `stop 22` with windows of consecutive beams too ([`Params::STOP22`];
 //! stop 21's [`Params::STOP21`] gives the same on these logs); `v2` the same
 //! with [`Params::V2`]'s footprint and merge (the defaults up to stop 20);
@@ -159,17 +160,19 @@ impl RealMethod {
 
 /// Name of the no-flags method.
 pub const NO_FLAGS: &str =
-    "defaults, no flags (per data; footprint + bridge + arcs + same-turn windows + anchor gate)";
+    "defaults, no flags (per data; footprint + bridge + arcs + same-turn windows + anchor gate + turn offsets)";
 /// Name of the no-flags method with the defaults of stop 23
-/// (`Params::STOP23`: no anchor gate on the merges).
-pub const STOP23_NO_FLAGS: &str = "stop-23 defaults, no flags (--merge-anchor-gate inf)";
+/// (`Params::STOP23`: no anchor gate on the merges, no turn offsets in the
+/// fits' χ²).
+pub const STOP23_NO_FLAGS: &str =
+    "stop-23 defaults, no flags (--merge-anchor-gate inf --no-turn-offsets)";
 /// Name of the no-flags method with the defaults of stop 22
 /// (`Params::STOP22`: windows of consecutive beams over both turns). On
 /// the real logs stop 21's defaults (`Params::STOP21`, no lines of arcs
 /// dropped) give the same figures: no line of them is dropped as an arc
 /// (`tools/feature-bits/tests/digests.rs`).
 pub const STOP22_NO_FLAGS: &str =
-    "stop-22 defaults, no flags (--merge-anchor-gate inf --no-same-turn-windows --split-budget 0)";
+    "stop-22 defaults, no flags (stop 23's and --no-same-turn-windows --split-budget 0)";
 /// Name of the no-flags method with the defaults up to stop 20
 /// (`Params::V2`: no footprint weights, no merge across rejected segments).
 pub const V2_NO_FLAGS: &str = "v2 defaults, no flags (per data)";
