@@ -443,38 +443,15 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
     ];
     let mut wrong = Vec::new();
+    // An older stop's flags: the newer stop's, and off what the newer added.
     let stop23 = ["--merge-anchor-gate", "inf", "--no-turn-offsets"];
     let stop22 = [
-        "--merge-anchor-gate",
-        "inf",
-        "--no-turn-offsets",
-        "--no-same-turn-windows",
-        "--split-budget",
-        "0",
-    ];
-    let stop21 = [
-        "--merge-anchor-gate",
-        "inf",
-        "--no-turn-offsets",
-        "--no-same-turn-windows",
-        "--split-budget",
-        "0",
-        "--arc-chain",
-        "0",
-    ];
-    let v2 = [
-        "--merge-anchor-gate",
-        "inf",
-        "--no-turn-offsets",
-        "--no-same-turn-windows",
-        "--split-budget",
-        "0",
-        "--arc-chain",
-        "0",
-        "--footprint",
-        "0",
-        "--no-bridge-merge",
-    ];
+        &stop23[..],
+        &["--no-same-turn-windows", "--split-budget", "0"],
+    ]
+    .concat();
+    let stop21 = [&stop22[..], &["--arc-chain", "0"]].concat();
+    let v2 = [&stop21[..], &["--footprint", "0", "--no-bridge-merge"]].concat();
     for (stem, pinned, pinned_stop23, pinned_stop22, pinned_stop21, pinned_v2) in PINNED {
         let path = data(&format!("{stem}.log.gz"));
         let path = path.to_str().unwrap();
