@@ -54,7 +54,7 @@ pub struct Params {
     /// Largest true range (m, ALGORITHM.md v2 §1): a beam at or beyond it is
     /// invalid (counted in `Stats::beyond_max_range`), so fill values of
     /// recorded logs never become walls. Default 81.83 m, the largest true
-    /// range of any LMS 2xx unit and mode (cm); [`Params::for_data`] gives
+    /// range of any LMS 2xx unit and mode (cm); [`DataProfile::params`] gives
     /// the value of a unit and range mode ([`max_range_of`]). `+inf` turns
     /// the limit off (v1).
     pub max_range: f32,
