@@ -1,12 +1,13 @@
-//! The defaults' other parameters one at a time, on the defaults of stop 23
-//! (same-turn windows, `Params::STOP23`; the defaults now add the
-//! merges' anchor gate): the footprint κ, `max_chi2`, `min_points`,
-//! `merge_gap_beams`, `corner_gap`, the passes and `max_alpha_sd_deg`.
-//! Realistic synthetic scenes (`SCANS` per family and σ₀) and the real logs'
-//! map truth (every 5th frame), pooled (docs/ALGORITHM-v3-section10.md
-//! §10.9). None wins every column.
+//! The defaults' other parameters one at a time: τ, the footprint κ,
+//! `max_chi2`, `min_points`, `merge_gap_beams`, `corner_gap`, the passes,
+//! `max_alpha_sd_deg` and the split's work bound. On the defaults, or with
+//! `--stop23` on stop 23's (`Params::STOP23`, as measured in
+//! docs/ALGORITHM-v3-section10.md §10.9; §10.11 has the sweep on the
+//! defaults). Realistic synthetic scenes (`SCANS` per family and σ₀) and
+//! the real logs' map truth (every 5th frame), pooled. None wins every
+//! column.
 //!
-//! `cargo run --release -p lms-lab --example param_sweep -- [SCANS]`
+//! `cargo run --release -p lms-lab --example param_sweep -- [SCANS] [--stop23]`
 
 use anyhow::Result;
 use lms_core::Params;
@@ -14,9 +15,15 @@ use lms_lab::realtruth::on_data;
 use lms_lab::sweep::{print_sweep_over, Adjust};
 
 fn main() -> Result<()> {
-    let scans: usize = std::env::args().nth(1).map_or(Ok(100), |s| s.parse())?;
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let scans: usize = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
+        .map_or(Ok(100), |s| s.parse())?;
     let v: Vec<(&'static str, Adjust)> = vec![
         ("defaults", |p| p),
+        ("τ 12", |p| Params { tau: 12.0, ..p }),
+        ("τ 16", |p| Params { tau: 16.0, ..p }),
         ("κ 2 mrad", |p| Params {
             footprint: 0.002,
             ..p
@@ -48,6 +55,14 @@ fn main() -> Result<()> {
             max_alpha_sd_deg: 1.25,
             ..p
         }),
+        ("split_budget 722", |p| Params {
+            split_budget: 722,
+            ..p
+        }),
     ];
-    print_sweep_over(|p| on_data(Params::STOP23, p), &v, 5, scans)
+    if args.iter().any(|a| a == "--stop23") {
+        print_sweep_over(|p| on_data(Params::STOP23, p), &v, 5, scans)
+    } else {
+        print_sweep_over(|p| p, &v, 5, scans)
+    }
 }
