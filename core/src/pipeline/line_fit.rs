@@ -101,8 +101,8 @@ pub struct RawScan<'a, B: BearingTable = Bearings<'a>> {
 
 /// The degrees of freedom of a line fit's χ² over `points` beams of
 /// `turns` interleaved turns (see [`RawScan::turns`]): `m − 2`, and
-/// `m − 1 − turns` when the turns' offsets are taken out (`turns` of 2 to
-/// [`MAX_TURNS`] and more than two beams per turn); at least 1.
+/// `m − 1 − turns` when the turns' offsets are taken out (`turns` of 2 or
+/// 4, and more than two beams per turn); at least 1.
 pub fn residual_dof(points: u16, turns: u8) -> f32 {
     let (m, k) = (u32::from(points), u32::from(turns));
     let dof = if offsets_apply(points, turns) {
