@@ -7,7 +7,9 @@
 //! rejected segments: the defaults up to stop 20), at 5 and 10 mm, for the
 //! cost of §10 (e), (f) as a ratio on the same machine; and at 10 mm with
 //! `Params::STOP22` (windows of consecutive beams), for the cost of
-//! same-turn windows (§10 (a), the default since stop 23).
+//! same-turn windows (§10 (a), the default since stop 23), and with
+//! `Params::STOP23`, for the cost of the anchor gate and the turns' offsets
+//! (stop 24).
 //!
 //! One benchmark iteration runs every frame of the log once (406 frames), so
 //! the reported time is for the whole log and the throughput is in frames
@@ -64,6 +66,13 @@ fn pipeline(c: &mut Criterion) {
                 Params {
                     per_turn: true,
                     ..cm
+                },
+            ),
+            (
+                BenchmarkId::new("stop23_sigma_10mm", 30),
+                Params {
+                    sigma: 0.01,
+                    ..Params::STOP23
                 },
             ),
             (
