@@ -15,16 +15,13 @@ use lms_lab::baselines::run_core;
 use lms_lab::metrics::{median, scan_truth, score_lines, Gates};
 use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
 use lms_lab::scenes::Family;
+use lms_lab::sweep::count_and_flags;
 
 /// χ²₁ at 99.9 %: the evaluation's gross-error limit.
 const GROSS: f64 = 10.83;
 
 fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let scans: usize = args
-        .iter()
-        .find(|a| !a.starts_with("--"))
-        .map_or(Ok(100), |s| s.parse())?;
+    let (scans, args) = count_and_flags(100)?;
     let base = if args.iter().any(|a| a == "--stop23") {
         Params::STOP23
     } else {

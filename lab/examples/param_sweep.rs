@@ -12,14 +12,10 @@
 use anyhow::Result;
 use lms_core::Params;
 use lms_lab::realtruth::on_data;
-use lms_lab::sweep::{print_sweep_over, Adjust};
+use lms_lab::sweep::{count_and_flags, print_sweep_over, Adjust};
 
 fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let scans: usize = args
-        .iter()
-        .find(|a| !a.starts_with("--"))
-        .map_or(Ok(100), |s| s.parse())?;
+    let (scans, args) = count_and_flags(100)?;
     let v: Vec<(&'static str, Adjust)> = vec![
         ("defaults", |p| p),
         ("τ 12", |p| Params { tau: 12.0, ..p }),

@@ -19,6 +19,18 @@ use crate::scenes::Family;
 /// σ₀ on synthetic scenes).
 pub type Adjust = fn(Params) -> Params;
 
+/// The command line of an example: the first argument that is not a flag
+/// (`--…`) as a count (`default` without one), and the flags given.
+pub fn count_and_flags(default: usize) -> Result<(usize, Vec<String>)> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let count = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
+        .map_or(Ok(default), |s| s.parse())?;
+    let flags = args.into_iter().filter(|a| a.starts_with("--")).collect();
+    Ok((count, flags))
+}
+
 /// Print, for each variant, the realistic synthetic scenes' figures
 /// (`scans` per family and σ₀) and the real logs' map-truth figures
 /// (every `every`-th frame, pooled), as Markdown tables.
