@@ -31,7 +31,7 @@ use lms_core::maths::Vec3;
 use lms_core::pipeline::bearings::TwoLevelBearings;
 use lms_core::pipeline::corners::intersect;
 use lms_core::pipeline::ekf::WindowFilter;
-use lms_core::pipeline::line_fit::{fit_line, Bearings};
+use lms_core::pipeline::line_fit::{fit_line, Bearings, RawScan};
 use lms_core::pipeline::segmentation::segment;
 use lms_core::unstable::{fit_span, try_merge};
 use lms_core::Corner;
@@ -112,6 +112,15 @@ pub fn features_from_segments(
 ) -> (Vec<Line>, Vec<Corner>) {
     let bearings = tables.core();
     let beams = frame.beams();
+    // The merges' refits: the baselines' fits have one turn (§7 as written).
+    let scan = RawScan {
+        bearings,
+        ranges,
+        beams,
+        max_range: params.max_range,
+        footprint: params.footprint,
+        turns: 1,
+    };
     let mut lines: Vec<Line> = Vec::new();
     for k in 0..segments.len() {
         let (first, last) = fit_span(segments, k, params.fit_shared_points);
@@ -123,8 +132,7 @@ pub fn features_from_segments(
         }
         if params.merge {
             if let Some(prev) = lines.last() {
-                // The baselines' fits have one turn (§7 as written).
-                if let Some(merged) = try_merge(bearings, ranges, beams, prev, &line, params, 1) {
+                if let Some(merged) = try_merge(&scan, prev, &line, params) {
                     if let Some(slot) = lines.last_mut() {
                         *slot = merged;
                     }

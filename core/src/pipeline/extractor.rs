@@ -446,7 +446,6 @@ fn fit_lines<B: BearingTable>(
     params: &Params,
     stats: &mut Stats,
 ) {
-    let (bearings, raw, beams) = (scan.bearings, scan.ranges, scan.beams);
     for k in 0..f.segments.len() {
         let (first, last) = fit_span(&f.segments, k, params.fit_shared_points);
         let line = match fit_piece(scan, first, last, params.line_sigma()) {
@@ -463,8 +462,7 @@ fn fit_lines<B: BearingTable>(
         // Merge with the previous candidate where §7.6 allows it.
         if params.merge {
             if let Some(prev) = f.lines.last() {
-                let turns = scan.turns;
-                if let Some(merged) = try_merge(bearings, raw, beams, prev, &line, params, turns) {
+                if let Some(merged) = try_merge(scan, prev, &line, params) {
                     stats.merges = stats.merges.saturating_add(1);
                     if let Some(slot) = f.lines.last_mut() {
                         *slot = merged;

@@ -119,6 +119,17 @@ fn offsets_apply(points: u16, turns: u8) -> bool {
     matches!(turns, 2 | 4) && u32::from(points) > 2 * u32::from(turns)
 }
 
+/// The turns a fit of `points` beams takes offsets for: `turns` where
+/// they apply ([`residual_dof`]), else 1.
+#[inline]
+pub(crate) fn offset_turns(points: u16, turns: u8) -> u8 {
+    if offsets_apply(points, turns) {
+        turns
+    } else {
+        1
+    }
+}
+
 /// Fit a line to the valid beams of `first..=last` of `ranges` (m), with
 /// range noise `sigma` (m). Beams outside the slices are ignored. With the
 /// extractor's own table (`&TwoLevelBearings`) the result is the
@@ -165,11 +176,7 @@ pub fn fit_piece<B: BearingTable>(
     // 3.–4. Covariance and chi2 at the solution (the turns' offsets taken
     // out of Σe² where `scan.turns` asks for it, §10.11).
     let points = m.min(u16::MAX as u32) as u16;
-    let turns = if offsets_apply(points, scan.turns) {
-        scan.turns
-    } else {
-        1
-    };
+    let turns = offset_turns(points, scan.turns);
     let (jtj, sum_e2) = span.normal_matrix_and_residual(ca, sa, r, turns)?;
     let var = sigma * sigma;
     let cov = jtj.inverse_spd().ok_or(FitError::Degenerate)?.scale(var);

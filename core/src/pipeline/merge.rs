@@ -4,7 +4,6 @@
 //! (`lms_core::unstable`), which carries no stability promise.
 
 use crate::features::{Line, Segment};
-use crate::frame::Beam;
 use crate::maths::wrap_angle;
 use crate::params::Params;
 use crate::pipeline::line_fit::{
@@ -34,23 +33,20 @@ pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16
 /// `merge_gap_beams` valid ones) lie between them, their parameters agree
 /// within `merge_gate`, and the refit of the union passes `max_chi2` (and,
 /// beyond §7.6, stays within `merge_anchor_gate` of the larger line's own
-/// parameters: [`anchored`]). `turns`: the fits' interleaved turns
-/// ([`RawScan::turns`]).
+/// parameters: [`anchored`]). The union is refitted on `scan`, the scan
+/// the two lines were fitted on (its range limit, footprint term and
+/// turns).
 pub fn try_merge<B: BearingTable>(
-    bearings: B,
-    raw: &[f32],
-    beams: &[Beam],
+    scan: &RawScan<'_, B>,
     prev: &Line,
     next: &Line,
     params: &Params,
-    turns: u8,
 ) -> Option<Line> {
     let gap_start = prev.last as usize + 1;
     let gap_end = next.first as usize; // exclusive
-    let max_range = params.max_range;
     let valid_between = (gap_start..gap_end.max(gap_start))
-        .filter(|&j| match (beams.get(j), raw.get(j)) {
-            (Some(&b), Some(&d)) => usable(b, d, max_range),
+        .filter(|&j| match (scan.beams.get(j), scan.ranges.get(j)) {
+            (Some(&b), Some(&d)) => usable(b, d, scan.max_range),
             _ => false,
         })
         .count();
@@ -60,16 +56,8 @@ pub fn try_merge<B: BearingTable>(
     if !(vouched || params.bridge_merge) {
         return None;
     }
-    let scan = RawScan {
-        bearings,
-        ranges: raw,
-        beams,
-        max_range,
-        footprint: params.footprint,
-        turns,
-    };
-    let sigma = params.line_sigma();
-    let merged = fit_piece(&scan, prev.first, next.last, sigma).ok()?;
+    let (sigma, turns) = (params.line_sigma(), scan.turns);
+    let merged = fit_piece(scan, prev.first, next.last, sigma).ok()?;
     // A bridge (§10 (e)): each line's own beams must fit the union line.
     let fits = |part: &Line| part_chi2(part, &merged, turns).is_some_and(|c| c <= params.max_chi2);
     let larger = if next.points > prev.points {

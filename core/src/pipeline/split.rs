@@ -31,7 +31,9 @@ use heapless::Vec;
 
 use crate::features::{Segment, Stats, MAX_SEGMENTS};
 use crate::params::{Params, MAX_SPLIT_DEPTH};
-use crate::pipeline::line_fit::{fit_piece, residual_dof, BearingTable, RawScan, TurnSums};
+use crate::pipeline::line_fit::{
+    fit_piece, offset_turns, residual_dof, BearingTable, RawScan, TurnSums,
+};
 
 /// Upper 0.1 % quantile of χ² with `nu` degrees of freedom (Wilson–Hilferty:
 /// 1.8 % above the exact value at ν = 3, 0.6 % at ν = 10, 0.04 % at ν = 100).
@@ -120,13 +122,13 @@ fn straightness_bounds<B: BearingTable>(
     let half_diff = (sxx - syy) / 2.0;
     let root = libm::sqrtf(half_diff * half_diff + sxy * sxy);
     let least = (sxx + syy) / 2.0 - root;
-    let points = m.min(u32::from(u16::MAX)) as u16;
-    let limit = chi2_quantile_999(residual_dof(points, scan.turns)) * (sigma * sigma);
     // The turns' offsets (§10.11) are taken out where they apply; then λ
     // bounds nothing (the turns' own lines may lie closer than one line).
-    let offsets = residual_dof(points, scan.turns) < f32::from(points) - 2.0;
-    let mut per_turn = TurnSums::new(if offsets { scan.turns } else { 1 });
-    if least > limit && k2 == 0.0 && !offsets {
+    let points = m.min(u32::from(u16::MAX)) as u16;
+    let turns = offset_turns(points, scan.turns);
+    let limit = chi2_quantile_999(residual_dof(points, turns)) * (sigma * sigma);
+    let mut per_turn = TurnSums::new(turns);
+    if least > limit && k2 == 0.0 && turns == 1 {
         return Bounds::Above; // the lower bound, without the weights only
     }
     // Normal of the smaller eigenvalue: (S − λ·I)·n = 0, from the row of
@@ -348,13 +350,11 @@ pub fn split_before_reject<B: BearingTable>(
             // Past the work bound a piece is not tested: it goes to §7
             // whole (one fit, the χ² gate), as in v1.
             let over_budget = match budget {
-                Some(left) => match left.checked_sub(tested.points()) {
-                    Some(rest) => {
-                        budget = Some(rest);
-                        false
-                    }
-                    None => true,
-                },
+                Some(left) if left < tested.points() => true,
+                Some(left) => {
+                    budget = Some(left - tested.points());
+                    false
+                }
                 None => false,
             };
             if over_budget || !not_straight(scan, tested, params.line_sigma()) {
