@@ -8,16 +8,13 @@
 
 use anyhow::Result;
 use lms_core::Params;
+use lms_lab::realtruth::on_data;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 fn main() -> Result<()> {
     let scans: usize = std::env::args().nth(1).map_or(Ok(100), |s| s.parse())?;
     let v: Vec<(&'static str, Adjust)> = vec![
-        ("stop 23 (neither)", |p| Params {
-            merge_anchor_gate: f32::INFINITY,
-            turn_offsets: false,
-            ..p
-        }),
+        ("stop 23 (neither)", |p| on_data(Params::STOP23, p)),
         ("anchor gate only", |p| Params {
             turn_offsets: false,
             ..p
