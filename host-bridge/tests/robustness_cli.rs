@@ -179,6 +179,22 @@ fn no_argument_panics() {
             &["verify", "--qemu", "/etc/hostname"][..],
             "not an ELF file",
         ),
+        // The firmware runs the defaults: a parameter it does not echo is
+        // refused by name, not reported as mismatches scan after scan.
+        (
+            &["verify", "--qemu", "--merge-anchor-gate", "inf"][..],
+            "merge_anchor_gate: inf would be checked",
+        ),
+        (
+            &[
+                "verify",
+                "--ports",
+                "/dev/null",
+                "/dev/null",
+                "--no-turn-offsets",
+            ][..],
+            "turn_offsets: false would be checked",
+        ),
     ] {
         let out = run(args);
         let err = stderr(&out);

@@ -205,10 +205,56 @@ fn checked_options(args: &VerifyArgs) -> Result<(Baud, Params)> {
     })?;
     args.params.ensure_coprocessor_runs_them()?;
     let params = args.params.to_params()?;
+    if args.qemu.is_some() || args.ports.is_some() {
+        ensure_firmware_runs(&params)?;
+    }
     if let Some(t) = args.recompute_tau {
         ensure!(t.is_finite() && t > 0.0, "--recompute-tau must be > 0");
     }
     Ok((host_baud, params))
+}
+
+/// With `--qemu` or `--ports` the co-processor is the firmware, which runs
+/// [`Params::DEFAULT`] and echoes only iterations, σ, q and τ in its `D0`
+/// summary: a different value of any other parameter on the command line
+/// would make the check recompute with parameters the firmware does not
+/// run, and report every scan that differs as a mismatch. Refuse it, naming
+/// the parameters.
+fn ensure_firmware_runs(params: &Params) -> Result<()> {
+    let echoed_only = Params {
+        iterations: params.iterations,
+        sigma: params.sigma,
+        q: params.q,
+        tau: params.tau,
+        ..Params::DEFAULT
+    };
+    if *params == echoed_only {
+        return Ok(());
+    }
+    // The fields that differ, by name, from the two structs' `Debug` text.
+    let fields = |p: &Params| {
+        let text = format!("{p:?}");
+        let inner = text
+            .split_once('{')
+            .map_or("", |(_, rest)| rest.trim_end_matches('}'));
+        inner
+            .split(", ")
+            .map(|f| f.trim().to_string())
+            .collect::<Vec<_>>()
+    };
+    let differing: Vec<String> = fields(params)
+        .into_iter()
+        .zip(fields(&echoed_only))
+        .filter(|(a, b)| a != b)
+        .map(|(a, _)| a)
+        .collect();
+    anyhow::bail!(
+        "with --qemu or --ports the co-processor is the firmware, which runs the default \
+         parameters and reports only iterations, sigma, q and tau: {} would be checked against \
+         results the firmware never computes; leave those flags out (or use --host, which runs \
+         the co-processor with them)",
+        differing.join(", ")
+    )
 }
 
 /// Run `host-bridge verify`.
