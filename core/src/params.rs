@@ -180,6 +180,25 @@ pub struct Params {
     /// same either way. Default on since stop 24; `false` is §7 as written
     /// (stop 23 and before).
     pub turn_offsets: bool,
+    /// Nested-model test of the merges (an F threshold; beyond ALGORITHM.md,
+    /// issue 14, docs/ALGORITHM-v3-section10.md §10.12): two lines are
+    /// merged only if one line explains their beams not significantly worse
+    /// than the two, `F = ((S₁ − S₂)/2) / (S₂/(m − 4)) ≤ merge_f_test`, with
+    /// `S₁` the union's weighted residual sum, `S₂` the two lines' own, `m`
+    /// their points (`crate::pipeline::merge`). Symmetric in the two lines,
+    /// where the anchor gate guards the larger only. 0 is no test (the
+    /// default).
+    pub merge_f_test: f32,
+    /// Two lines alone can be a curve too (beyond ALGORITHM.md, issue 14
+    /// item 6, docs/ALGORITHM-v3-section10.md §10.12): a pair of
+    /// consecutive lines linked as in an arc chain (`arc_chain`, whose
+    /// `0` turns this off too) is dropped with its lines counted in
+    /// `Stats::rejected_arc` when a circle through their beams explains
+    /// them within the noise and no worse than the two lines do
+    /// (`crate::pipeline::arcs::mark_arc_pairs`); a corner between two
+    /// straight walls does not pass. Default on since stop 25; `false`:
+    /// pairs are kept (stop 24 and before).
+    pub arc_pairs: bool,
 }
 
 /// Pairing gate of [`Params::per_turn`] on |Δα| between two turns' lines
@@ -261,14 +280,23 @@ impl Params {
         split_budget: 542,
         merge_anchor_gate: DEFAULT_MERGE_ANCHOR_GATE,
         turn_offsets: true,
+        merge_f_test: 0.0,
+        arc_pairs: true,
     };
 
-    /// The defaults of stop 23: [`Params::DEFAULT`] with no anchor gate on
+    /// The defaults of stop 24: [`Params::DEFAULT`] with pairs of lines
+    /// kept whatever a circle says of them.
+    pub const STOP24: Params = Params {
+        arc_pairs: false,
+        ..Params::DEFAULT
+    };
+
+    /// The defaults of stop 23: [`Params::STOP24`] with no anchor gate on
     /// the merges and no turn offsets in the fits' χ².
     pub const STOP23: Params = Params {
         merge_anchor_gate: f32::INFINITY,
         turn_offsets: false,
-        ..Params::DEFAULT
+        ..Params::STOP24
     };
 
     /// The defaults of stop 22: [`Params::STOP23`] with the windows of
@@ -350,6 +378,8 @@ pub enum ParamError {
     MaxAlphaSd,
     /// `merge_anchor_gate` must be > 0 (`+inf` allowed).
     MergeAnchorGate,
+    /// `merge_f_test` must be finite and ≥ 0.
+    MergeFTest,
     /// `grazing_noise` must be finite and ≥ 0.
     GrazingNoise,
     /// `fit_sigma` must be finite and ≥ 0.
@@ -394,6 +424,9 @@ impl fmt::Display for ParamError {
             ParamError::MaxAlphaSd => "max_alpha_sd_deg must be > 0 (degrees; inf for no limit)",
             ParamError::MergeAnchorGate => {
                 "merge_anchor_gate must be > 0 (chi-square, 2 dof; inf for no test)"
+            }
+            ParamError::MergeFTest => {
+                "merge_f_test must be finite and >= 0 (an F threshold; 0: off)"
             }
             ParamError::GrazingNoise => "grazing_noise must be finite and >= 0",
             ParamError::FitSigma => "fit_sigma must be finite and >= 0 (metres; 0: sigma)",
@@ -453,6 +486,8 @@ impl ValidParams {
         split_budget: 0,
         merge_anchor_gate: 0.0,
         turn_offsets: false,
+        merge_f_test: 0.0,
+        arc_pairs: false,
     });
 
     /// The parameters.
@@ -538,6 +573,9 @@ impl Params {
         if !(self.max_alpha_sd_deg > 0.0) {
             return Err(ParamError::MaxAlphaSd);
         }
+        if !non_neg(self.merge_f_test) {
+            return Err(ParamError::MergeFTest);
+        }
         if !(self.merge_anchor_gate > 0.0) {
             return Err(ParamError::MergeAnchorGate);
         }
@@ -574,6 +612,8 @@ impl Params {
             Some("fit_sigma")
         } else if self.per_turn {
             Some("per_turn")
+        } else if self.merge_f_test != 0.0 {
+            Some("merge_f_test")
         } else {
             None
         }

@@ -189,6 +189,8 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             split_budget: f.3,
             merge_anchor_gate: f.4,
             turn_offsets: c.0 ^ e.0,
+            arc_pairs: c.1 ^ e.0,
+            merge_f_test: if c.2 % 2 == 0 { 0.0 } else { f.4.min(40.0) },
         })
 }
 

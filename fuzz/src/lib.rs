@@ -472,6 +472,8 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 split_budget: (raw[11] >> 8) as u16,
                 merge_anchor_gate: f32::from_bits(raw[6] ^ limits[1]),
                 turn_offsets: raw[6] & 0x10 != 0,
+                arc_pairs: raw[6] & 0x20 != 0,
+                merge_f_test: f32::from_bits(raw[5] ^ limits[2]),
             }
         }
         PARAMS_SANE => Params {
@@ -538,6 +540,12 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
                 f32::INFINITY
             } else {
                 0.5 + unit(raw[6].rotate_left(12)) * 50.0
+            },
+            arc_pairs: raw[6] & 0x20 != 0,
+            merge_f_test: if raw[6] & 0x200 == 0 {
+                0.0
+            } else {
+                unit(raw[5].rotate_left(12)) * 50.0
             },
         },
         _ => Params {

@@ -149,6 +149,25 @@ pub struct ParamArgs {
     /// --merge-anchor-gate inf the defaults of stop 23
     #[arg(long)]
     pub no_turn_offsets: bool,
+    /// Keep a pair of touching lines that a circle explains better (two
+    /// chords of a curved wall or pillar are dropped by default); with
+    /// the defaults otherwise, those of stop 24
+    #[arg(long)]
+    pub no_arc_pairs: bool,
+    /// Nested-model test of the merges (an F threshold, e.g. 20): two lines
+    /// merge only if one line fits their beams not significantly worse than
+    /// the two; 0 for no test [default: 0]. Host builds only (ALGORITHM.md
+    /// §10 option): the co-processor paths refuse it
+    #[arg(long, value_name = "F", value_parser = f_test_parser)]
+    pub merge_f_test: Option<f32>,
+}
+
+/// `--merge-f-test`: finite and >= 0.
+fn f_test_parser(s: &str) -> std::result::Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(f) if f.is_finite() && f >= 0.0 => Ok(f),
+        _ => Err("give an F threshold >= 0 (e.g. 20), or 0 for no test".into()),
+    }
 }
 
 /// `--merge-anchor-gate`: > 0, or `inf`.
@@ -190,6 +209,11 @@ impl ParamArgs {
              firmware leaves out, and its D0 echo could not tell a client): use it with \
              extract or plot"
         );
+        anyhow::ensure!(
+            self.merge_f_test.is_none_or(|f| f == 0.0),
+            "--merge-f-test: the co-processor does not run it (an ALGORITHM.md §10 option the \
+             firmware leaves out): use it with extract or plot"
+        );
         Ok(())
     }
 
@@ -224,6 +248,8 @@ impl ParamArgs {
             split_budget: self.split_budget.unwrap_or(d.split_budget),
             merge_anchor_gate: self.merge_anchor_gate.unwrap_or(d.merge_anchor_gate),
             turn_offsets: !self.no_turn_offsets && d.turn_offsets,
+            arc_pairs: !self.no_arc_pairs && d.arc_pairs,
+            merge_f_test: self.merge_f_test.unwrap_or(d.merge_f_test),
             ..d
         };
         p.validate()

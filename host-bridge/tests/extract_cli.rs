@@ -372,21 +372,23 @@ fn without_arc_counter(json: &[u8]) -> Vec<u8> {
 /// `extract LOG` (defaults) on every shared log gives exactly the JSON it
 /// gave when these digests were pinned (FNV-1a-64 of stdout): no field, no
 /// bit of any float may change. Re-pin only for an intended change (last:
-/// the merges' anchor gate and the turns' offsets, stop 24; see
-/// tools/feature-bits/tests/digests.rs). The digests before it are what
-/// `--merge-anchor-gate inf --no-turn-offsets` gives (stop 23), with `--no-same-turn-windows --split-budget 0` too (stop 22),
+/// the arcs' pairs, stop 25; see tools/feature-bits/tests/digests.rs).
+/// The digests before it are what `--no-arc-pairs` gives (stop 24), with
+/// `--merge-anchor-gate inf --no-turn-offsets` too (stop 23), with `--no-same-turn-windows --split-budget 0` too (stop 22),
 /// with `--arc-chain 0` (stop 21) and with `--footprint 0
 /// --no-bridge-merge` too (v2), the last two bit for bit once the counter
 /// `rejected_arc` that stop 22 added to every record's `stats` is taken
 /// out of the text.
 #[test]
 fn extract_json_of_every_shared_log_is_pinned() {
-    // (log stem, defaults, `--merge-anchor-gate inf --no-turn-offsets`, with
+    // (log stem, defaults, `--no-arc-pairs`, with `--merge-anchor-gate inf
+    // --no-turn-offsets` too, with
     // `--no-same-turn-windows --split-budget 0`, with `--arc-chain 0`,
     // and with `--footprint 0 --no-bridge-merge`)
-    const PINNED: [(&str, u64, u64, u64, u64, u64); 7] = [
+    const PINNED: [(&str, u64, u64, u64, u64, u64, u64); 7] = [
         (
             "acapulco-corrected",
+            0xa3f8776617088897,
             0x04250938a78912fa,
             0xc40701c7d173c357,
             0xc40701c7d173c357,
@@ -396,6 +398,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         (
             "belgioioso-corrected",
             0x0b4302b0290ca5d1,
+            0x0b4302b0290ca5d1,
             0xe5cd3416cf912913,
             0xe6b583dc85e6a459,
             0xf040b3b3779f54d2,
@@ -403,6 +406,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "csail-corrected",
+            0xd6ad46dc5e78fb06,
             0xd6ad46dc5e78fb06,
             0x83fc1a76c6ce7327,
             0xa727593897fecdd7,
@@ -412,6 +416,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         (
             "freiburg-101-corrected",
             0xead9bdb3cf37d669,
+            0xead9bdb3cf37d669,
             0x18db85e23d9855b4,
             0x86d65186b7903ee6,
             0x9e0878902dbd72e4,
@@ -419,6 +424,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "freiburg-campus-corrected",
+            0x3238531ce147315d,
             0x37ae5dcfab6bf12d,
             0x9e9f56de6baafb1e,
             0x91a67e96d6d10d7c,
@@ -427,6 +433,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "intel-corrected",
+            0xbebe5ac352b47944,
             0x4abed1f79912e32e,
             0x739aa99c0dab50e2,
             0x739aa99c0dab50e2,
@@ -436,6 +443,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         (
             "orebro-corrected",
             0x582be87adeaa59c8,
+            0x582be87adeaa59c8,
             0x23de0131a1d3b95d,
             0x23de0131a1d3b95d,
             0xd80fb2ca8bb9f702,
@@ -444,7 +452,12 @@ fn extract_json_of_every_shared_log_is_pinned() {
     ];
     let mut wrong = Vec::new();
     // An older stop's flags: the newer stop's, and off what the newer added.
-    let stop23 = ["--merge-anchor-gate", "inf", "--no-turn-offsets"];
+    let stop24 = ["--no-arc-pairs"];
+    let stop23 = [
+        &stop24[..],
+        &["--merge-anchor-gate", "inf", "--no-turn-offsets"],
+    ]
+    .concat();
     let stop22 = [
         &stop23[..],
         &["--no-same-turn-windows", "--split-budget", "0"],
@@ -452,11 +465,14 @@ fn extract_json_of_every_shared_log_is_pinned() {
     .concat();
     let stop21 = [&stop22[..], &["--arc-chain", "0"]].concat();
     let v2 = [&stop21[..], &["--footprint", "0", "--no-bridge-merge"]].concat();
-    for (stem, pinned, pinned_stop23, pinned_stop22, pinned_stop21, pinned_v2) in PINNED {
+    for (stem, pinned, pinned_stop24, pinned_stop23, pinned_stop22, pinned_stop21, pinned_v2) in
+        PINNED
+    {
         let path = data(&format!("{stem}.log.gz"));
         let path = path.to_str().unwrap();
         for (flags, pinned, counter) in [
             (&[][..], pinned, true),
+            (&stop24[..], pinned_stop24, true),
             (&stop23[..], pinned_stop23, true),
             (&stop22[..], pinned_stop22, true),
             (&stop21[..], pinned_stop21, false),

@@ -4,10 +4,12 @@
 //! Each is classed by the noise-free hits of its beams: beams on another
 //! surface than the piece's (a wall past a corner, a pillar beside the
 //! wall), or every beam on the piece's own wall. `--stop23` runs
-//! `Params::STOP23` (no anchor gate on the merges), `--list` prints each.
+//! `Params::STOP23` (no anchor gate on the merges), `--merge-f-test=F` the
+//! merges' nested-model test (`Params::merge_f_test`, §10.12), `--list`
+//! prints each.
 //! docs/ALGORITHM-v3-section10.md §10.10.
 //!
-//! `cargo run --release -p lms-lab --example gross_errors -- [SCANS] [--stop23] [--list]`
+//! `cargo run --release -p lms-lab --example gross_errors -- [SCANS] [--stop23] [--merge-f-test=F] [--list]`
 
 use anyhow::Result;
 use lms_core::{Extractor, Params};
@@ -28,6 +30,14 @@ fn main() -> Result<()> {
         Params::DEFAULT
     };
     let list = args.iter().any(|a| a == "--list");
+    let f_test = args
+        .iter()
+        .find_map(|a| a.strip_prefix("--merge-f-test="))
+        .map_or(Ok(base.merge_f_test), |s| s.parse())?;
+    let base = Params {
+        merge_f_test: f_test,
+        ..base
+    };
     println!("| σ₀ | matched resolvable | gross | with beams on another surface | of those: on an arc | median such beams | all on the piece's wall |");
     println!("|---|---:|---:|---:|---:|---:|---:|");
     let mut ex = Extractor::new();

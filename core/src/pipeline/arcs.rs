@@ -14,32 +14,53 @@
 //! direction, is dropped and counted (`Stats::rejected_arc`). Two lines
 //! alone are kept: an obtuse corner looks the same.
 //!
+//! Two such lines alone can be an obtuse corner, and [`curve_not_corner`]
+//! tells them apart with their beams (`Params::arc_pairs`,
+//! docs/ALGORITHM-v3-section10.md §10.12): a circle through the union
+//! explains a curved wall within the noise and no worse than the two lines
+//! do, but not the kink of a corner between two straight walls.
+//!
 //! Runs on the lines §7 kept (accepted, merged, long and certain enough)
 //! and before §8 (no corner is reported on an arc). f32, fixed order, no
 //! allocation.
 
-use crate::features::{Line, MAX_LINES};
+use crate::features::{Line, Segment, MAX_LINES};
 use crate::params::Params;
+use crate::pipeline::line_fit::{residual_dof, BearingTable, RawScan};
+use crate::pipeline::split::{chi2_quantile_999, circle_residuals};
 
 /// Mark in `on_arc` (entry `k`: line `k`) the lines of `lines` (scan
-/// order) that belong to an arc; returns how many.
+/// order, fitted on `scan`) that belong to an arc; returns how many. A run
+/// of exactly two linked lines is marked if [`curve_not_corner`] says so
+/// (`Params::arc_pairs`).
 #[inline(never)]
-pub fn mark_arcs(lines: &[Line], params: &Params, on_arc: &mut [bool; MAX_LINES]) -> u16 {
+pub fn mark_arcs<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    lines: &[Line],
+    params: &Params,
+    on_arc: &mut [bool; MAX_LINES],
+) -> u16 {
     let chain = usize::from(params.arc_chain);
     if chain < 2 {
         return 0;
     }
-    let deg = core::f32::consts::PI / 180.0;
-    let (min_turn, max_turn) = (params.arc_min_turn_deg * deg, params.arc_max_turn_deg * deg);
     // The run so far: lines `start..=k`, and its last turn (0: one line).
     let (mut start, mut last_turn) = (0usize, 0.0f32);
     let mut close = |start: usize, last: usize| {
-        if last + 1 >= start + chain {
+        let pair = last == start + 1
+            && params.arc_pairs
+            && !on_arc.get(start).copied().unwrap_or(true)
+            && lines
+                .get(start..=last)
+                .is_some_and(|pair| curve_not_corner(scan, pair, params));
+        if pair || last + 1 >= start + chain {
             for flag in on_arc.get_mut(start..=last).into_iter().flatten() {
                 *flag = true;
             }
         }
     };
+    let deg = core::f32::consts::PI / 180.0;
+    let (min_turn, max_turn) = (params.arc_min_turn_deg * deg, params.arc_max_turn_deg * deg);
     for (k, pair) in lines.windows(2).enumerate() {
         let (a, b) = (&pair[0], &pair[1]);
         let turn = turn(a.alpha, b.alpha);
@@ -57,6 +78,41 @@ pub fn mark_arcs(lines: &[Line], params: &Params, on_arc: &mut [bool; MAX_LINES]
     }
     close(start, lines.len().saturating_sub(1));
     on_arc.iter().filter(|&&f| f).count() as u16
+}
+
+/// Gauss–Newton steps of the pair test's circle after the algebraic fit.
+const ARC_PAIR_REFINE: u8 = 2;
+
+/// How much better (in `Σe²/σ²`) the circle must fit than the two lines:
+/// χ²₁ at 95 %. A bend of 10–15° between two 0.4 m walls at σ = 1 cm is
+/// explained by a circle about as well as by its two lines; the margin
+/// keeps 99 % of them (Akaike's criterion, a margin of −2, lost 9–14 %;
+/// `core/tests/arc_pairs.rs`, docs/ALGORITHM-v3-section10.md §10.12).
+const ARC_PAIR_MARGIN: f32 = 3.841_459;
+
+/// Whether the two linked lines `pair` are two chords of a curve rather
+/// than a corner: the circle through the valid beams `a.first..=b.last`
+/// (the algebraic fit and [`ARC_PAIR_REFINE`] geometric steps) explains
+/// them at σ (`Σ(‖p − c‖ − R)²/σ²` below χ²ₘ₋₃ at 99.9 %, as split before
+/// reject's circle test) and fits them better than the two lines do by
+/// [`ARC_PAIR_MARGIN`] (`Σ = χ²·dof`, each line's own, turn offsets out),
+/// with one parameter fewer.
+fn curve_not_corner<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    pair: &[Line],
+    params: &Params,
+) -> bool {
+    let [a, b] = pair else {
+        return false;
+    };
+    let own = |l: &Line| l.chi2 * residual_dof(l.points, scan.turns);
+    let union = Segment {
+        first: a.first,
+        last: b.last,
+    };
+    circle_residuals(scan, union, params.line_sigma(), ARC_PAIR_REFINE).is_some_and(|(sum, m)| {
+        sum < chi2_quantile_999(m - 3.0) && sum + ARC_PAIR_MARGIN <= own(a) + own(b)
+    })
 }
 
 /// `b − a` wrapped into (−π, π] for `a`, `b` in (−π, π] (a line's α):
@@ -80,10 +136,21 @@ mod tests {
     use crate::maths::Sym2;
     use heapless::Vec;
 
-    /// Drop the arcs' lines as the extractor does; how many.
+    /// Drop the arcs' lines as the extractor does; how many. The lines
+    /// have no beams (a scan of none): a pair is never taken for a curve
+    /// here (`core/tests/arc_pairs.rs` tests pairs on beams).
     fn drop_arcs(lines: &mut Vec<Line, MAX_LINES>, params: &Params) -> u16 {
+        use crate::pipeline::line_fit::Bearings;
+        let scan = RawScan {
+            bearings: Bearings { cos: &[], sin: &[] },
+            ranges: &[],
+            beams: &[],
+            max_range: f32::INFINITY,
+            footprint: 0.0,
+            turns: 1,
+        };
         let mut on_arc = [false; MAX_LINES];
-        let n = mark_arcs(lines, params, &mut on_arc);
+        let n = mark_arcs(&scan, lines, params, &mut on_arc);
         let mut flags = on_arc.iter();
         lines.retain(|_| !flags.next().copied().unwrap_or(false));
         n

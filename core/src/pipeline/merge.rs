@@ -67,7 +67,8 @@ pub fn try_merge<B: BearingTable>(
     };
     (merged.chi2 <= params.max_chi2
         && (vouched || (fits(prev) && fits(next)))
-        && anchored(larger, &merged, params.merge_anchor_gate))
+        && anchored(larger, &merged, params.merge_anchor_gate)
+        && nested(prev, next, &merged, turns, params.merge_f_test))
     .then_some(merged)
 }
 
@@ -84,6 +85,28 @@ fn anchored(larger: &Line, merged: &Line, gate: f32) -> bool {
     gate == f32::INFINITY
         || mahalanobis(&larger.cov, larger, merged)
             .is_some_and(|d| d <= gate * larger.chi2.max(1.0))
+}
+
+/// Whether one line (`merged`) explains the beams of `prev` and `next`
+/// not significantly worse than the two: `F = ((S₁ − S₂)/2) / (S₂/(m − 4))
+/// ≤ threshold` ([`Params::merge_f_test`]; the F ratio of nested least
+/// squares models, two more parameters in the pair), with `S = χ²·dof`
+/// each fit's weighted residual sum in units of σ² and `m` the two lines'
+/// points. 0: no test (and always without feature `section10`).
+fn nested(prev: &Line, next: &Line, merged: &Line, turns: u8, threshold: f32) -> bool {
+    // An ALGORITHM.md §10 option: out of builds without `section10`
+    // (the firmware), whose validation keeps it at 0.
+    if !cfg!(feature = "section10") || threshold == 0.0 {
+        return true;
+    }
+    let sum = |l: &Line| l.chi2 * residual_dof(l.points, turns);
+    let two = sum(prev) + sum(next);
+    let dof = f32::from(prev.points) + f32::from(next.points) - 4.0;
+    if !(dof > 0.0 && two > 0.0) {
+        return true;
+    }
+    let f = ((sum(merged) - two) / 2.0) / (two / dof);
+    f <= threshold
 }
 
 /// χ² per point of the beams `part` was fitted to about `line` (§10 (e)),

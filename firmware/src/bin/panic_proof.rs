@@ -141,6 +141,8 @@ fn any_params() -> Params {
         split_budget: black_box(1083),
         merge_anchor_gate: any_f32(),
         turn_offsets: black_box(true),
+        arc_pairs: black_box(true),
+        merge_f_test: any_f32(),
     }
 }
 

@@ -87,6 +87,19 @@ fn log(stem: &str) -> PathBuf {
 #[cfg(not(feature = "libm-trig"))]
 const PINNED: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x3fd2675e26bb39dc, 861),
+    ("belgioioso-corrected", 0x3908bce88a7db6d7, 395),
+    ("csail-corrected", 0x0a89b0ef9fe8ed12, 406),
+    ("freiburg-101-corrected", 0xa7666d445f566abe, 292),
+    ("freiburg-campus-corrected", 0xb28a2bf3b7a4b1f1, 2008),
+    ("intel-corrected", 0x995db2487c2251e4, 910),
+    ("orebro-corrected", 0xe720b6fb012a9a3f, 237),
+];
+
+/// The same at `Params::STOP24` (the defaults of stop 24: pairs of lines
+/// on a curve kept).
+#[cfg(not(feature = "libm-trig"))]
+const PINNED_STOP24: [(&str, u64, usize); 7] = [
+    ("acapulco-corrected", 0x3fd2675e26bb39dc, 861),
     ("belgioioso-corrected", 0x68758aa19d2330ee, 395),
     ("csail-corrected", 0x9c838733fe481d31, 406),
     ("freiburg-101-corrected", 0xa7666d445f566abe, 292),
@@ -250,6 +263,17 @@ fn feature_bits_of_every_shared_log_are_pinned() {
 
 #[cfg(not(feature = "libm-trig"))]
 #[test]
+fn feature_bits_of_every_shared_log_at_stop_24_are_pinned() {
+    let wrong = check_pins(&PINNED_STOP24, &lms_core::Params::STOP24, false);
+    assert!(
+        wrong.is_empty(),
+        "stop-24 results changed:\n{}",
+        wrong.join("\n")
+    );
+}
+
+#[cfg(not(feature = "libm-trig"))]
+#[test]
 fn feature_bits_of_every_shared_log_at_stop_23_are_pinned() {
     let wrong = check_pins(&PINNED_STOP23, &lms_core::Params::STOP23, false);
     assert!(
@@ -303,10 +327,10 @@ fn a_changed_bit_changes_the_digest() {
     assert_eq!(a.0, PINNED[6].1);
 }
 
-/// (log stem, σ (m), `max_range` (m), digests: defaults, stop 23, stop 22,
-/// stop 21, v2).
+/// (log stem, σ (m), `max_range` (m), digests: defaults, stop 24, stop 23,
+/// stop 22, stop 21, v2).
 #[cfg(not(feature = "libm-trig"))]
-type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64);
+type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64, u64);
 
 /// With the parameters `host-bridge extract LOG` uses when no flag is given
 /// (issue 14, item 4: σ and `max_range` from the survey of the log,
@@ -317,17 +341,18 @@ type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64);
 /// values. (Örebro has no range beyond its limit: its digest is the one at
 /// `Params::default`.) `host-bridge`'s
 /// `extract_cli::per_data_defaults_match_the_pinned_feature_bits` checks
-/// that its `defaults::for_log` gives these same parameters. The last four
-/// columns are the digests with `Params::STOP23`, `Params::STOP22`,
-/// `Params::STOP21` and `Params::V2` otherwise (pinned at stops 23, 22 and
-/// 21 and up to stop 20), the last two without the `rejected_arc` counter
-/// ([`WithoutArcCounter`]).
+/// that its `defaults::for_log` gives these same parameters. The last five
+/// columns are the digests with `Params::STOP24`, `Params::STOP23`,
+/// `Params::STOP22`, `Params::STOP21` and `Params::V2` otherwise (pinned at
+/// stops 24, 23, 22 and 21 and up to stop 20), the last two without the
+/// `rejected_arc` counter ([`WithoutArcCounter`]).
 #[cfg(not(feature = "libm-trig"))]
 const PINNED_PER_DATA: [PerDataPin; 7] = [
     (
         "acapulco-corrected",
         0.030000001,
         50.0,
+        0xd7e2f9506260af05,
         0xff362eae488123ab,
         0x456597c9d8b236ef,
         0x456597c9d8b236ef,
@@ -339,6 +364,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         0.01,
         81.83,
         0x898fc07de11d58a7,
+        0x898fc07de11d58a7,
         0x04407f65d761c00e,
         0xc2c8950c6374724d,
         0xcf25f846ba026f7e,
@@ -348,6 +374,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "csail-corrected",
         0.01,
         81.83,
+        0x82e4874b6425520e,
         0x82e4874b6425520e,
         0x4373d6154e313a6d,
         0xeed794a1b8ba1c99,
@@ -359,6 +386,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         0.01,
         81.83,
         0xd29bd4544d235609,
+        0xd29bd4544d235609,
         0xb63357291e3ad9e8,
         0x47dce9c54f84e796,
         0x466d8dff9805249e,
@@ -368,6 +396,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "freiburg-campus-corrected",
         0.01,
         81.83,
+        0xd1d07c6f0d1ea572,
         0x02ae4a2203de1483,
         0x1710d46adb43c02b,
         0x43b22e4e673cb55e,
@@ -378,6 +407,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "intel-corrected",
         0.01,
         81.83,
+        0x5d872066b9cfec79,
         0xf5959bee1126b7fc,
         0xe3cf0b3e0d27c2db,
         0xe3cf0b3e0d27c2db,
@@ -388,6 +418,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "orebro-corrected",
         0.005,
         32.759,
+        0xe720b6fb012a9a3f,
         0xe720b6fb012a9a3f,
         0xee57028d62c2f364,
         0xee57028d62c2f364,
@@ -400,14 +431,19 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
 #[test]
 fn feature_bits_at_the_per_data_defaults_are_pinned() {
     let mut wrong = Vec::new();
-    for (stem, sigma, max_range, pin, pin_stop23, pin_stop22, pin_stop21, pin_v2) in PINNED_PER_DATA
+    for (stem, sigma, max_range, pin, pin_stop24, pin_stop23, pin_stop22, pin_stop21, pin_v2) in
+        PINNED_PER_DATA
     {
         let path = log(stem);
         let params = per_data_params(&path).unwrap();
+        let stop24 = lms_core::Params {
+            arc_pairs: false,
+            ..params
+        };
         let stop23 = lms_core::Params {
             merge_anchor_gate: f32::INFINITY,
             turn_offsets: false,
-            ..params
+            ..stop24
         };
         let stop22 = lms_core::Params {
             same_turn_windows: false,
@@ -432,6 +468,7 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
             }
         );
         let (d, _, _) = digests(&path, &params);
+        let (d24, _, _) = digests(&path, &stop24);
         let (d23, _, _) = digests(&path, &stop23);
         let (d22, d22_without, _) = digests(&path, &stop22);
         let (_, d21, _) = digests(&path, &stop21);
@@ -443,20 +480,20 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
         );
         let (_, d2, _) = digests(&path, &v2);
         println!(
-            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d23:016x}, 0x{d22:016x}, 0x{d21:016x}, \
-             0x{d2:016x}),",
+            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d24:016x}, 0x{d23:016x}, 0x{d22:016x}, \
+             0x{d21:016x}, 0x{d2:016x}),",
             params.sigma, params.max_range
         );
-        if (params.sigma, params.max_range, d, d23, d22, d21, d2)
+        if (params.sigma, params.max_range, d, d24, d23, d22, d21, d2)
             != (
-                sigma, max_range, pin, pin_stop23, pin_stop22, pin_stop21, pin_v2,
+                sigma, max_range, pin, pin_stop24, pin_stop23, pin_stop22, pin_stop21, pin_v2,
             )
         {
             wrong.push(format!(
-                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, stop 23 0x{d23:016x}, stop 22 \
-                 0x{d22:016x}, stop 21 0x{d21:016x}, v2 0x{d2:016x}; pinned {sigma}, \
-                 {max_range}, 0x{pin:016x}, 0x{pin_stop23:016x}, 0x{pin_stop22:016x}, \
-                 0x{pin_stop21:016x}, 0x{pin_v2:016x}",
+                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, stop 24 0x{d24:016x}, stop 23 \
+                 0x{d23:016x}, stop 22 0x{d22:016x}, stop 21 0x{d21:016x}, v2 0x{d2:016x}; \
+                 pinned {sigma}, {max_range}, 0x{pin:016x}, 0x{pin_stop24:016x}, \
+                 0x{pin_stop23:016x}, 0x{pin_stop22:016x}, 0x{pin_stop21:016x}, 0x{pin_v2:016x}",
                 params.sigma, params.max_range
             ));
         }
