@@ -9,7 +9,8 @@
 //! `Params::STOP22` (windows of consecutive beams), for the cost of
 //! same-turn windows (§10 (a), the default since stop 23), and with
 //! `Params::STOP23`, for the cost of the anchor gate and the turns' offsets
-//! (stop 24).
+//! (stop 24), and with `Params::STOP24`, for the cost of the arcs' pairs
+//! and of the strided pass at every stride (stop 25).
 //!
 //! One benchmark iteration runs every frame of the log once (406 frames), so
 //! the reported time is for the whole log and the throughput is in frames
@@ -66,6 +67,13 @@ fn pipeline(c: &mut Criterion) {
                 Params {
                     per_turn: true,
                     ..cm
+                },
+            ),
+            (
+                BenchmarkId::new("stop24_sigma_10mm", 30),
+                Params {
+                    sigma: 0.01,
+                    ..Params::STOP24
                 },
             ),
             (

@@ -77,8 +77,9 @@ pub fn sample(
 /// The methods: ALGORITHM.md v1's defaults, v2's (`Params::V2`), stop
 /// 21's (§10 (e), (f): `Params::STOP21`), stop 22's (and the lines of arcs
 /// dropped: `Params::STOP22`), stop 23's (and same-turn windows, §10 (a):
-/// `Params::STOP23`), the defaults (and the merges' anchor gate and the
-/// turns' offsets out of the fits' χ²), §10 options on them,
+/// `Params::STOP23`), stop 24's (and the merges' anchor gate and the
+/// turns' offsets out of the fits' χ²: `Params::STOP24`), the defaults (and
+/// the pairs of lines on a curve dropped), §10 options on them,
 /// split-and-merge.
 pub fn methods() -> Vec<Method> {
     vec![
@@ -108,9 +109,22 @@ pub fn methods() -> Vec<Method> {
                 ..Params::STOP23
             }
         }),
+        Method::with("stop-24 defaults (Params::STOP24)", Kind::Core, |p| {
+            Params {
+                sigma: p.sigma,
+                ..Params::STOP24
+            }
+        }),
         Method::with("defaults (Params::default)", Kind::Core, |p| Params {
             sigma: p.sigma,
             ..Params::default()
+        }),
+        Method::with("defaults + merge F test 20 (§10.12)", Kind::Core, |p| {
+            Params {
+                sigma: p.sigma,
+                merge_f_test: 20.0,
+                ..Params::default()
+            }
         }),
         Method::with("defaults + grazing ρ = 0.5", Kind::Core, |p| Params {
             sigma: p.sigma,

@@ -35,8 +35,10 @@
 //! the merge across rejected segments of §10 (e), (f), since stop 22 the
 //! lines of arcs dropped, since stop 23 same-turn windows (§10 (a)), since
 //! stop 24 the merges' anchor gate and the turns' offsets out of the fits'
-//! χ² — with σ and `max_range` from the data); `stop 23` is the same without
-//! both ([`Params::STOP23`]);
+//! χ², since stop 25 the pairs of lines on a curve dropped — with σ and
+//! `max_range` from the data); `stop 24` is the same with pairs kept
+//! ([`Params::STOP24`]); `stop 23` without the anchor gate and the offsets
+//! too ([`Params::STOP23`]);
 //! `stop 22` with windows of consecutive beams too ([`Params::STOP22`];
 //! stop 21's [`Params::STOP21`] gives the same on these logs); `v2` the same
 //! with [`Params::V2`]'s footprint and merge (the defaults up to stop 20);
@@ -160,12 +162,15 @@ impl RealMethod {
 
 /// Name of the no-flags method.
 pub const NO_FLAGS: &str =
-    "defaults, no flags (per data; footprint + bridge + arcs + same-turn windows + anchor gate + turn offsets)";
+    "defaults, no flags (per data; footprint + bridge + arcs + same-turn windows + anchor gate + turn offsets + arc pairs)";
+/// Name of the no-flags method with the defaults of stop 24
+/// (`Params::STOP24`: pairs of lines on a curve kept).
+pub const STOP24_NO_FLAGS: &str = "stop-24 defaults, no flags (--no-arc-pairs)";
 /// Name of the no-flags method with the defaults of stop 23
 /// (`Params::STOP23`: no anchor gate on the merges, no turn offsets in the
 /// fits' χ²).
 pub const STOP23_NO_FLAGS: &str =
-    "stop-23 defaults, no flags (--merge-anchor-gate inf --no-turn-offsets)";
+    "stop-23 defaults, no flags (stop 24's and --merge-anchor-gate inf --no-turn-offsets)";
 /// Name of the no-flags method with the defaults of stop 22
 /// (`Params::STOP22`: windows of consecutive beams over both turns). On
 /// the real logs stop 21's defaults (`Params::STOP21`, no lines of arcs
@@ -203,6 +208,7 @@ pub fn methods() -> Vec<RealMethod> {
     let own = SigmaChoice::Base;
     vec![
         m(NO_FLAGS, Core, NoFlags, own),
+        g(STOP24_NO_FLAGS, |p| on_data(Params::STOP24, p)),
         g(STOP23_NO_FLAGS, |p| on_data(Params::STOP23, p)),
         g(STOP22_NO_FLAGS, |p| on_data(Params::STOP22, p)),
         g(V2_NO_FLAGS, |p| on_data(Params::V2, p)),
@@ -232,6 +238,10 @@ pub fn methods() -> Vec<RealMethod> {
         g("fit σ = 2σ (windows as v2)", |p| Params {
             fit_sigma: 2.0 * p.sigma,
             ..on_data(Params::STOP22, p)
+        }),
+        g("no flags + merge F test 20 (§10.12)", |p| Params {
+            merge_f_test: 20.0,
+            ..p
         }),
         g(PER_TURN, |p| Params {
             per_turn: true,
