@@ -1,111 +1,108 @@
-//! What the defaults' false lines on the realistic synthetic scenes lie on:
-//! a pillar (a full circle), a curved wall (an open arc), or a straight
-//! surface (then the evaluation's classes: a duplicate of a matched piece,
-//! a piece too short to resolve, off the gates, mixed), with the median
-//! points, length and σ_α of each class and how many of each class have a
-//! range jump (> 0.3 m) or a no-echo beam next to both of their ends.
+//! What the false lines on the realistic synthetic scenes lie on: a pillar
+//! (a full circle), a curved wall (an open arc), or a straight surface
+//! (then the evaluation's classes: a duplicate of a matched piece, a piece
+//! too short to resolve, off the gates, mixed), with the median points,
+//! length and σ_α of each class and how many of each class have a range
+//! jump (> 0.3 m) or a no-echo beam next to both of their ends. The
+//! defaults, or stop 24's (`--stop24`: pairs of lines on a curve kept).
+//! docs/ALGORITHM-v3-section10.md §10.12.
 //!
-//! `cargo run --release -p lms-lab --example false_lines -- [SCANS] [--stop23]`
+//! `cargo run --release -p lms-lab --example false_lines -- [SCANS] [--stop24]`
 
 use std::collections::BTreeMap;
 
 use anyhow::Result;
-use lms_core::{Extractor, Line, Params};
-use lms_lab::baselines::run_core;
-use lms_lab::metrics::{median, scan_truth, score_lines, Gates};
-use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
-use lms_lab::scenes::Family;
-use lms_lab::sweep::count_and_flags;
+use lms_core::{Line, Params};
+use lms_lab::metrics::median;
+use lms_lab::realistic::SIGMAS;
+use lms_lab::scenes::Sample;
+use lms_lab::sweep::{count_and_flags, each_scored_scan};
 use lms_scene::Surface;
 
+/// The false lines on one kind of surface.
 #[derive(Default)]
 struct Class {
     n: usize,
     points: Vec<f64>,
-    length: Vec<f64>,
+    length_m: Vec<f64>,
     sd_alpha_deg: Vec<f64>,
     isolated: usize,
 }
 
-fn length(l: &Line) -> f64 {
-    let [a, b] = l.endpoints;
-    f64::from((a[0] - b[0]).hypot(a[1] - b[1]))
+impl Class {
+    fn add(&mut self, l: &Line, isolated: bool) {
+        let [a, b] = l.endpoints;
+        self.n += 1;
+        self.points.push(f64::from(l.points));
+        self.length_m
+            .push(f64::from((a[0] - b[0]).hypot(a[1] - b[1])));
+        self.sd_alpha_deg
+            .push(f64::from(l.cov.a).sqrt().to_degrees());
+        self.isolated += usize::from(isolated);
+    }
+}
+
+/// What most of `l`'s noise-free hits lie on.
+fn what_it_lies_on(s: &Sample, l: &Line) -> &'static str {
+    let (f, t) = (usize::from(l.first), usize::from(l.last));
+    let kinds: Vec<Option<&str>> = (f..=t)
+        .filter_map(|j| s.truth.hits.get(j).copied().flatten())
+        .map(|h| match s.scene.surface(h.surface) {
+            Some(Surface::Arc(a)) if a.is_full_circle() => Some("pillar"),
+            Some(Surface::Arc(_)) => Some("curved wall"),
+            _ => None,
+        })
+        .collect();
+    let half = (t - f + 1).div_euclid(2);
+    let on = |kind| kinds.iter().filter(|&&k| k == Some(kind)).count();
+    if on("pillar") > half {
+        "pillar"
+    } else if on("curved wall") > half {
+        "curved wall"
+    } else {
+        "straight (dup/unres/off/mixed)"
+    }
+}
+
+/// Whether both ends of `l` face a jump of more than 0.3 m, a no-echo beam
+/// or the end of the scan.
+fn isolated(s: &Sample, l: &Line) -> bool {
+    let (beams, ranges) = (s.frame.beams(), s.frame.ranges());
+    let range = |j: usize| {
+        beams
+            .get(j)
+            .filter(|b| b.is_valid())
+            .and_then(|_| ranges.get(j).copied())
+    };
+    let jump = |a: usize, b: usize| match (range(a), range(b)) {
+        (Some(x), Some(y)) => (x - y).abs() > 0.3,
+        _ => true,
+    };
+    let (f, t) = (usize::from(l.first), usize::from(l.last));
+    (f == 0 || jump(f, f - 1)) && (t + 1 >= beams.len() || jump(t, t + 1))
 }
 
 fn main() -> Result<()> {
     let (scans, args) = count_and_flags(100)?;
-    let base = if args.iter().any(|a| a == "--stop23") {
-        Params::STOP23
+    let base = if args.iter().any(|a| a == "--stop24") {
+        Params::STOP24
     } else {
         Params::DEFAULT
     };
-    let mut ex = Extractor::new();
     for sigma in SIGMAS {
-        let model = realistic_model(sigma);
-        let gates = Gates {
-            kappa: model.kappa,
-            ..Gates::default()
-        };
-        let params = Params {
-            sigma: sigma as f32,
-            ..base
-        };
         let mut classes: BTreeMap<&'static str, Class> = BTreeMap::new();
         let mut lines = 0;
-        for family in Family::ALL {
-            for k in 0..scans {
-                let s = sample(family, k, 1, &model, DELTA)?;
-                let truth = scan_truth(&s.truth, &s.scene, &params, sigma, &gates);
-                let x = run_core(&mut ex, &s.frame, &params);
-                let score = score_lines(&truth, &x.lines, s.frame.beams(), sigma, &gates);
-                lines += x.lines.len();
-                let matched: Vec<usize> = score.pairs.iter().map(|p| p.line).collect();
-                let beams = s.frame.beams();
-                let ranges = s.frame.ranges();
-                let range = |j: usize| {
-                    beams
-                        .get(j)
-                        .filter(|b| b.is_valid())
-                        .and_then(|_| ranges.get(j).copied())
-                };
-                for (e, l) in x.lines.iter().enumerate() {
-                    if matched.contains(&e) {
-                        continue;
-                    }
-                    let (f, t) = (usize::from(l.first), usize::from(l.last));
-                    let mid = (f..=t)
-                        .filter_map(|j| s.truth.hits.get(j).copied().flatten())
-                        .map(|h| h.surface)
-                        .collect::<Vec<_>>();
-                    let arc_kind = |id| match s.scene.surface(id) {
-                        Some(Surface::Arc(a)) if a.is_full_circle() => Some("pillar"),
-                        Some(Surface::Arc(_)) => Some("curved wall"),
-                        _ => None,
-                    };
-                    let on = |kind| mid.iter().filter(|&&id| arc_kind(id) == Some(kind)).count();
-                    let half = (t - f + 1).div_euclid(2);
-                    let kind = if on("pillar") > half {
-                        "pillar"
-                    } else if on("curved wall") > half {
-                        "curved wall"
-                    } else {
-                        "straight (dup/unres/off/mixed)"
-                    };
-                    let jump = |a: usize, b: usize| match (range(a), range(b)) {
-                        (Some(x), Some(y)) => (x - y).abs() > 0.3,
-                        _ => true,
-                    };
-                    let isolated =
-                        (f == 0 || jump(f, f - 1)) && (t + 1 >= beams.len() || jump(t, t + 1));
-                    let c = classes.entry(kind).or_default();
-                    c.n += 1;
-                    c.points.push(f64::from(l.points));
-                    c.length.push(length(l));
-                    c.sd_alpha_deg.push(f64::from(l.cov.a).sqrt().to_degrees());
-                    c.isolated += usize::from(isolated);
+        each_scored_scan(sigma, scans, base, |scan| {
+            let (s, x) = (scan.sample, scan.extraction);
+            lines += x.lines.len();
+            let matched: Vec<usize> = scan.score.pairs.iter().map(|p| p.line).collect();
+            for (e, l) in x.lines.iter().enumerate() {
+                if !matched.contains(&e) {
+                    let c = classes.entry(what_it_lies_on(s, l)).or_default();
+                    c.add(l, isolated(s, l));
                 }
             }
-        }
+        })?;
         println!("\nσ₀ = {} mm, {lines} lines", sigma * 1e3);
         println!("| on | false lines | share of all lines | median points | median length (m) | median σα (°) | jump at both ends |");
         println!("|---|---:|---:|---:|---:|---:|---:|");
@@ -115,7 +112,7 @@ fn main() -> Result<()> {
                 c.n,
                 c.n as f64 / lines as f64,
                 median(&c.points),
-                median(&c.length),
+                median(&c.length_m),
                 median(&c.sd_alpha_deg),
                 c.isolated
             );

@@ -12,12 +12,10 @@
 //! `cargo run --release -p lms-lab --example gross_errors -- [SCANS] [--stop23] [--merge-f-test=F] [--list]`
 
 use anyhow::Result;
-use lms_core::{Extractor, Params};
-use lms_lab::baselines::run_core;
-use lms_lab::metrics::{median, scan_truth, score_lines, Gates};
-use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
-use lms_lab::scenes::Family;
-use lms_lab::sweep::count_and_flags;
+use lms_core::Params;
+use lms_lab::metrics::median;
+use lms_lab::realistic::SIGMAS;
+use lms_lab::sweep::{count_and_flags, each_scored_scan};
 
 /// χ²₁ at 99.9 %: the evaluation's gross-error limit.
 const GROSS: f64 = 10.83;
@@ -40,63 +38,49 @@ fn main() -> Result<()> {
     };
     println!("| σ₀ | matched resolvable | gross | with beams on another surface | of those: on an arc | median such beams | all on the piece's wall |");
     println!("|---|---:|---:|---:|---:|---:|---:|");
-    let mut ex = Extractor::new();
     for sigma in SIGMAS {
-        let model = realistic_model(sigma);
-        let gates = Gates {
-            kappa: model.kappa,
-            ..Gates::default()
-        };
-        let params = Params {
-            sigma: sigma as f32,
-            ..base
-        };
         let (mut pairs, mut gross, mut arc, mut own) = (0, 0, 0, 0);
         let mut others = Vec::new();
-        for family in Family::ALL {
-            for k in 0..scans {
-                let s = sample(family, k, 1, &model, DELTA)?;
-                let truth = scan_truth(&s.truth, &s.scene, &params, sigma, &gates);
-                let x = run_core(&mut ex, &s.frame, &params);
-                let score = score_lines(&truth, &x.lines, s.frame.beams(), sigma, &gates);
-                for p in score.pairs.iter().filter(|p| p.resolvable) {
-                    pairs += 1;
-                    let (za, zr) = (p.d_alpha * p.d_alpha / p.crb_aa, p.d_r * p.d_r / p.crb_rr);
-                    if !(za > GROSS || zr > GROSS) {
-                        continue;
-                    }
-                    gross += 1;
-                    let (line, piece) = (&x.lines[p.line], &truth.pieces[p.piece]);
-                    let surface_of = |j: usize| s.truth.hits.get(j).copied().flatten();
-                    // The piece's wall: the surface of its middle beam's hit.
-                    let wall = surface_of((piece.first + piece.last) / 2).map(|h| h.surface);
-                    let beams = usize::from(line.first)..=usize::from(line.last);
-                    let foreign: Vec<usize> = beams
-                        .filter(|&j| s.frame.beams()[j].is_valid())
-                        .filter(|&j| surface_of(j).map(|h| h.surface) != wall)
-                        .collect();
-                    let on_arc = foreign.iter().any(|&j| truth.on_arc[j]);
-                    if foreign.is_empty() {
-                        own += 1;
-                    } else {
-                        others.push(foreign.len() as f64);
-                        arc += usize::from(on_arc);
-                    }
-                    if list {
-                        println!(
-                            "{} {k}: piece {}..{}, line {}..{}, z²α {za:.0}, z²r {zr:.0}, {} beams elsewhere{}",
-                            family.name(),
-                            piece.first,
-                            piece.last,
-                            line.first,
-                            line.last,
-                            foreign.len(),
-                            if on_arc { " (arc)" } else { "" }
-                        );
-                    }
+        each_scored_scan(sigma, scans, base, |scan| {
+            let (s, truth, x) = (scan.sample, scan.truth, scan.extraction);
+            for p in scan.score.pairs.iter().filter(|p| p.resolvable) {
+                pairs += 1;
+                let (za, zr) = (p.d_alpha * p.d_alpha / p.crb_aa, p.d_r * p.d_r / p.crb_rr);
+                if !(za > GROSS || zr > GROSS) {
+                    continue;
+                }
+                gross += 1;
+                let (line, piece) = (&x.lines[p.line], &truth.pieces[p.piece]);
+                let surface_of = |j: usize| s.truth.hits.get(j).copied().flatten();
+                // The piece's wall: the surface of its middle beam's hit.
+                let wall = surface_of((piece.first + piece.last) / 2).map(|h| h.surface);
+                let beams = usize::from(line.first)..=usize::from(line.last);
+                let foreign: Vec<usize> = beams
+                    .filter(|&j| s.frame.beams()[j].is_valid())
+                    .filter(|&j| surface_of(j).map(|h| h.surface) != wall)
+                    .collect();
+                let on_arc = foreign.iter().any(|&j| truth.on_arc[j]);
+                if foreign.is_empty() {
+                    own += 1;
+                } else {
+                    others.push(foreign.len() as f64);
+                    arc += usize::from(on_arc);
+                }
+                if list {
+                    println!(
+                        "{} {}: piece {}..{}, line {}..{}, z²α {za:.0}, z²r {zr:.0}, {} beams elsewhere{}",
+                        s.family.name(),
+                        s.index,
+                        piece.first,
+                        piece.last,
+                        line.first,
+                        line.last,
+                        foreign.len(),
+                        if on_arc { " (arc)" } else { "" }
+                    );
                 }
             }
-        }
+        })?;
         println!(
             "| {} mm | {pairs} | {gross} | {} | {arc} | {:.0} | {own} |",
             sigma * 1e3,

@@ -10,10 +10,10 @@ use lms_core::{Extractor, Frame, Params};
 
 use crate::baselines::{run_core, Extraction};
 use crate::maptruth::{build_map, frame_truth, TruthConfig};
-use crate::metrics::{scan_truth, Gates, Tally};
+use crate::metrics::{scan_truth, score_lines, Gates, LineScore, ScanTruth, Tally};
 use crate::realistic::{realistic_model, sample, DELTA, SIGMAS};
 use crate::realtruth::{no_flag_params, pooled_table, score_frame, RealTally, ScoredLine};
-use crate::scenes::Family;
+use crate::scenes::{Family, Sample};
 
 /// A change applied to the defaults (the per-data defaults on real logs,
 /// σ₀ on synthetic scenes).
@@ -51,6 +51,61 @@ pub fn print_sweep_over(
     print_sweep_with(&names, every, scans, &|k, ex, frame, params| {
         run_core(ex, frame, &(variants[k].1)(base(*params)))
     })
+}
+
+/// One realistic synthetic scan as the diagnostic examples see it: the
+/// sample, its truth, what the core extracted and the line score.
+pub struct ScoredScan<'a> {
+    /// The scene, pose, truth and frame (and family and index).
+    pub sample: &'a Sample,
+    /// The truth scored against.
+    pub truth: &'a ScanTruth,
+    /// The core's result.
+    pub extraction: &'a Extraction,
+    /// The lines' score.
+    pub score: &'a LineScore,
+}
+
+/// Run the core with `base` (σ set to `sigma`) on the first `scans`
+/// realistic synthetic scans of every family at `sigma` and hand each,
+/// scored, to `f`.
+pub fn each_scored_scan(
+    sigma: f64,
+    scans: usize,
+    base: Params,
+    mut f: impl FnMut(&ScoredScan<'_>),
+) -> Result<()> {
+    let model = realistic_model(sigma);
+    let gates = Gates {
+        kappa: model.kappa,
+        ..Gates::default()
+    };
+    let params = Params {
+        sigma: sigma as f32,
+        ..base
+    };
+    let mut ex = Extractor::new();
+    for family in Family::ALL {
+        for index in 0..scans {
+            let sample = sample(family, index, 1, &model, DELTA)?;
+            let truth = scan_truth(&sample.truth, &sample.scene, &params, sigma, &gates);
+            let extraction = run_core(&mut ex, &sample.frame, &params);
+            let score = score_lines(
+                &truth,
+                &extraction.lines,
+                sample.frame.beams(),
+                sigma,
+                &gates,
+            );
+            f(&ScoredScan {
+                sample: &sample,
+                truth: &truth,
+                extraction: &extraction,
+                score: &score,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Extraction of variant `k` on a frame, from the defaults `params`.
