@@ -255,6 +255,35 @@ pub fn circle_residuals<B: BearingTable>(
         return None;
     }
     let local = |x: f32, y: f32| ((x - cx) / scale, (y - cy) / scale);
+    let (mut ou, mut ov, mut radius) = kasa_circle(scan, piece, &local, mf)?;
+    for _ in 0..refine {
+        let Some([dx, dy, dr]) = gauss_newton_step(scan, piece, &local, (ou, ov, radius)) else {
+            break;
+        };
+        (ou, ov, radius) = (ou + dx, ov + dy, radius + dr);
+    }
+    let mut sum = 0.0f32;
+    scan.each_point(piece, |_, x, y| {
+        let (u, v) = local(x, y);
+        // `sqrtf`, not `hypotf`: libm's `hypotf` works in f64, which the
+        // M4F does in software; the coordinates here are O(1), no overflow.
+        let (du, dv) = (u - ou, v - ov);
+        let e = (libm::sqrtf(du * du + dv * dv) - radius) * scale / sigma;
+        sum += e * e;
+    });
+    Some((sum, mf))
+}
+
+/// Kåsa's algebraic circle through the valid points of `piece` in the
+/// local coordinates `local` (centred, scaled; `mf` points): centre and
+/// radius, or `None` for a straight run or no real radius.
+#[inline(always)]
+fn kasa_circle<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    piece: Segment,
+    local: &impl Fn(f32, f32) -> (f32, f32),
+    mf: f32,
+) -> Option<(f32, f32, f32)> {
     // Normal equations: rows (u, v, 1), right-hand side −(u² + v²).
     let (mut suu, mut suv, mut svv, mut su, mut sv) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
     let (mut bu, mut bv, mut b1) = (0.0f32, 0.0f32, 0.0f32);
@@ -276,45 +305,38 @@ pub fn circle_residuals<B: BearingTable>(
         return None;
     }
     let [d, e, f] = solve3(&a, [bu, bv, b1])?;
-    let (mut ou, mut ov) = (-d / 2.0, -e / 2.0);
+    let (ou, ov) = (-d / 2.0, -e / 2.0);
     let rr = ou * ou + ov * ov - f;
-    if !(rr > 0.0) {
-        return None;
-    }
-    let mut radius = libm::sqrtf(rr);
-    for _ in 0..refine {
-        // JᵀJ·δ = −Jᵀe with J's rows −(du/ρ, dv/ρ, 1): the sums of row·rowᵀ
-        // and row·e, for (centre, radius) += δ.
-        let (mut jtj, mut jte) = ([[0.0f32; 3]; 3], [0.0f32; 3]);
-        scan.each_point(piece, |_, x, y| {
-            let (u, v) = local(x, y);
-            let (du, dv) = (u - ou, v - ov);
-            let rho = libm::sqrtf(du * du + dv * dv);
-            if rho > 0.0 {
-                let row = [du / rho, dv / rho, 1.0];
-                for (i, ri) in row.iter().enumerate() {
-                    for (k, rk) in row.iter().enumerate() {
-                        jtj[i][k] += ri * rk;
-                    }
-                    jte[i] += ri * (rho - radius);
-                }
-            }
-        });
-        let Some([dx, dy, dr]) = solve3(&jtj, jte) else {
-            break;
-        };
-        (ou, ov, radius) = (ou + dx, ov + dy, radius + dr);
-    }
-    let mut sum = 0.0f32;
+    (rr > 0.0).then(|| (ou, ov, libm::sqrtf(rr)))
+}
+
+/// One Gauss–Newton step of the circle `(centre, radius)` on the geometric
+/// residuals `ρ − R` of the valid points of `piece` (local coordinates):
+/// `JᵀJ·δ = −Jᵀe` with J's rows `−(du/ρ, dv/ρ, 1)`, i.e. the sums of
+/// `row·rowᵀ` and `row·e`; the step δ, or `None` if it cannot be solved.
+#[inline(always)]
+fn gauss_newton_step<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    piece: Segment,
+    local: &impl Fn(f32, f32) -> (f32, f32),
+    (ou, ov, radius): (f32, f32, f32),
+) -> Option<[f32; 3]> {
+    let (mut jtj, mut jte) = ([[0.0f32; 3]; 3], [0.0f32; 3]);
     scan.each_point(piece, |_, x, y| {
         let (u, v) = local(x, y);
-        // `sqrtf`, not `hypotf`: libm's `hypotf` works in f64, which the
-        // M4F does in software; the coordinates here are O(1), no overflow.
         let (du, dv) = (u - ou, v - ov);
-        let e = (libm::sqrtf(du * du + dv * dv) - radius) * scale / sigma;
-        sum += e * e;
+        let rho = libm::sqrtf(du * du + dv * dv);
+        if rho > 0.0 {
+            let row = [du / rho, dv / rho, 1.0];
+            for (i, ri) in row.iter().enumerate() {
+                for (k, rk) in row.iter().enumerate() {
+                    jtj[i][k] += ri * rk;
+                }
+                jte[i] += ri * (rho - radius);
+            }
+        }
     });
-    Some((sum, mf))
+    solve3(&jtj, jte)
 }
 
 /// The determinant of a 3×3 matrix (rows).
