@@ -194,10 +194,10 @@ pub struct Params {
     /// consecutive lines linked as in an arc chain (`arc_chain`, whose
     /// `0` turns this off too) is dropped with its lines counted in
     /// `Stats::rejected_arc` when a circle through their beams explains
-    /// them within the noise and no worse than the two lines do
-    /// (`crate::pipeline::arcs::mark_arc_pairs`); a corner between two
-    /// straight walls does not pass. Default on since stop 25; `false`:
-    /// pairs are kept (stop 24 and before).
+    /// them within the noise and better than the two lines do by χ²₁'s 95 %
+    /// quantile (`crate::pipeline::arcs`); a corner between two straight
+    /// walls does not pass. Default on since stop 25; `false`: pairs are
+    /// kept (stop 24 and before).
     pub arc_pairs: bool,
 }
 
@@ -249,7 +249,8 @@ impl Params {
     /// project's measured additions (`merge_collinear`, `max_alpha_sd_deg`,
     /// since stop 21 `bridge_merge` and `footprint`, §10 (e) and (f), and
     /// since stop 22 `arc_chain`, since stop 23 `same_turn_windows` and
-    /// `split_budget`, since stop 24 `merge_anchor_gate` and `turn_offsets`).
+    /// `split_budget`, since stop 24 `merge_anchor_gate` and `turn_offsets`,
+    /// since stop 25 `arc_pairs`).
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
@@ -390,7 +391,7 @@ pub enum ParamError {
     /// arc_max_turn_deg ≤ 180`.
     Arc,
     /// An ALGORITHM.md §10 option (`grazing_noise`, `fit_sigma`,
-    /// `per_turn`; named by `option`) has a non-default value, but this
+    /// `per_turn`, `merge_f_test`; named by `option`) has a non-default value, but this
     /// build of the core leaves the §10 options out (feature `section10`
     /// off, as in the firmware).
     NotInBuild {

@@ -195,6 +195,12 @@ fn no_argument_panics() {
             ][..],
             "turn_offsets: false would be checked",
         ),
+        // The merges' F test is a host-only option; its threshold is checked.
+        (
+            &["verify", "--host", "--count", "1", "--merge-f-test", "20"][..],
+            "--merge-f-test: the co-processor does not run it",
+        ),
+        (&["extract", "--merge-f-test=-1"][..], "F threshold >= 0"),
     ] {
         let out = run(args);
         let err = stderr(&out);

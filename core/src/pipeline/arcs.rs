@@ -17,7 +17,7 @@
 //! Two such lines alone can be an obtuse corner, and [`curve_not_corner`]
 //! tells them apart with their beams (`Params::arc_pairs`,
 //! docs/ALGORITHM-v3-section10.md §10.12): a circle through the union
-//! explains a curved wall within the noise and no worse than the two lines
+//! explains a curved wall within the noise and better than its two chords
 //! do, but not the kink of a corner between two straight walls.
 //!
 //! Runs on the lines §7 kept (accepted, merged, long and certain enough)
