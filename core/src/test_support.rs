@@ -113,6 +113,13 @@ impl Rng {
         (self.next_u64() % n.max(1) as u64) as usize
     }
 
+    /// A standard normal draw (Box–Muller, the cosine of the pair; two
+    /// `unit` draws).
+    pub fn normal(&mut self) -> f64 {
+        let u = self.unit().max(f64::MIN_POSITIVE);
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * self.unit()).cos()
+    }
+
     /// Events of probability `p` per trial: the trials until the next one
     /// (geometric; `u64::MAX` for `p ≤ 0`).
     pub fn gap(&mut self, p: f64) -> u64 {

@@ -23,12 +23,6 @@ const GAP_DEG: f64 = 0.0;
 /// 5 cm.
 const RADIUS: f64 = 1.5;
 
-/// A standard normal draw (Box–Muller).
-fn normal(rng: &mut Rng) -> f64 {
-    let u = rng.unit().max(f64::MIN_POSITIVE);
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * rng.unit()).cos()
-}
-
 /// A 0.5° scan (σ = 1 cm) of a surface given as the range along each
 /// bearing (rad) between `FROM_DEG` and `TO_DEG`, no echo elsewhere and at
 /// `GAP_DEG`.
@@ -39,7 +33,7 @@ fn scan(range: impl Fn(f64) -> f64, rng: &mut Rng) -> Frame {
         let deg = phi.to_degrees();
         let on = (FROM_DEG..=TO_DEG).contains(&deg) && (deg - GAP_DEG).abs() > 0.25;
         if on {
-            frame.set_metres(j, (range(phi) + SIGMA * normal(rng)) as f32);
+            frame.set_metres(j, (range(phi) + SIGMA * rng.normal()) as f32);
         } else {
             frame.set_invalid(j, lms_core::Invalid::NoEcho);
         }

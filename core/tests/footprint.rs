@@ -15,12 +15,6 @@ const WALL: (f64, f64) = (0.3, 2.0);
 /// Its beams: 0.5° steps from −75° to +75° of incidence.
 const INCIDENCE_DEG: f64 = 75.0;
 
-/// A standard normal draw (Box–Muller).
-fn normal(rng: &mut Rng) -> f64 {
-    let u = rng.unit().max(f64::MIN_POSITIVE);
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * rng.unit()).cos()
-}
-
 /// Bearings (rad) of the wall's beams and their true ranges (m).
 fn wall_beams() -> (Vec<f64>, Vec<f64>) {
     let (alpha, r) = WALL;
@@ -39,7 +33,7 @@ fn noisy(d: &[f64], phi: &[f64], rng: &mut Rng) -> Vec<f32> {
         .map(|(&d, &p)| {
             let t = f64::from(KAPPA) * d * (p - WALL.0).tan();
             let sd = (f64::from(SIGMA).powi(2) + t * t).sqrt();
-            (d + sd * normal(rng)) as f32
+            (d + sd * rng.normal()) as f32
         })
         .collect()
 }
@@ -213,7 +207,7 @@ fn wall_scan(r: [f32; 2], split_at: usize, patch: std::ops::Range<usize>, zigzag
             continue;
         }
         let wall = if j < split_at { r[0] } else { r[1] };
-        let mut d = wall / c + 0.004 * normal(&mut rng) as f32;
+        let mut d = wall / c + 0.004 * rng.normal() as f32;
         if patch.contains(&j) {
             d += if j % 2 == 0 { zigzag } else { -zigzag };
         }

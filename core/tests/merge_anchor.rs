@@ -16,12 +16,6 @@ const PIECE: f64 = 0.35;
 /// Draws per case.
 const DRAWS: usize = 200;
 
-/// A standard normal draw (Box–Muller).
-fn normal(rng: &mut Rng) -> f64 {
-    let u = rng.unit().max(f64::MIN_POSITIVE);
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * rng.unit()).cos()
-}
-
 /// Range (m) along bearing `phi` to the segment `a`–`b`, if it is hit.
 fn hit(phi: f64, a: (f64, f64), b: (f64, f64)) -> Option<f64> {
     let (ux, uy) = (phi.cos(), phi.sin());
@@ -58,7 +52,7 @@ fn bent_wall(bend_deg: f64, rng: &mut Rng) -> (Frame, usize) {
         // The beam at the joint gives no echo: the piece is a segment of
         // its own, for §7.6 to merge across the invalid beam.
         let at_joint = first_on_piece == j;
-        let r = d.map_or(0.0, |d| (d + SIGMA * normal(rng)) as f32);
+        let r = d.map_or(0.0, |d| (d + SIGMA * rng.normal()) as f32);
         frame.set_metres(j, if at_joint { 0.0 } else { r });
     }
     assert!(first_on_piece < frame.len(), "the piece is in view");

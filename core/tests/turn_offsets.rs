@@ -15,12 +15,6 @@ use common::interleaved_wall;
 /// Range noise σ (m).
 const SIGMA: f32 = 0.01;
 
-/// A standard normal draw (Box–Muller).
-fn normal(rng: &mut Rng) -> f64 {
-    let u = rng.unit().max(f64::MIN_POSITIVE);
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * rng.unit()).cos()
-}
-
 #[test]
 fn degrees_of_freedom() {
     assert_eq!(residual_dof(100, 1), 98.0);
@@ -46,7 +40,7 @@ fn chi2_without_the_turns_offset_matches_an_f64_reference() {
         .enumerate()
         .map(|(j, p)| {
             let shift = if j % 2 == 1 { offset } else { 0.0 };
-            ((r - shift) / (p - alpha).cos() + f64::from(SIGMA) * normal(&mut rng)) as f32
+            ((r - shift) / (p - alpha).cos() + f64::from(SIGMA) * rng.normal()) as f32
         })
         .collect();
     let cos: Vec<f32> = phi.iter().map(|p| p.cos() as f32).collect();
