@@ -26,7 +26,7 @@
 
 use crate::features::{Line, Segment, MAX_LINES};
 use crate::params::Params;
-use crate::pipeline::line_fit::{residual_dof, BearingTable, RawScan};
+use crate::pipeline::line_fit::{residual_sum, BearingTable, RawScan};
 use crate::pipeline::split::{chi2_quantile_999, circle_residuals};
 
 /// Mark in `on_arc` (entry `k`: line `k`) the lines of `lines` (scan
@@ -95,7 +95,7 @@ const ARC_PAIR_MARGIN: f32 = 3.841_459;
 /// (the algebraic fit and [`ARC_PAIR_REFINE`] geometric steps) explains
 /// them at σ (`Σ(‖p − c‖ − R)²/σ²` below χ²ₘ₋₃ at 99.9 %, as split before
 /// reject's circle test) and fits them better than the two lines do by
-/// [`ARC_PAIR_MARGIN`] (`Σ = χ²·dof`, each line's own, turn offsets out),
+/// [`ARC_PAIR_MARGIN`] (`Σ`: each line's own `residual_sum`, turn offsets out),
 /// with one parameter fewer.
 fn curve_not_corner<B: BearingTable>(
     scan: &RawScan<'_, B>,
@@ -105,7 +105,7 @@ fn curve_not_corner<B: BearingTable>(
     let [a, b] = pair else {
         return false;
     };
-    let own = |l: &Line| l.chi2 * residual_dof(l.points, scan.turns);
+    let own = |l: &Line| residual_sum(l, scan.turns);
     let union = Segment {
         first: a.first,
         last: b.last,

@@ -23,8 +23,8 @@ use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{EdgeList, Segmenter};
 use crate::pipeline::smoothing::{
-    interleaved_turns, smoothing_pass_strided, usable, usable_windows, usable_windows_strided,
-    WindowSink, WINDOW_WORDS,
+    interleaved_turns, smoothing_pass_strided, usable, usable_windows_strided, WindowSink,
+    WINDOW_WORDS,
 };
 use crate::pipeline::split::split_before_reject;
 
@@ -360,12 +360,15 @@ impl ScaleSpace<'_> {
         windows: usize,
     ) {
         let (beams, raw) = (frame.beams(), frame.ranges());
-        let ok = &mut *self.window_ok;
-        if stride != 1 {
-            usable_windows_strided(beams, raw, params.max_range, stride, windows, ok);
-            return;
-        }
-        usable_windows(beams, raw, params.max_range, windows, ok);
+        // At stride 1 the strided spans are §2's usable windows.
+        usable_windows_strided(
+            beams,
+            raw,
+            params.max_range,
+            stride,
+            windows,
+            &mut self.window_ok[..],
+        );
     }
 }
 

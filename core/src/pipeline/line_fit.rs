@@ -113,6 +113,15 @@ pub fn residual_dof(points: u16, turns: u8) -> f32 {
     dof.max(1) as f32
 }
 
+/// A line's own weighted residual sum in units of σ², `χ²·dof` (its
+/// `chi2` is `Σe²/(σ²·dof)`, [`residual_dof`], with the turns' offsets out
+/// where they apply): what the merges' per-part χ² and F test and the arcs'
+/// pair test compare.
+#[inline]
+pub fn residual_sum(line: &Line, turns: u8) -> f32 {
+    line.chi2 * residual_dof(line.points, turns)
+}
+
 /// Whether the turns' offsets are taken out of a fit of `points` beams.
 #[inline]
 fn offsets_apply(points: u16, turns: u8) -> bool {

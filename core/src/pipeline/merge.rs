@@ -7,7 +7,7 @@ use crate::features::{Line, Segment};
 use crate::maths::wrap_angle;
 use crate::params::Params;
 use crate::pipeline::line_fit::{
-    fit_piece, mahalanobis, parameter_distance, residual_dof, BearingTable, RawScan,
+    fit_piece, mahalanobis, parameter_distance, residual_sum, BearingTable, RawScan,
 };
 use crate::pipeline::smoothing::usable;
 
@@ -90,35 +90,33 @@ fn anchored(larger: &Line, merged: &Line, gate: f32) -> bool {
 /// Whether one line (`merged`) explains the beams of `prev` and `next`
 /// not significantly worse than the two: `F = ((S₁ − S₂)/2) / (S₂/(m − 4))
 /// ≤ threshold` ([`Params::merge_f_test`]; the F ratio of nested least
-/// squares models, two more parameters in the pair), with `S = χ²·dof`
-/// each fit's weighted residual sum in units of σ² and `m` the two lines'
-/// points. 0: no test (and always without feature `section10`).
+/// squares models, two more parameters in the pair), with `S` each fit's
+/// [`residual_sum`] and `m` the two lines' points. 0: no test (and always without feature `section10`).
 fn nested(prev: &Line, next: &Line, merged: &Line, turns: u8, threshold: f32) -> bool {
     // An ALGORITHM.md §10 option: out of builds without `section10`
     // (the firmware), whose validation keeps it at 0.
     if !cfg!(feature = "section10") || threshold == 0.0 {
         return true;
     }
-    let sum = |l: &Line| l.chi2 * residual_dof(l.points, turns);
-    let two = sum(prev) + sum(next);
+    let two = residual_sum(prev, turns) + residual_sum(next, turns);
     let dof = f32::from(prev.points) + f32::from(next.points) - 4.0;
     if !(dof > 0.0 && two > 0.0) {
         return true;
     }
-    let f = ((sum(merged) - two) / 2.0) / (two / dof);
+    let f = ((residual_sum(merged, turns) - two) / 2.0) / (two / dof);
     f <= threshold
 }
 
 /// χ² per point of the beams `part` was fitted to about `line` (§10 (e)),
-/// from `part`'s own fit: its weighted residual sum, `chi2·dof` in units of
-/// σ² (`dof` = [`residual_dof`], `m − 2` with one turn), plus what it rises by when the parameters move from
+/// from `part`'s own fit: its weighted residual sum ([`residual_sum`], in
+/// units of σ²), plus what it rises by when the parameters move from
 /// `part`'s to `line`'s, `Δᵀ Σ⁻¹ Δ` (`Σ = σ²(JᵀWJ)⁻¹`, so exact for the
 /// range model linearised at `part`), over the `m` points. `None` if
 /// `part`'s covariance is not positive definite.
 fn part_chi2(part: &Line, line: &Line, turns: u8) -> Option<f32> {
     let rise = mahalanobis(&part.cov, part, line)?;
     let m = f32::from(part.points);
-    Some((part.chi2 * residual_dof(part.points, turns) + rise) / m)
+    Some((residual_sum(part, turns) + rise) / m)
 }
 
 /// Whether `next` continues `prev` nearly collinearly: facing endpoints

@@ -300,11 +300,9 @@ fn kasa_circle<B: BearingTable>(
         b1 += rhs;
     });
     let a = [[suu, suv, su], [suv, svv, sv], [su, sv, mf]];
-    // Relative to the diagonal: a straight run of points makes it vanish.
-    if !(libm::fabsf(det3(&a)) > 1e-6 * suu * svv * mf) {
-        return None;
-    }
-    let [d, e, f] = solve3(&a, [bu, bv, b1])?;
+    // The determinant relative to the diagonal: a straight run of points
+    // makes it vanish.
+    let [d, e, f] = solve3(&a, [bu, bv, b1], 1e-6 * suu * svv * mf)?;
     let (ou, ov) = (-d / 2.0, -e / 2.0);
     let rr = ou * ou + ov * ov - f;
     (rr > 0.0).then(|| (ou, ov, libm::sqrtf(rr)))
@@ -336,7 +334,7 @@ fn gauss_newton_step<B: BearingTable>(
             }
         }
     });
-    solve3(&jtj, jte)
+    solve3(&jtj, jte, 0.0)
 }
 
 /// The determinant of a 3×3 matrix (rows).
@@ -346,10 +344,11 @@ fn det3(a: &[[f32; 3]; 3]) -> f32 {
         + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
 }
 
-/// `a·x = b` by Cramer's rule; `None` if `det a` is 0 or not finite.
-fn solve3(a: &[[f32; 3]; 3], b: [f32; 3]) -> Option<[f32; 3]> {
+/// `a·x = b` by Cramer's rule; `None` unless `|det a|` is finite and above
+/// `min_det` (≥ 0).
+fn solve3(a: &[[f32; 3]; 3], b: [f32; 3], min_det: f32) -> Option<[f32; 3]> {
     let det = det3(a);
-    if !(det != 0.0 && det.is_finite()) {
+    if !(libm::fabsf(det) > min_det && det.is_finite()) {
         return None;
     }
     let column = |col: usize| {
