@@ -13,10 +13,11 @@ use anyhow::Result;
 use host_bridge::carmen::{self, UnitMode};
 use lms_core::{Extractor, Params};
 use lms_lab::baselines::run_core;
-use lms_lab::maptruth::{build_map, frame_truth, TruthConfig};
+use lms_lab::maptruth::{build_map, TruthConfig};
 use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
-use lms_lab::realtruth::{no_flag_params, pooled_table, score_frame, RealTally, ScoredLine};
+use lms_lab::realtruth::{no_flag_params, pooled_table, RealTally};
 use lms_lab::scenes::Family;
+use lms_lab::sweep::tally_log_frames;
 
 /// Pooled residual variance ratio of the lines of `frames` at `params`.
 fn pooled_s2<'a>(
@@ -98,15 +99,9 @@ fn main() -> Result<()> {
         );
         let variants = [base, one, two, raw];
         let mut tallies = vec![RealTally::default(); names.len()];
-        for scan in log.scans.iter().step_by(every.max(1)) {
-            let truth = frame_truth(scan, &map, &cfg);
-            let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
-            for (p, t) in variants.iter().zip(tallies.iter_mut()) {
-                let x = run_core(&mut ex, &scan.frame, p);
-                let lines: Vec<ScoredLine> = x.lines.iter().map(ScoredLine::from).collect();
-                score_frame(&truth, &lines, &valid, t);
-            }
-        }
+        tally_log_frames(&log.scans, &map, &cfg, every, &mut tallies, |k, frame| {
+            run_core(&mut ex, frame, &variants[k])
+        });
         print!("{}", pooled_table(&names, &tallies));
         for (p, t) in pooled.iter_mut().zip(&tallies) {
             p.merge(t);

@@ -5,11 +5,11 @@
 use std::path::Path;
 
 use anyhow::Result;
-use host_bridge::carmen::{self, UnitMode};
+use host_bridge::carmen::{self, Scan, UnitMode};
 use lms_core::{Extractor, Frame, Params};
 
 use crate::baselines::{run_core, Extraction};
-use crate::maptruth::{build_map, frame_truth, TruthConfig};
+use crate::maptruth::{build_map, frame_truth, Map, TruthConfig};
 use crate::metrics::{scan_truth, score_lines, Gates, LineScore, ScanTruth, Tally};
 use crate::realistic::{realistic_model, sample, DELTA, SIGMAS};
 use crate::realtruth::{no_flag_params, pooled_table, score_frame, RealTally, ScoredLine};
@@ -108,6 +108,27 @@ pub fn each_scored_scan(
     Ok(())
 }
 
+/// Score every `every`-th frame of a log against its map truth: variant
+/// `k`'s lines, `extract(k, frame)`, into `tallies[k]`.
+pub fn tally_log_frames(
+    scans: &[Scan],
+    map: &Map,
+    cfg: &TruthConfig,
+    every: usize,
+    tallies: &mut [RealTally],
+    mut extract: impl FnMut(usize, &Frame) -> Extraction,
+) {
+    for scan in scans.iter().step_by(every.max(1)) {
+        let truth = frame_truth(scan, map, cfg);
+        let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
+        for (k, t) in tallies.iter_mut().enumerate() {
+            let x = extract(k, &scan.frame);
+            let lines: Vec<ScoredLine> = x.lines.iter().map(ScoredLine::from).collect();
+            score_frame(&truth, &lines, &valid, t);
+        }
+    }
+}
+
 /// Extraction of variant `k` on a frame, from the defaults `params`.
 pub type RunVariant<'a> = dyn Fn(usize, &mut Extractor, &Frame, &Params) -> Extraction + 'a;
 
@@ -171,15 +192,9 @@ pub fn print_sweep_with(
         let params = no_flag_params(&path)?;
         // Per log, then pooled: wall ids are per log.
         let mut tallies = vec![RealTally::default(); names.len()];
-        for scan in log.scans.iter().step_by(every.max(1)) {
-            let truth = frame_truth(scan, &map, &cfg);
-            let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
-            for (k, t) in tallies.iter_mut().enumerate() {
-                let x = run(k, &mut ex, &scan.frame, &params);
-                let lines: Vec<ScoredLine> = x.lines.iter().map(ScoredLine::from).collect();
-                score_frame(&truth, &lines, &valid, t);
-            }
-        }
+        tally_log_frames(&log.scans, &map, &cfg, every, &mut tallies, |k, frame| {
+            run(k, &mut ex, frame, &params)
+        });
         for (p, t) in pooled.iter_mut().zip(&tallies) {
             p.merge(t);
         }
