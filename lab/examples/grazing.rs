@@ -11,9 +11,8 @@
 use std::path::Path;
 
 use anyhow::Result;
-use host_bridge::carmen::{self, UnitMode};
 use lms_core::{Extractor, Params};
-use lms_lab::maptruth::{build_map, frame_truth, TruthConfig};
+use lms_lab::maptruth::{frame_truth, TruthConfig};
 
 /// Upper edges of the incidence bins (degrees).
 const INC: [f64; 8] = [30.0, 45.0, 60.0, 70.0, 75.0, 80.0, 85.0, 90.0];
@@ -80,9 +79,12 @@ fn main() -> Result<()> {
     let logs = lms_lab::real::find_logs(Path::new("../shared/data/carmen"))?;
     let cfg = TruthConfig::default();
     for path in &logs {
-        let log = carmen::read_log(path, UnitMode::Auto)?;
-        let map = build_map(&log.scans, &cfg);
-        let base = lms_lab::realtruth::no_flag_params(path)?;
+        let lms_lab::realtruth::LogWithMap {
+            log,
+            no_flags: base,
+            cfg,
+            map,
+        } = lms_lab::realtruth::load_with_map(path, &cfg)?;
         let params = Params {
             grazing_noise: rho,
             same_turn_windows: same_turn,

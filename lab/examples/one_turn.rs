@@ -40,8 +40,9 @@ fn main() -> Result<()> {
         if log.scans.first().is_none_or(|s| s.frame.len() < 300) {
             continue;
         }
-        let map = build_map(&log.scans, &cfg);
         let params = no_flag_params(&path)?;
+        let cfg = cfg.for_data(params.max_range);
+        let map = build_map(&log.scans, &cfg);
         let per_turn = Params {
             per_turn: true,
             ..params

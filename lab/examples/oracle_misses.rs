@@ -9,8 +9,7 @@
 use std::path::Path;
 
 use anyhow::Result;
-use host_bridge::carmen::{self, UnitMode};
-use lms_lab::maptruth::{build_map, frame_truth, TruthConfig};
+use lms_lab::maptruth::{frame_truth, TruthConfig};
 use lms_lab::realtruth::{GATE_ALPHA_DEG, GATE_R};
 
 /// Upper edges of the length bins (m).
@@ -38,8 +37,8 @@ fn main() -> Result<()> {
          < 0.5, < 1, < 2, ≥ 2 m | median rms of hits from the map line, matched / missed (mm) |"
     );
     for path in names {
-        let log = carmen::read_log(&path, UnitMode::Auto)?;
-        let map = build_map(&log.scans, &cfg);
+        let lms_lab::realtruth::LogWithMap { log, cfg, map, .. } =
+            lms_lab::realtruth::load_with_map(&path, &cfg)?;
         let (mut n, mut gates) = (0, [0usize; 3]);
         let mut by_len = [(0usize, 0usize); 4];
         let (mut rms_hit, mut rms_miss) = (Vec::new(), Vec::new());

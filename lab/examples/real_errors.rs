@@ -22,13 +22,12 @@ use std::collections::HashSet;
 use std::path::Path;
 
 use anyhow::Result;
-use host_bridge::carmen::{self, Scan, UnitMode};
+use host_bridge::carmen::Scan;
 use lms_core::Extractor;
 use lms_lab::baselines::{run_core, Extraction};
-use lms_lab::maptruth::{build_map, frame_truth, world_hit, FrameTruth, Piece, TruthConfig};
+use lms_lab::maptruth::{frame_truth, world_hit, FrameTruth, Piece, TruthConfig};
 use lms_lab::realtruth::{
-    candidate, no_flag_params, overlap, score_frame, RealTally, ScoredLine, GATE_ALPHA_DEG,
-    GATE_OVERLAP,
+    candidate, overlap, score_frame, RealTally, ScoredLine, GATE_ALPHA_DEG, GATE_OVERLAP,
 };
 
 /// Causes of false lines, in the order printed.
@@ -60,6 +59,11 @@ struct Errors {
     false_by_cause: [usize; 6],
     false_short: usize,
     static_along: usize,
+    /// Lines over several pieces whose on-wall beams all lie on one map
+    /// line, and that line within the gates: one wall seen past an occluder.
+    several_one_wall: usize,
+    /// Lines on no wall: share of their valid beams on a map wall.
+    no_wall_on: Vec<f64>,
     gate_z: Vec<f64>,
     gate_inside: Vec<f64>,
     pieces: usize,
@@ -79,6 +83,8 @@ impl Errors {
         }
         self.false_short += o.false_short;
         self.static_along += o.static_along;
+        self.several_one_wall += o.several_one_wall;
+        self.no_wall_on.extend(o.no_wall_on);
         self.gate_z.extend(o.gate_z);
         self.gate_inside.extend(o.gate_inside);
         self.pieces += o.pieces;
@@ -124,6 +130,22 @@ fn along_map(scan: &Scan, line: &lms_core::Line, on_static: &dyn Fn([f64; 2]) ->
     on as f64 / (n + 1) as f64
 }
 
+/// Whether the on-wall beams of `l` (of `beams`) all lie on one map line
+/// and `l` is within the gates of a piece of it.
+fn one_wall(truth: &FrameTruth, l: &ScoredLine, beams: &[usize]) -> bool {
+    let mut ids = beams.iter().filter_map(|&j| truth.on_wall[j]);
+    let Some(id) = ids.next() else {
+        return false;
+    };
+    ids.all(|k| k == id)
+        && truth.pieces.iter().any(|p| {
+            let (a, r) = p.reference();
+            p.line == id
+                && lms_scene::wrap_angle(l.alpha - a).abs() < GATE_ALPHA_DEG.to_radians()
+                && (l.r - r).abs() < lms_lab::realtruth::GATE_R
+        })
+}
+
 /// The false lines of one frame.
 fn false_lines(
     scan: &Scan,
@@ -148,6 +170,7 @@ fn false_lines(
             .find(|p| overlap(l.first, l.last, p.first, p.last) >= GATE_OVERLAP);
         let cause = match piece {
             _ if !half(on) => {
+                e.no_wall_on.push(on as f64 / beams.len().max(1) as f64);
                 let st = beams
                     .iter()
                     .filter(|&&j| on_static(world_hit(scan, j)))
@@ -159,7 +182,10 @@ fn false_lines(
                     1
                 }
             }
-            None => 5,
+            None => {
+                e.several_one_wall += usize::from(one_wall(truth, &l, &beams));
+                5
+            }
             Some(p) => {
                 let (a, r) = p.reference();
                 let (da, dr) = (lms_scene::wrap_angle(l.alpha - a), l.r - r);
@@ -296,8 +322,13 @@ fn fragment_pairs(
 }
 
 fn log_errors(path: &Path, every: usize, cfg: &TruthConfig) -> Result<Errors> {
-    let log = carmen::read_log(path, UnitMode::Auto)?;
-    let map = build_map(&log.scans, cfg);
+    let lms_lab::realtruth::LogWithMap {
+        log,
+        no_flags: params,
+        cfg,
+        map,
+    } = lms_lab::realtruth::load_with_map(path, cfg)?;
+    let cfg = &cfg;
     let cell = |p: [f64; 2]| {
         (
             (p[0] / cfg.cell).floor() as i64,
@@ -310,7 +341,6 @@ fn log_errors(path: &Path, every: usize, cfg: &TruthConfig) -> Result<Errors> {
         let (cx, cy) = cell(p);
         (-1..=1).any(|dx| (-1..=1).any(|dy| occupied.contains(&(cx + dx, cy + dy))))
     };
-    let params = no_flag_params(path)?;
     let mut ex = Extractor::new();
     let mut e = Errors::default();
     for scan in log.scans.iter().step_by(every) {
@@ -419,6 +449,20 @@ fn main() -> Result<()> {
          | log | pairs | union χ² > 4 | parameters within the merge gate | union χ² quartiles |\n\
          |:---|---:|---:|---:|---:|\n{}",
         frag_md.join("\n")
+    );
+    println!(
+        "\nOf the {} lines over several pieces, {} lie on one map line within the gates \
+         (one wall past an occluder).",
+        all.false_by_cause[5], all.several_one_wall
+    );
+    let h = &all.no_wall_on;
+    let at = |lo: f64, hi: f64| h.iter().filter(|&&x| x >= lo && x < hi).count();
+    println!(
+        "Of the {} lines on no wall, share of their beams on a map wall: 0: {}, (0, ¼): {}, [¼, ½): {}.",
+        h.len(),
+        at(0.0, 1e-9),
+        at(1e-9, 0.25),
+        at(0.25, 0.5)
     );
     Ok(())
 }

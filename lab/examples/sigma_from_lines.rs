@@ -10,12 +10,11 @@
 use std::path::Path;
 
 use anyhow::Result;
-use host_bridge::carmen::{self, UnitMode};
 use lms_core::{Extractor, Params};
 use lms_lab::baselines::run_core;
-use lms_lab::maptruth::{build_map, TruthConfig};
+use lms_lab::maptruth::TruthConfig;
 use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
-use lms_lab::realtruth::{no_flag_params, pooled_table, RealTally};
+use lms_lab::realtruth::{pooled_table, RealTally};
 use lms_lab::scenes::Family;
 use lms_lab::sweep::tally_log_frames;
 
@@ -72,9 +71,12 @@ fn main() -> Result<()> {
     ];
     let mut pooled = vec![RealTally::default(); names.len()];
     for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
-        let log = carmen::read_log(&path, UnitMode::Auto)?;
-        let map = build_map(&log.scans, &cfg);
-        let base = no_flag_params(&path)?;
+        let lms_lab::realtruth::LogWithMap {
+            log,
+            no_flags: base,
+            cfg,
+            map,
+        } = lms_lab::realtruth::load_with_map(&path, &cfg)?;
         let sample_frames = || log.scans.iter().step_by(10).map(|s| &s.frame);
         let s2 = pooled_s2(&mut ex, sample_frames(), &base);
         let one = Params {

@@ -7,11 +7,10 @@
 //!
 //! `cargo run --release -p lms-lab --example sigma_per_frame -- [EVERY]`
 use anyhow::Result;
-use host_bridge::carmen::{self, UnitMode};
 use lms_core::{Extractor, Params};
 use lms_lab::baselines::run_core;
-use lms_lab::maptruth::{build_map, frame_truth, TruthConfig};
-use lms_lab::realtruth::{no_flag_params, pooled_table, score_frame, RealTally, ScoredLine};
+use lms_lab::maptruth::{frame_truth, TruthConfig};
+use lms_lab::realtruth::{pooled_table, score_frame, RealTally, ScoredLine};
 use std::path::Path;
 
 /// A variant: the parameters from the per-data defaults and σ̂.
@@ -56,9 +55,12 @@ fn main() -> Result<()> {
     let mut pooled = vec![RealTally::default(); variants.len()];
     println!("| log | σ₀ (mm) | σ̂ quartiles over frames (mm) |\n|:---|---:|---:|");
     for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
-        let log = carmen::read_log(&path, UnitMode::Auto)?;
-        let map = build_map(&log.scans, &cfg);
-        let params = no_flag_params(&path)?;
+        let lms_lab::realtruth::LogWithMap {
+            log,
+            no_flags: params,
+            cfg,
+            map,
+        } = lms_lab::realtruth::load_with_map(&path, &cfg)?;
         let mut ex = Extractor::new();
         let mut sig = Vec::new();
         for scan in log.scans.iter().step_by(every) {

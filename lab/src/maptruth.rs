@@ -86,6 +86,9 @@ pub struct TruthConfig {
     pub gap_beams: usize,
     /// Count only pieces whose own hits agree with the map line (step 4).
     pub verify: bool,
+    /// Register each frame to the map's walls before ray-casting
+    /// ([`refine_pose`]): the SLAM pose corrected by the frame's own hits.
+    pub refine_pose: bool,
 }
 
 impl Default for TruthConfig {
@@ -106,6 +109,20 @@ impl Default for TruthConfig {
             min_piece: 0.3,
             gap_beams: 3,
             verify: true,
+            refine_pose: false,
+        }
+    }
+}
+
+impl TruthConfig {
+    /// This truth over every range a log's extraction may use: beams up to
+    /// `data_max_range` (m), the log's range limit from its data profile
+    /// (`lms_core::DataProfile::max_range`: the mode's first error code, or
+    /// the lowest fill value the log holds), instead of [`Self::max_range`].
+    pub fn for_data(self, data_max_range: f32) -> Self {
+        TruthConfig {
+            max_range: f64::from(data_max_range),
+            ..self
         }
     }
 }
@@ -154,7 +171,12 @@ pub struct Map {
 
 /// World point of beam `j` of `scan` (laser pose, bearing from the frame).
 pub fn world_hit(scan: &Scan, j: usize) -> [f64; 2] {
-    let [x, y, th] = scan.meta.pose;
+    world_hit_at(scan, j, scan.meta.pose)
+}
+
+/// World point of beam `j` of `scan` seen from the laser pose `pose`.
+fn world_hit_at(scan: &Scan, j: usize, pose: [f64; 3]) -> [f64; 2] {
+    let [x, y, th] = pose;
     let d = f64::from(scan.frame.ranges()[j]);
     let phi = th + f64::from(scan.frame.geometry().bearing(j));
     [x + d * phi.cos(), y + d * phi.sin()]
@@ -559,6 +581,7 @@ fn ray_hit(o: [f64; 2], u: [f64; 2], w: &MapWall, ext: f64) -> Option<f64> {
 fn beam_wall(
     scan: &Scan,
     j: usize,
+    pose: [f64; 3],
     walls: &[MapWall],
     near: &[usize],
     cfg: &TruthConfig,
@@ -566,10 +589,10 @@ fn beam_wall(
     if !usable(scan, j, cfg) {
         return None;
     }
-    let [x, y, th] = scan.meta.pose;
+    let [x, y, th] = pose;
     let phi = th + f64::from(scan.frame.geometry().bearing(j));
     let u = [phi.cos(), phi.sin()];
-    let p = world_hit(scan, j);
+    let p = world_hit_at(scan, j, pose);
     let mut best: Option<(f64, usize)> = None;
     for &w in near {
         let wall = &walls[w];
@@ -582,6 +605,93 @@ fn beam_wall(
         }
     }
     best.map(|(_, w)| w)
+}
+
+/// Registration: a hit's scatter about its wall (m), the scale of the
+/// Cauchy weight `1/(1 + (e/s)²)` that takes clutter against a wall out.
+const REFINE_SCATTER: f64 = 0.03;
+/// Registration prior: the SLAM pose's standard deviation in x and y (m).
+const REFINE_PRIOR_XY: f64 = 0.1;
+/// Registration prior: the SLAM pose's standard deviation in heading (rad, 2°).
+const REFINE_PRIOR_TH: f64 = 0.035;
+/// Gauss–Newton steps of the registration (each re-assigns the beams).
+const REFINE_STEPS: usize = 5;
+
+/// The laser pose of `scan` registered to the map's walls (step 3a): from
+/// the SLAM pose, Gauss–Newton steps on the hits' distances to the walls
+/// their beams meet (assigned by [`beam_wall`] at the current pose), each
+/// hit Cauchy-weighted at [`REFINE_SCATTER`], with the SLAM pose as a prior
+/// ([`REFINE_PRIOR_XY`], [`REFINE_PRIOR_TH`]) so that what the frame does not
+/// constrain (along a corridor) stays where SLAM put it. A frame of one
+/// SLAM run is a few centimetres and tenths of a degree off the map the run
+/// built; at the matching gates' scale (3°, 0.1 m) that error moves every
+/// piece of the frame alike, which a registration of the whole frame — three
+/// numbers from hundreds of hits — removes without fitting any one piece.
+pub fn refine_pose(scan: &Scan, walls: &[MapWall], near: &[usize], cfg: &TruthConfig) -> [f64; 3] {
+    let prior = scan.meta.pose;
+    let g = scan.frame.geometry();
+    let mut pose = prior;
+    let info = [
+        REFINE_PRIOR_XY.powi(-2),
+        REFINE_PRIOR_XY.powi(-2),
+        REFINE_PRIOR_TH.powi(-2),
+    ];
+    for _ in 0..REFINE_STEPS {
+        let mut h = [[0.0f64; 3]; 3];
+        let mut b = [0.0f64; 3];
+        for k in 0..3 {
+            h[k][k] = info[k];
+            b[k] = -info[k] * (pose[k] - prior[k]);
+        }
+        for j in 0..scan.frame.len() {
+            let Some(w) = beam_wall(scan, j, pose, walls, near, cfg) else {
+                continue;
+            };
+            let (ca, sa) = (walls[w].alpha.cos(), walls[w].alpha.sin());
+            let p = world_hit_at(scan, j, pose);
+            let e = p[0] * ca + p[1] * sa - walls[w].rho;
+            let d = f64::from(scan.frame.ranges()[j]);
+            let phi = pose[2] + f64::from(g.bearing(j));
+            let jac = [ca, sa, d * (-phi.sin() * ca + phi.cos() * sa)];
+            let wgt = 1.0 / (1.0 + (e / REFINE_SCATTER).powi(2)) / REFINE_SCATTER.powi(2);
+            for r in 0..3 {
+                for c in 0..3 {
+                    h[r][c] += wgt * jac[r] * jac[c];
+                }
+                b[r] -= wgt * jac[r] * e;
+            }
+        }
+        let Some(step) = solve3(h, b) else { break };
+        for k in 0..3 {
+            pose[k] += step[k];
+        }
+        if step[0].hypot(step[1]) < 1e-5 && step[2].abs() < 1e-6 {
+            break;
+        }
+    }
+    pose
+}
+
+/// `x` with `h x = b` by Cramer's rule, `None` if `h` is singular.
+fn solve3(h: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+    let det = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(h);
+    if d.abs() < 1e-30 {
+        return None;
+    }
+    let mut x = [0.0; 3];
+    for (k, xk) in x.iter_mut().enumerate() {
+        let mut m = h;
+        for r in 0..3 {
+            m[r][k] = b[r];
+        }
+        *xk = det(m) / d;
+    }
+    Some(x)
 }
 
 /// Walls with a point within `reach` of `o`.
@@ -602,8 +712,13 @@ fn walls_near(walls: &[MapWall], o: [f64; 2], reach: f64) -> Vec<usize> {
 pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
     let [x, y, _] = scan.meta.pose;
     let near = walls_near(&map.walls, [x, y], cfg.max_range);
+    let pose = if cfg.refine_pose {
+        refine_pose(scan, &map.walls, &near, cfg)
+    } else {
+        scan.meta.pose
+    };
     let walls: Vec<Option<usize>> = (0..scan.frame.len())
-        .map(|j| beam_wall(scan, j, &map.walls, &near, cfg))
+        .map(|j| beam_wall(scan, j, pose, &map.walls, &near, cfg))
         .collect();
     let on_wall: Vec<Option<usize>> = walls.iter().map(|w| w.map(|w| map.walls[w].line)).collect();
     let mut pieces = Vec::new();
@@ -627,9 +742,9 @@ pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
             k += 1;
         }
         let wall = &map.walls[w];
-        let (alpha, r) = line_in_sensor(wall, scan.meta.pose);
+        let (alpha, r) = line_in_sensor(wall, pose);
         let t = |p: [f64; 2]| -p[0] * wall.alpha.sin() + p[1] * wall.alpha.cos();
-        let length = (t(world_hit(scan, last)) - t(world_hit(scan, first))).abs();
+        let length = (t(world_hit_at(scan, last, pose)) - t(world_hit_at(scan, first, pose))).abs();
         let (own_alpha, own_r) = own_fit(scan, &on_wall, wall.line, (first, last));
         let verified = lms_scene::wrap_angle(own_alpha - alpha).abs()
             < crate::realtruth::GATE_ALPHA_DEG.to_radians()

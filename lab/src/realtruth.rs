@@ -60,7 +60,7 @@ use host_bridge::options::UnitArg;
 use lms_core::{Extractor, Line, Params};
 
 use crate::baselines::{self, run_core, Extraction, Tables};
-use crate::maptruth::{build_map, frame_truth, FrameTruth, TruthConfig};
+use crate::maptruth::{build_map, frame_truth, FrameTruth, Map, TruthConfig};
 use crate::metrics::{mean, std_dev};
 
 /// Matching gate on |Δα| (degrees).
@@ -82,6 +82,33 @@ pub fn no_flag_params(path: &Path) -> Result<Params> {
         Some((params, _)) => Ok(params),
         None => anyhow::bail!("{}: not a CARMEN log", path.display()),
     }
+}
+
+/// A log read for scoring against its map truth.
+pub struct LogWithMap {
+    /// The log.
+    pub log: carmen::CarmenLog,
+    /// What `host-bridge extract LOG` uses on it ([`no_flag_params`]).
+    pub no_flags: Params,
+    /// The truth's settings over the log's ranges ([`TruthConfig::for_data`]).
+    pub cfg: TruthConfig,
+    /// Its map (steps 1–2 of [`crate::maptruth`]).
+    pub map: Map,
+}
+
+/// Read the log at `path`, its no-flag parameters, and build its map with
+/// `cfg` limited to the ranges the extraction uses.
+pub fn load_with_map(path: &Path, cfg: &TruthConfig) -> Result<LogWithMap> {
+    let log = carmen::read_log(path, UnitMode::Auto)?;
+    let no_flags = no_flag_params(path)?;
+    let cfg = cfg.for_data(no_flags.max_range);
+    let map = build_map(&log.scans, &cfg);
+    Ok(LogWithMap {
+        log,
+        no_flags,
+        cfg,
+        map,
+    })
 }
 
 /// `preset` (an older stop's defaults, say) on the data of `data`: its σ
@@ -601,12 +628,16 @@ pub fn run_log(
     cfg: &TruthConfig,
     figures: Option<&Path>,
 ) -> Result<LogTruth> {
-    let log = carmen::read_log(path, UnitMode::Auto)?;
+    let LogWithMap {
+        log,
+        no_flags,
+        cfg,
+        map,
+    } = load_with_map(path, cfg)?;
+    let cfg = &cfg;
     let name = path
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let map = build_map(&log.scans, cfg);
-    let no_flags = no_flag_params(path)?;
     let mut ex = Extractor::new();
     let mut tallies = vec![RealTally::default(); methods.len()];
     let mut prev: Vec<Option<(MatchedWalls, HashSet<usize>)>> = vec![None; methods.len()];

@@ -5,14 +5,16 @@
 use std::path::Path;
 
 use anyhow::Result;
-use host_bridge::carmen::{self, Scan, UnitMode};
+use host_bridge::carmen::Scan;
 use lms_core::{Extractor, Frame, Params};
 
 use crate::baselines::{run_core, Extraction};
-use crate::maptruth::{build_map, frame_truth, Map, TruthConfig};
+use crate::maptruth::{frame_truth, Map, TruthConfig};
 use crate::metrics::{scan_truth, score_lines, Gates, LineScore, ScanTruth, Tally};
 use crate::realistic::{realistic_model, sample, DELTA, SIGMAS};
-use crate::realtruth::{no_flag_params, pooled_table, score_frame, RealTally, ScoredLine};
+use crate::realtruth::{
+    load_with_map, pooled_table, score_frame, LogWithMap, RealTally, ScoredLine,
+};
 use crate::scenes::{Family, Sample};
 
 /// A change applied to the defaults (the per-data defaults on real logs,
@@ -187,9 +189,12 @@ pub fn print_sweep_with(
     let cfg = TruthConfig::default();
     let mut pooled = vec![RealTally::default(); names.len()];
     for path in crate::real::find_logs(Path::new("../shared/data/carmen"))? {
-        let log = carmen::read_log(&path, UnitMode::Auto)?;
-        let map = build_map(&log.scans, &cfg);
-        let params = no_flag_params(&path)?;
+        let LogWithMap {
+            log,
+            no_flags: params,
+            cfg,
+            map,
+        } = load_with_map(&path, &cfg)?;
         // Per log, then pooled: wall ids are per log.
         let mut tallies = vec![RealTally::default(); names.len()];
         tally_log_frames(&log.scans, &map, &cfg, every, &mut tallies, |k, frame| {

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use host_bridge::carmen::{parse_log, Scan, UnitMode};
-use lms_lab::maptruth::{build_map, frame_truth, FrameTruth, Piece, TruthConfig};
+use lms_lab::maptruth::{build_map, frame_truth, refine_pose, FrameTruth, Piece, TruthConfig};
 use lms_lab::realtruth::{
     methods, oracle_lines, run_log, score_frame, RealTally, ScoredLine, ORACLE,
 };
@@ -15,9 +15,14 @@ use lms_scene::{wrap_angle, Bearings, Pose, Scene, Surface};
 
 /// A CARMEN log (cm) of `scene` seen noise-free from `poses`.
 fn synthetic_log(scene: &Scene, poses: &[Pose]) -> Vec<Scan> {
+    synthetic_log_to(scene, poses, lms_scene::DEFAULT_MAX_RANGE)
+}
+
+/// [`synthetic_log`] with returns up to `max_range` (m).
+fn synthetic_log_to(scene: &Scene, poses: &[Pose], max_range: f64) -> Vec<Scan> {
     let mut text = String::new();
     for (k, pose) in poses.iter().enumerate() {
-        let truth = scene.cast(&Bearings::default(), *pose);
+        let truth = scene.cast_with_max_range(&Bearings::default(), *pose, max_range);
         let ranges: Vec<String> = truth
             .ranges()
             .iter()
@@ -183,6 +188,84 @@ fn scoring_counts_matches_fragments_and_lines_on_no_wall() {
     let s = t.summary();
     assert_eq!(s.true_pos, 0.5);
     assert_eq!(s.false_pos, 0.75);
+}
+
+#[test]
+fn a_frame_whose_pose_is_off_is_registered_back_onto_the_map() {
+    let (scene, poses) = room();
+    let scans = synthetic_log(&scene, &poses);
+    let cfg = TruthConfig {
+        refine_pose: true,
+        ..TruthConfig::default()
+    };
+    let map = build_map(&scans, &cfg);
+    let all: Vec<usize> = (0..map.walls.len()).collect();
+    for k in [0, 7, 15] {
+        let mut scan = scans[k].clone();
+        let truth = scan.meta.pose;
+        scan.meta.pose = [
+            truth[0] + 0.03,
+            truth[1] - 0.02,
+            truth[2] + 0.6f64.to_radians(),
+        ];
+        let p = refine_pose(&scan, &map.walls, &all, &cfg);
+        let (dxy, dth) = (
+            (p[0] - truth[0]).hypot(p[1] - truth[1]),
+            wrap_angle(p[2] - truth[2]).abs().to_degrees(),
+        );
+        assert!(dxy < 0.005 && dth < 0.05, "frame {k}: {dxy} m, {dth}°");
+        // The registered truth's lines are the walls' from the true pose.
+        let registered = frame_truth(&scan, &map, &cfg);
+        let slam = frame_truth(&scan, &map, &TruthConfig::default());
+        let worst = |t: &FrameTruth| {
+            t.pieces
+                .iter()
+                .filter(|p| p.counted)
+                .map(|p| wrap_angle(p.own_alpha - p.alpha).abs())
+                .fold(0.0, f64::max)
+                .to_degrees()
+        };
+        let (r, s) = (worst(&registered), worst(&slam));
+        eprintln!("frame {k}: worst |own α − map α| {r:.3}° registered, {s:.3}° at the SLAM pose");
+        assert!(r < 0.3 && s > 0.5, "{r}°, {s}°");
+    }
+}
+
+#[test]
+fn the_truth_covers_every_range_the_data_allows() {
+    // A 20 m wall 45 m ahead, seen from 24 poses 1 cm apart (so that the
+    // map's 5 cm cells fill in between beams 0.4 m apart).
+    let mut scene = Scene::new();
+    let wall = scene.add_wall(
+        lms_scene::Point::new(45.0, -10.0),
+        lms_scene::Point::new(45.0, 10.0),
+    );
+    let poses: Vec<Pose> = (0..24)
+        .map(|k| Pose::new(0.0, k as f64 * 0.01, 0.0))
+        .collect();
+    let scans = synthetic_log_to(&scene, &poses, 80.0);
+    let on_wall = |cfg: &TruthConfig| {
+        let map = build_map(&scans, cfg);
+        let t = frame_truth(&scans[12], &map, cfg);
+        t.pieces
+            .iter()
+            .filter(|p| p.counted)
+            .map(|p| p.beams)
+            .sum::<usize>()
+    };
+    // The default truth stops at 40 m: the wall is in no frame's truth ...
+    let cfg = TruthConfig::default();
+    assert_eq!(on_wall(&cfg), 0);
+    // ... over a cm log's 81.83 m it is, with the beams that see it.
+    let seen = scene
+        .cast_with_max_range(&Bearings::default(), poses[12], 80.0)
+        .line(wall)
+        .map_or(0, |l| l.beams);
+    let counted = on_wall(&cfg.for_data(81.83));
+    assert!(
+        seen > 40 && counted + 2 >= seen,
+        "{counted} of {seen} beams"
+    );
 }
 
 #[test]
