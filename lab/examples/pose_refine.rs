@@ -36,7 +36,7 @@ fn main() -> Result<()> {
         vec![RealTally::default(); methods.len()],
     ];
     println!(
-        "| log | median / 95 % |Δθ| (°) | median / 95 % |Δxy| (mm) | verified, SLAM → registered |"
+        "| log | median / 95 % \\|Δθ\\| (°) | median / 95 % \\|Δxy\\| (mm) | verified, SLAM → registered |"
     );
     println!("|:---|---:|---:|---:|");
     for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
