@@ -10,7 +10,7 @@ use std::path::Path;
 
 use anyhow::Result;
 use lms_lab::maptruth::{refine_pose, TruthConfig};
-use lms_lab::realtruth::{load_with_map, methods, run_log, LogWithMap, RealTally};
+use lms_lab::realtruth::{load_with_map, methods, pooled_table, run_log, LogWithMap, RealTally};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -72,26 +72,18 @@ fn main() -> Result<()> {
             pooled[1][k].merge(t);
         }
     }
-    println!(
-        "\n| truth · method | TruePos | ≥ 1 m | FalsePos | on no wall | FalsePos on walls | coverage | σΔα (°) | σΔr (mm) | walls > 5 % fragmented |"
-    );
-    println!("|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for (truth, tallies) in ["SLAM poses", "registered"].iter().zip(&pooled) {
+        let names: Vec<String> = methods
+            .iter()
+            .map(|m| format!("{truth} · {}", m.name))
+            .collect();
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        println!("\n{}", pooled_table(&names, tallies));
         for (m, t) in methods.iter().zip(tallies) {
             let s = t.summary();
             println!(
-                "| {truth} · {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.1} | {} of {} |",
-                m.name,
-                s.true_pos,
-                s.true_pos_1m,
-                s.false_pos,
-                s.no_wall,
-                s.false_pos_on_walls,
-                s.coverage,
-                s.sd_alpha_deg,
-                s.sd_r_mm,
-                s.walls_fragmented.0,
-                s.walls_fragmented.1
+                "{truth} · {}: σΔα {:.2}°, σΔr {:.1} mm",
+                m.name, s.sd_alpha_deg, s.sd_r_mm
             );
         }
     }

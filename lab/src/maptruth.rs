@@ -661,7 +661,9 @@ pub fn refine_pose(scan: &Scan, walls: &[MapWall], near: &[usize], cfg: &TruthCo
                 b[r] -= wgt * jac[r] * e;
             }
         }
-        let Some(step) = solve3(h, b) else { break };
+        let Some(step) = crate::variants::solve3(h, b) else {
+            break;
+        };
         for k in 0..3 {
             pose[k] += step[k];
         }
@@ -670,28 +672,6 @@ pub fn refine_pose(scan: &Scan, walls: &[MapWall], near: &[usize], cfg: &TruthCo
         }
     }
     pose
-}
-
-/// `x` with `h x = b` by Cramer's rule, `None` if `h` is singular.
-fn solve3(h: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(h);
-    if d.abs() < 1e-30 {
-        return None;
-    }
-    let mut x = [0.0; 3];
-    for (k, xk) in x.iter_mut().enumerate() {
-        let mut m = h;
-        for r in 0..3 {
-            m[r][k] = b[r];
-        }
-        *xk = det(m) / d;
-    }
-    Some(x)
 }
 
 /// Walls with a point within `reach` of `o`.

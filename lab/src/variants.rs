@@ -132,8 +132,8 @@ pub fn circle_explains(frame: &Frame, tables: &Tables, seg: Segment, params: &Pa
     sum < chi2_quantile_999((m - 3) as f64)
 }
 
-/// Solve a 3×3 linear system by Cramer's rule.
-fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+/// Solve a 3×3 linear system by Cramer's rule (`None` if singular).
+pub(crate) fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
     let det = |m: [[f64; 3]; 3]| {
         m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
             - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
