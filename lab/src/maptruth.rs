@@ -17,11 +17,13 @@
 //!    a consensus fit of its cells ([`consensus_tls`]). The peak's cells leave the
 //!    transform; repeat until no peak has [`TruthConfig::min_votes`] cells.
 //! 3. **Ray-cast** the walls into each frame: a beam is *on wall w* if its
-//!    ray meets `w` (its extent widened by [`TruthConfig::beam_tol`]) and the
-//!    measured hit is within [`TruthConfig::beam_tol`] of `w`'s line (so a
-//!    person in front of a wall, or a hit past the map, is on no wall); of
-//!    several such walls, the one whose ray distance is closest to the
-//!    measured range.
+//!    ray meets `w` (its extent widened by half a cell) and the measured
+//!    hit is within [`TruthConfig::beam_tol`] of `w`'s line (so a person in
+//!    front of a wall, or a hit past the map, is on no wall); of several
+//!    such walls, the one whose line is nearest the hit. With
+//!    [`TruthConfig::refine_pose`] the frame's pose is first registered to
+//!    the walls ([`refine_pose`]; off by default: it changed nothing
+//!    measurable, docs/ALGORITHM-v3-section10.md §10.13).
 //!    Runs of beams on one wall, bridging at most
 //!    [`TruthConfig::gap_beams`] beams on no wall (ALGORITHM.md §7.6's
 //!    merge gap), are the frame's *true pieces*; the pieces with at least
@@ -58,8 +60,10 @@ pub struct TruthConfig {
     pub cell: f64,
     /// A cell is occupied if hit in at least this many frames.
     pub min_frames: u32,
-    /// Beams at or beyond this range are not used (m); also excludes fill
-    /// values such as the Acapulco log's ~50 m.
+    /// Beams at or beyond this range are not used (m). The default, 40 m,
+    /// is for callers that know nothing of the data; the real-log tools
+    /// replace it with the log's own limit ([`TruthConfig::for_data`]),
+    /// which also keeps out fill values such as the Acapulco log's ~50 m.
     pub max_range: f64,
     /// Hough angle bins over [0, π).
     pub angle_bins: usize,
@@ -577,7 +581,8 @@ fn ray_hit(o: [f64; 2], u: [f64; 2], w: &MapWall, ext: f64) -> Option<f64> {
     (t > 0.0 && s >= -margin && s <= 1.0 + margin).then_some(t)
 }
 
-/// Step 3 for one beam: the wall it is on.
+/// Step 3 for one beam seen from `pose`: the wall it is on, and the hit's
+/// signed distance from that wall's line (m).
 fn beam_wall(
     scan: &Scan,
     j: usize,
@@ -585,7 +590,7 @@ fn beam_wall(
     walls: &[MapWall],
     near: &[usize],
     cfg: &TruthConfig,
-) -> Option<usize> {
+) -> Option<(usize, f64)> {
     if !usable(scan, j, cfg) {
         return None;
     }
@@ -593,18 +598,18 @@ fn beam_wall(
     let phi = th + f64::from(scan.frame.geometry().bearing(j));
     let u = [phi.cos(), phi.sin()];
     let p = world_hit_at(scan, j, pose);
-    let mut best: Option<(f64, usize)> = None;
+    let mut best: Option<(usize, f64)> = None;
     for &w in near {
         let wall = &walls[w];
         if ray_hit([x, y], u, wall, 0.5 * cfg.cell).is_none() {
             continue;
         }
-        let perp = (p[0] * wall.alpha.cos() + p[1] * wall.alpha.sin() - wall.rho).abs();
-        if perp <= cfg.beam_tol && best.is_none_or(|(bd, _)| perp < bd) {
-            best = Some((perp, w));
+        let e = p[0] * wall.alpha.cos() + p[1] * wall.alpha.sin() - wall.rho;
+        if e.abs() <= cfg.beam_tol && best.is_none_or(|(_, be)| e.abs() < be.abs()) {
+            best = Some((w, e));
         }
     }
-    best.map(|(_, w)| w)
+    best
 }
 
 /// Registration: a hit's scatter about its wall (m), the scale of the
@@ -619,9 +624,9 @@ const REFINE_STEPS: usize = 5;
 
 /// The laser pose of `scan` registered to the map's walls (step 3a): from
 /// the SLAM pose, Gauss–Newton steps on the hits' distances to the walls
-/// their beams meet (assigned by [`beam_wall`] at the current pose), each
-/// hit Cauchy-weighted at [`REFINE_SCATTER`], with the SLAM pose as a prior
-/// ([`REFINE_PRIOR_XY`], [`REFINE_PRIOR_TH`]) so that what the frame does not
+/// their beams meet (assigned as in step 3, at the current pose), each
+/// hit Cauchy-weighted at 3 cm (`REFINE_SCATTER`), with the SLAM pose as a
+/// prior (0.1 m, 2°: `REFINE_PRIOR_XY`, `REFINE_PRIOR_TH`) so that what the frame does not
 /// constrain (along a corridor) stays where SLAM put it. A frame of one
 /// SLAM run is a few centimetres and tenths of a degree off the map the run
 /// built; at the matching gates' scale (3°, 0.1 m) that error moves every
@@ -644,12 +649,10 @@ pub fn refine_pose(scan: &Scan, walls: &[MapWall], near: &[usize], cfg: &TruthCo
             b[k] = -info[k] * (pose[k] - prior[k]);
         }
         for j in 0..scan.frame.len() {
-            let Some(w) = beam_wall(scan, j, pose, walls, near, cfg) else {
+            let Some((w, e)) = beam_wall(scan, j, pose, walls, near, cfg) else {
                 continue;
             };
             let (ca, sa) = (walls[w].alpha.cos(), walls[w].alpha.sin());
-            let p = world_hit_at(scan, j, pose);
-            let e = p[0] * ca + p[1] * sa - walls[w].rho;
             let d = f64::from(scan.frame.ranges()[j]);
             let phi = pose[2] + f64::from(g.bearing(j));
             let jac = [ca, sa, d * (-phi.sin() * ca + phi.cos() * sa)];
@@ -698,7 +701,7 @@ pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
         scan.meta.pose
     };
     let walls: Vec<Option<usize>> = (0..scan.frame.len())
-        .map(|j| beam_wall(scan, j, pose, &map.walls, &near, cfg))
+        .map(|j| beam_wall(scan, j, pose, &map.walls, &near, cfg).map(|(w, _)| w))
         .collect();
     let on_wall: Vec<Option<usize>> = walls.iter().map(|w| w.map(|w| map.walls[w].line)).collect();
     let mut pieces = Vec::new();

@@ -260,8 +260,8 @@ mod tests {
             let s = sample(Family::Corridor, index, 1, &model, DELTA).unwrap();
             let (beams, ranges) = (s.frame.beams(), s.frame.ranges());
             for (j, hit) in s.truth.hits.iter().enumerate() {
-                // Away from the range limit (noise, turn offsets) and
-                // from jumps (mixed pixels land between two surfaces).
+                // Away from the range limit, where noise and the turns'
+                // offsets move a reading across it.
                 let d = f64::from(ranges[j]);
                 if !beams[j].is_valid() || d > 8.1 {
                     continue;

@@ -12,10 +12,10 @@
 //! `corner_gap` of the next one's ([`Line::gap_to`]) and each turning from
 //! the last by `arc_min_turn_deg ..= arc_max_turn_deg` in the same
 //! direction, is dropped and counted (`Stats::rejected_arc`). Two lines
-//! alone are kept: an obtuse corner looks the same.
+//! alone are no chain: an obtuse corner looks the same.
 //!
-//! Two such lines alone can be an obtuse corner, and [`curve_not_corner`]
-//! tells them apart with their beams (`Params::arc_pairs`,
+//! Such a pair is dropped too when [`curve_not_corner`] tells it from a
+//! corner with its beams (`Params::arc_pairs`,
 //! docs/ALGORITHM-v3-section10.md §10.12): a circle through the union
 //! explains a curved wall within the noise and better than its two chords
 //! do, but not the kink of a corner between two straight walls.
