@@ -27,7 +27,7 @@ use lms_core::Extractor;
 use lms_lab::baselines::{run_core, Extraction};
 use lms_lab::maptruth::{frame_truth, world_hit, FrameTruth, Piece, TruthConfig};
 use lms_lab::realtruth::{
-    candidate, overlap, score_frame, RealTally, ScoredLine, GATE_ALPHA_DEG, GATE_OVERLAP,
+    candidate, overlap, score_frame, RealTally, ScoredLine, GATE_ALPHA_DEG, GATE_OVERLAP, GATE_R,
 };
 
 /// Causes of false lines, in the order printed.
@@ -62,6 +62,13 @@ struct Errors {
     /// Lines over several pieces whose on-wall beams all lie on one map
     /// line, and that line within the gates: one wall seen past an occluder.
     several_one_wall: usize,
+    /// Lines off the Δr gate only whose middle (the mean of their
+    /// endpoints) lies within the gate of the piece's line: off at the foot
+    /// of the normal, on the wall where the line is.
+    dr_mid_inside: usize,
+    /// Missed pieces with an unmatched line on them within the Δα gate
+    /// whose middle is within the Δr gate of the piece's line.
+    missed_mid_inside: usize,
     /// Lines on no wall: share of their valid beams on a map wall.
     no_wall_on: Vec<f64>,
     gate_z: Vec<f64>,
@@ -84,6 +91,8 @@ impl Errors {
         self.false_short += o.false_short;
         self.static_along += o.static_along;
         self.several_one_wall += o.several_one_wall;
+        self.dr_mid_inside += o.dr_mid_inside;
+        self.missed_mid_inside += o.missed_mid_inside;
         self.no_wall_on.extend(o.no_wall_on);
         self.gate_z.extend(o.gate_z);
         self.gate_inside.extend(o.gate_inside);
@@ -142,8 +151,19 @@ fn one_wall(truth: &FrameTruth, l: &ScoredLine, beams: &[usize]) -> bool {
             let (a, r) = p.reference();
             p.line == id
                 && lms_scene::wrap_angle(l.alpha - a).abs() < GATE_ALPHA_DEG.to_radians()
-                && (l.r - r).abs() < lms_lab::realtruth::GATE_R
+                && (l.r - r).abs() < GATE_R
         })
+}
+
+/// |Δr| (m) of `line` against piece `p`'s reference line measured at the
+/// line's middle, whatever gate `p` uses ([`Piece::range_offset`]).
+fn mid_offset(line: &lms_core::Line, p: &Piece) -> f64 {
+    let l = ScoredLine::from(line);
+    let at_middle = Piece {
+        gate_at_middle: true,
+        ..*p
+    };
+    at_middle.range_offset(l.r, l.middle, p.reference()).abs()
 }
 
 /// The false lines of one frame.
@@ -206,6 +226,7 @@ fn false_lines(
                     if off_alpha {
                         3
                     } else {
+                        e.dr_mid_inside += usize::from(mid_offset(line, p) < GATE_R);
                         4
                     }
                 }
@@ -236,6 +257,13 @@ fn missed_pieces(scan: &Scan, truth: &FrameTruth, x: &Extraction, used: &[bool],
                 .iter()
                 .any(|(l, _)| overlap(l.first, l.last, p.first, p.last) >= GATE_OVERLAP);
             e.missed[if mostly_on { 1 } else { 2 }] += 1;
+            let (a, _) = p.reference();
+            e.missed_mid_inside += usize::from(x.lines.iter().zip(used).any(|(line, &u)| {
+                let l = ScoredLine::from(line);
+                !u && overlap(l.first, l.last, p.first, p.last) >= GATE_OVERLAP
+                    && lms_scene::wrap_angle(l.alpha - a).abs() < GATE_ALPHA_DEG.to_radians()
+                    && mid_offset(line, p) < GATE_R
+            }));
             continue;
         }
         e.missed[0] += 1;
@@ -454,6 +482,18 @@ fn main() -> Result<()> {
         "\nOf the {} lines over several pieces, {} lie on one map line within the gates \
          (one wall past an occluder).",
         all.false_by_cause[5], all.several_one_wall
+    );
+    println!(
+        "Of the {} lines off the Δr gate only, {} have their middle within {} m of the \
+         piece's line (off at the foot of the normal, far from the line itself).",
+        all.false_by_cause[4], all.dr_mid_inside, GATE_R
+    );
+    println!(
+        "Of the {} missed counted pieces, {} have an unmatched line on them within the Δα gate \
+         whose middle is within {} m of the piece's line.",
+        all.missed.iter().sum::<usize>(),
+        all.missed_mid_inside,
+        GATE_R
     );
     let h = &all.no_wall_on;
     let at = |lo: f64, hi: f64| h.iter().filter(|&&x| x >= lo && x < hi).count();

@@ -1,8 +1,10 @@
 //! How much the real-scan figures depend on the map truth's own choices:
-//! the defaults and the oracle against the verified truth with one setting
-//! of `TruthConfig` changed at a time — shorter map walls, a wider band of
-//! on-wall hits, cells occupied from fewer frames, sparser walls — pooled
-//! over the logs (docs/ALGORITHM-v3-section10.md §10.8).
+//! the defaults, split-and-merge and the oracle against the verified truth
+//! with one setting of `TruthConfig` changed at a time — shorter map walls,
+//! a wider band of on-wall hits, cells occupied from fewer frames, sparser
+//! walls, Δr measured at the line's middle instead of at the foot of its
+//! normal (§10.14) — pooled over the logs (docs/ALGORITHM-v3-section10.md
+//! §10.8).
 //!
 //! `cargo run --release -p lms-lab --example truth_sensitivity -- [EVERY]`
 
@@ -23,6 +25,7 @@ fn main() -> Result<()> {
     };
     let methods = [
         method("defaults, no flags", RealKind::Core),
+        method("split-and-merge (4σ)", RealKind::SplitMerge(4.0)),
         method("oracle", RealKind::Oracle),
     ];
     let names: Vec<&str> = methods.iter().map(|m| m.name).collect();
@@ -52,6 +55,13 @@ fn main() -> Result<()> {
             "walls from 25 % occupied",
             TruthConfig {
                 min_density: 0.25,
+                ..d
+            },
+        ),
+        (
+            "Δr at the line's middle",
+            TruthConfig {
+                range_gate_at_middle: true,
                 ..d
             },
         ),

@@ -93,6 +93,12 @@ pub struct TruthConfig {
     /// Register each frame to the map's walls before ray-casting
     /// ([`refine_pose`]): the SLAM pose corrected by the frame's own hits.
     pub refine_pose: bool,
+    /// Measure the matching's and the verification's Δr where the line is,
+    /// at its middle, instead of at the foot of its normal (issue 14's
+    /// gate, the default). A line far from its foot point misses the 0.1 m
+    /// gate there with a sub-degree α error while lying on the wall
+    /// ([`Piece::range_offset`]; docs/ALGORITHM-v3-section10.md §10.14).
+    pub range_gate_at_middle: bool,
 }
 
 impl Default for TruthConfig {
@@ -114,6 +120,7 @@ impl Default for TruthConfig {
             gap_beams: 3,
             verify: true,
             refine_pose: false,
+            range_gate_at_middle: false,
         }
     }
 }
@@ -499,6 +506,11 @@ pub struct Piece {
     pub own_alpha: f64,
     /// Distance of that fit (m), ≥ 0.
     pub own_r: f64,
+    /// Centroid of the piece's own on-wall hits in the sensor frame (m):
+    /// the middle of the fit above.
+    pub own_middle: [f64; 2],
+    /// Δr is measured at a line's middle ([`TruthConfig::range_gate_at_middle`]).
+    pub gate_at_middle: bool,
     /// The own fit agrees with the map line (step 4).
     pub verified: bool,
     /// At least `min_beams` beams on the wall, `min_piece` long and, with
@@ -517,16 +529,31 @@ impl Piece {
             (self.own_alpha, self.own_r)
         }
     }
+
+    /// Signed Δr (m) of a line with normal `alpha`, distance `r` and
+    /// middle `middle` (sensor frame) against the line `(ref_alpha, ref_r)`:
+    /// `r − ref_r` at the foot of the normal (issue 14's gate), or with
+    /// [`Self::gate_at_middle`] the middle's distance from the reference
+    /// line, `middle·n_ref − ref_r`, where the line is. The two agree for
+    /// parallel lines.
+    pub fn range_offset(&self, r: f64, middle: [f64; 2], reference: (f64, f64)) -> f64 {
+        let (ref_alpha, ref_r) = reference;
+        if self.gate_at_middle {
+            middle[0] * ref_alpha.cos() + middle[1] * ref_alpha.sin() - ref_r
+        } else {
+            r - ref_r
+        }
+    }
 }
 
 /// TLS fit `(α, r)`, r ≥ 0, to the hits of beams `first..=last` on map
-/// line `line`, in the sensor frame.
+/// line `line`, in the sensor frame, and the hits' centroid.
 pub fn own_fit(
     scan: &Scan,
     on_wall: &[Option<usize>],
     line: usize,
     span: (usize, usize),
-) -> (f64, f64) {
+) -> (f64, f64, [f64; 2]) {
     let g = scan.frame.geometry();
     let r = scan.frame.ranges();
     let pts: Vec<[f64; 2]> = (span.0..=span.1)
@@ -541,7 +568,12 @@ pub fn own_fit(
         rho = -rho;
         a += std::f64::consts::PI;
     }
-    (lms_scene::wrap_angle(a), rho)
+    let n = pts.len().max(1) as f64;
+    let middle = [
+        pts.iter().map(|p| p[0]).sum::<f64>() / n,
+        pts.iter().map(|p| p[1]).sum::<f64>() / n,
+    ];
+    (lms_scene::wrap_angle(a), rho, middle)
 }
 
 /// The truth of one frame.
@@ -728,11 +760,8 @@ pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
         let (alpha, r) = line_in_sensor(wall, pose);
         let t = |p: [f64; 2]| -p[0] * wall.alpha.sin() + p[1] * wall.alpha.cos();
         let length = (t(world_hit_at(scan, last, pose)) - t(world_hit_at(scan, first, pose))).abs();
-        let (own_alpha, own_r) = own_fit(scan, &on_wall, wall.line, (first, last));
-        let verified = lms_scene::wrap_angle(own_alpha - alpha).abs()
-            < crate::realtruth::GATE_ALPHA_DEG.to_radians()
-            && (own_r - r).abs() < crate::realtruth::GATE_R;
-        pieces.push(Piece {
+        let (own_alpha, own_r, own_middle) = own_fit(scan, &on_wall, wall.line, (first, last));
+        let mut piece = Piece {
             wall: w,
             line: wall.line,
             alpha,
@@ -743,9 +772,17 @@ pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
             length,
             own_alpha,
             own_r,
-            verified,
-            counted: beams >= cfg.min_beams && length >= cfg.min_piece && (verified || !cfg.verify),
-        });
+            own_middle,
+            gate_at_middle: cfg.range_gate_at_middle,
+            verified: false,
+            counted: false,
+        };
+        piece.verified = lms_scene::wrap_angle(own_alpha - alpha).abs()
+            < crate::realtruth::GATE_ALPHA_DEG.to_radians()
+            && piece.range_offset(own_r, own_middle, (alpha, r)).abs() < crate::realtruth::GATE_R;
+        piece.counted =
+            beams >= cfg.min_beams && length >= cfg.min_piece && (piece.verified || !cfg.verify);
+        pieces.push(piece);
         j = last + 1;
     }
     FrameTruth { on_wall, pieces }

@@ -199,6 +199,7 @@ where
             r: p.r,
             first: p.first,
             last: p.last,
+            middle: p.own_middle,
         });
     chart
         .draw_series(true_lines.filter_map(|l| {

@@ -6,7 +6,9 @@
 //! # Matching
 //! A line and a true piece are a candidate pair if at least half of the
 //! line's beam range `first..=last` lies in the piece's, `|Δα| < 3°` and
-//! `|Δr| < 0.1 m` ([`GATE_ALPHA_DEG`], [`GATE_R`]); pairs are taken
+//! `|Δr| < 0.1 m` ([`GATE_ALPHA_DEG`], [`GATE_R`]; Δr at the foot of the
+//! normal, or with [`crate::maptruth::TruthConfig::range_gate_at_middle`]
+//! at the line's middle); pairs are taken
 //! one-to-one, greedily by `(Δα/3°)² + (Δr/0.1 m)²`.
 //!
 //! # Figures
@@ -437,15 +439,24 @@ pub struct ScoredLine {
     pub first: usize,
     /// Last beam (inclusive).
     pub last: usize,
+    /// Middle of the line in the sensor frame (m): the mean of its
+    /// endpoints (where a Δr measured at the line is taken,
+    /// [`crate::maptruth::Piece::range_offset`]).
+    pub middle: [f64; 2],
 }
 
 impl From<&Line> for ScoredLine {
     fn from(l: &Line) -> Self {
+        let [p, q] = l.endpoints;
         ScoredLine {
             alpha: f64::from(l.alpha),
             r: f64::from(l.r),
             first: usize::from(l.first),
             last: usize::from(l.last),
+            middle: [
+                (f64::from(p[0]) + f64::from(q[0])) / 2.0,
+                (f64::from(p[1]) + f64::from(q[1])) / 2.0,
+            ],
         }
     }
 }
@@ -468,7 +479,7 @@ pub fn candidate(l: &ScoredLine, p: &crate::maptruth::Piece) -> Option<(f64, f64
     }
     let (alpha, r) = p.reference();
     let da = lms_scene::wrap_angle(l.alpha - alpha);
-    let dr = l.r - r;
+    let dr = p.range_offset(l.r, l.middle, (alpha, r));
     (da.abs() < GATE_ALPHA_DEG.to_radians() && dr.abs() < GATE_R).then_some((da, dr))
 }
 
@@ -572,6 +583,7 @@ pub fn oracle_lines(truth: &FrameTruth) -> Vec<ScoredLine> {
             r: p.own_r,
             first: p.first,
             last: p.last,
+            middle: p.own_middle,
         })
         .collect()
 }

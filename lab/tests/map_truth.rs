@@ -9,7 +9,7 @@ use std::path::Path;
 use host_bridge::carmen::{parse_log, Scan, UnitMode};
 use lms_lab::maptruth::{build_map, frame_truth, refine_pose, FrameTruth, Piece, TruthConfig};
 use lms_lab::realtruth::{
-    methods, oracle_lines, run_log, score_frame, RealTally, ScoredLine, ORACLE,
+    candidate, methods, oracle_lines, run_log, score_frame, RealTally, ScoredLine, ORACLE,
 };
 use lms_scene::{wrap_angle, Bearings, Pose, Scene, Surface};
 
@@ -140,9 +140,47 @@ fn piece(first: usize, last: usize, alpha: f64, r: f64) -> Piece {
         length: 2.0,
         own_alpha: alpha,
         own_r: r,
+        own_middle: [r * alpha.cos(), r * alpha.sin()],
+        gate_at_middle: false,
         verified: true,
         counted: true,
     }
+}
+
+/// A wall seen at grazing incidence, far from the foot of its normal: a
+/// line 1° off that crosses it at its middle misses issue 14's Δr gate at
+/// the foot (by 0.14 m) and passes it where the line is.
+#[test]
+fn the_range_gate_at_the_middle_keeps_a_line_on_a_far_grazing_wall() {
+    // The wall x·cos 0 + y·sin 0 = 1 (α = 0, r = 1), seen from y = 7 to 9.
+    let middle = [1.0, 8.0];
+    let tilt = 1.0_f64.to_radians();
+    // The line through the middle with α = 1°: r = middle·n.
+    let r = middle[0] * tilt.cos() + middle[1] * tilt.sin();
+    let line = ScoredLine {
+        alpha: tilt,
+        r,
+        first: 10,
+        last: 39,
+        middle,
+    };
+    let at_foot = piece(10, 39, 0.0, 1.0);
+    assert!((r - 1.0) > 0.13, "{r}");
+    assert!(candidate(&line, &at_foot).is_none());
+    let at_middle = Piece {
+        gate_at_middle: true,
+        ..at_foot
+    };
+    let (da, dr) = candidate(&line, &at_middle).expect("on the wall where the line is");
+    assert!((da - tilt).abs() < 1e-12 && dr.abs() < 1e-12, "{da} {dr}");
+    // A line parallel to the wall 0.15 m off fails both.
+    let off = ScoredLine {
+        alpha: 0.0,
+        r: 1.15,
+        middle: [1.15, 8.0],
+        ..line
+    };
+    assert!(candidate(&off, &at_foot).is_none() && candidate(&off, &at_middle).is_none());
 }
 
 #[test]
@@ -163,6 +201,7 @@ fn scoring_counts_matches_fragments_and_lines_on_no_wall() {
         r,
         first,
         last,
+        middle: [0.0; 2],
     };
     let lines = [
         // Two lines on the first piece: one match, one fragment.
@@ -324,12 +363,14 @@ fn an_unverified_piece_is_not_counted_and_its_own_fit_is_not_false() {
         r: 2.0,
         first: 10,
         last: 39,
+        middle: [0.0; 2],
     };
     let on_frame = ScoredLine {
         alpha: 0.4,
         r: 2.0,
         first: 10,
         last: 39,
+        middle: [0.0; 2],
     };
     let mut t = RealTally::default();
     score_frame(&truth, &[on_frame], &valid, &mut t);
