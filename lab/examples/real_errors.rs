@@ -27,7 +27,8 @@ use lms_core::Extractor;
 use lms_lab::baselines::{run_core, Extraction};
 use lms_lab::maptruth::{frame_truth, world_hit, FrameTruth, Piece, TruthConfig};
 use lms_lab::realtruth::{
-    candidate, overlap, score_frame, RealTally, ScoredLine, GATE_ALPHA_DEG, GATE_OVERLAP, GATE_R,
+    candidate, gate_offsets, overlap, score_frame, within_gates, RealTally, ScoredLine,
+    GATE_ALPHA_DEG, GATE_OVERLAP, GATE_R,
 };
 
 /// Causes of false lines, in the order printed.
@@ -147,23 +148,16 @@ fn one_wall(truth: &FrameTruth, l: &ScoredLine, beams: &[usize]) -> bool {
         return false;
     };
     ids.all(|k| k == id)
-        && truth.pieces.iter().any(|p| {
-            let (a, r) = p.reference();
-            p.line == id
-                && lms_scene::wrap_angle(l.alpha - a).abs() < GATE_ALPHA_DEG.to_radians()
-                && (l.r - r).abs() < GATE_R
-        })
+        && truth
+            .pieces
+            .iter()
+            .any(|p| p.line == id && within_gates(gate_offsets(l, p.reference(), p.gate_at_middle)))
 }
 
-/// |Δr| (m) of `line` against piece `p`'s reference line measured at the
-/// line's middle, whatever gate `p` uses ([`Piece::range_offset`]).
-fn mid_offset(line: &lms_core::Line, p: &Piece) -> f64 {
-    let l = ScoredLine::from(line);
-    let at_middle = Piece {
-        gate_at_middle: true,
-        ..*p
-    };
-    at_middle.range_offset(l.r, l.middle, p.reference()).abs()
+/// `(Δα, Δr)` of `line` against piece `p`'s reference line with Δr at the
+/// line's middle, whatever gate `p` uses.
+fn mid_offsets(line: &lms_core::Line, p: &Piece) -> (f64, f64) {
+    gate_offsets(&ScoredLine::from(line), p.reference(), true)
 }
 
 /// The false lines of one frame.
@@ -207,8 +201,7 @@ fn false_lines(
                 5
             }
             Some(p) => {
-                let (a, r) = p.reference();
-                let (da, dr) = (lms_scene::wrap_angle(l.alpha - a), l.r - r);
+                let (da, dr) = gate_offsets(&l, p.reference(), p.gate_at_middle);
                 let off_alpha = da.abs() >= GATE_ALPHA_DEG.to_radians();
                 if candidate(&l, p).is_some() {
                     2
@@ -226,7 +219,7 @@ fn false_lines(
                     if off_alpha {
                         3
                     } else {
-                        e.dr_mid_inside += usize::from(mid_offset(line, p) < GATE_R);
+                        e.dr_mid_inside += usize::from(mid_offsets(line, p).1.abs() < GATE_R);
                         4
                     }
                 }
@@ -257,12 +250,9 @@ fn missed_pieces(scan: &Scan, truth: &FrameTruth, x: &Extraction, used: &[bool],
                 .iter()
                 .any(|(l, _)| overlap(l.first, l.last, p.first, p.last) >= GATE_OVERLAP);
             e.missed[if mostly_on { 1 } else { 2 }] += 1;
-            let (a, _) = p.reference();
             e.missed_mid_inside += usize::from(x.lines.iter().zip(used).any(|(line, &u)| {
-                let l = ScoredLine::from(line);
-                !u && overlap(l.first, l.last, p.first, p.last) >= GATE_OVERLAP
-                    && lms_scene::wrap_angle(l.alpha - a).abs() < GATE_ALPHA_DEG.to_radians()
-                    && mid_offset(line, p) < GATE_R
+                !u && overlap(line.first.into(), line.last.into(), p.first, p.last) >= GATE_OVERLAP
+                    && within_gates(mid_offsets(line, p))
             }));
             continue;
         }

@@ -53,6 +53,8 @@ use std::collections::{BinaryHeap, HashMap};
 
 use host_bridge::carmen::Scan;
 
+use crate::realtruth::{gate_offsets, within_gates, ScoredLine};
+
 /// Parameters of the map and of the per-frame truth.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TruthConfig {
@@ -97,7 +99,7 @@ pub struct TruthConfig {
     /// at its middle, instead of at the foot of its normal (issue 14's
     /// gate, the default). A line far from its foot point misses the 0.1 m
     /// gate there with a sub-degree α error while lying on the wall
-    /// ([`Piece::range_offset`]; docs/ALGORITHM-v3-section10.md §10.14).
+    /// ([`gate_offsets`]; docs/ALGORITHM-v3-section10.md §10.14).
     pub range_gate_at_middle: bool,
 }
 
@@ -238,12 +240,18 @@ pub fn occupied_cells(scans: &[Scan], cfg: &TruthConfig) -> Vec<MapCell> {
         .collect()
 }
 
-/// Total-least-squares line `(α, ρ)` through `pts`.
-pub fn tls(pts: &[[f64; 2]]) -> (f64, f64) {
+/// Mean of the points `pts` (the origin for none).
+pub fn centroid(pts: &[[f64; 2]]) -> [f64; 2] {
     let n = pts.len().max(1) as f64;
     let (mx, my) = pts
         .iter()
         .fold((0.0, 0.0), |(a, b), p| (a + p[0] / n, b + p[1] / n));
+    [mx, my]
+}
+
+/// Total-least-squares line `(α, ρ)` through `pts`.
+pub fn tls(pts: &[[f64; 2]]) -> (f64, f64) {
+    let [mx, my] = centroid(pts);
     let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
     for p in pts {
         let (dx, dy) = (p[0] - mx, p[1] - my);
@@ -509,7 +517,8 @@ pub struct Piece {
     /// Centroid of the piece's own on-wall hits in the sensor frame (m):
     /// the middle of the fit above.
     pub own_middle: [f64; 2],
-    /// Δr is measured at a line's middle ([`TruthConfig::range_gate_at_middle`]).
+    /// Lines are matched to it with Δr at their middle
+    /// ([`TruthConfig::range_gate_at_middle`], [`gate_offsets`]).
     pub gate_at_middle: bool,
     /// The own fit agrees with the map line (step 4).
     pub verified: bool,
@@ -527,21 +536,6 @@ impl Piece {
             (self.alpha, self.r)
         } else {
             (self.own_alpha, self.own_r)
-        }
-    }
-
-    /// Signed Δr (m) of a line with normal `alpha`, distance `r` and
-    /// middle `middle` (sensor frame) against the line `(ref_alpha, ref_r)`:
-    /// `r − ref_r` at the foot of the normal (issue 14's gate), or with
-    /// [`Self::gate_at_middle`] the middle's distance from the reference
-    /// line, `middle·n_ref − ref_r`, where the line is. The two agree for
-    /// parallel lines.
-    pub fn range_offset(&self, r: f64, middle: [f64; 2], reference: (f64, f64)) -> f64 {
-        let (ref_alpha, ref_r) = reference;
-        if self.gate_at_middle {
-            middle[0] * ref_alpha.cos() + middle[1] * ref_alpha.sin() - ref_r
-        } else {
-            r - ref_r
         }
     }
 }
@@ -568,12 +562,7 @@ pub fn own_fit(
         rho = -rho;
         a += std::f64::consts::PI;
     }
-    let n = pts.len().max(1) as f64;
-    let middle = [
-        pts.iter().map(|p| p[0]).sum::<f64>() / n,
-        pts.iter().map(|p| p[1]).sum::<f64>() / n,
-    ];
-    (lms_scene::wrap_angle(a), rho, middle)
+    (lms_scene::wrap_angle(a), rho, centroid(&pts))
 }
 
 /// The truth of one frame.
@@ -761,7 +750,15 @@ pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
         let t = |p: [f64; 2]| -p[0] * wall.alpha.sin() + p[1] * wall.alpha.cos();
         let length = (t(world_hit_at(scan, last, pose)) - t(world_hit_at(scan, first, pose))).abs();
         let (own_alpha, own_r, own_middle) = own_fit(scan, &on_wall, wall.line, (first, last));
-        let mut piece = Piece {
+        let own = ScoredLine {
+            alpha: own_alpha,
+            r: own_r,
+            first,
+            last,
+            middle: own_middle,
+        };
+        let verified = within_gates(gate_offsets(&own, (alpha, r), cfg.range_gate_at_middle));
+        pieces.push(Piece {
             wall: w,
             line: wall.line,
             alpha,
@@ -774,15 +771,9 @@ pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
             own_r,
             own_middle,
             gate_at_middle: cfg.range_gate_at_middle,
-            verified: false,
-            counted: false,
-        };
-        piece.verified = lms_scene::wrap_angle(own_alpha - alpha).abs()
-            < crate::realtruth::GATE_ALPHA_DEG.to_radians()
-            && piece.range_offset(own_r, own_middle, (alpha, r)).abs() < crate::realtruth::GATE_R;
-        piece.counted =
-            beams >= cfg.min_beams && length >= cfg.min_piece && (piece.verified || !cfg.verify);
-        pieces.push(piece);
+            verified,
+            counted: beams >= cfg.min_beams && length >= cfg.min_piece && (verified || !cfg.verify),
+        });
         j = last + 1;
     }
     FrameTruth { on_wall, pieces }

@@ -441,7 +441,7 @@ pub struct ScoredLine {
     pub last: usize,
     /// Middle of the line in the sensor frame (m): the mean of its
     /// endpoints (where a Δr measured at the line is taken,
-    /// [`crate::maptruth::Piece::range_offset`]).
+    /// [`gate_offsets`]).
     pub middle: [f64; 2],
 }
 
@@ -477,10 +477,31 @@ pub fn candidate(l: &ScoredLine, p: &crate::maptruth::Piece) -> Option<(f64, f64
     if overlap(l.first, l.last, p.first, p.last) < GATE_OVERLAP {
         return None;
     }
-    let (alpha, r) = p.reference();
+    let offsets = gate_offsets(l, p.reference(), p.gate_at_middle);
+    within_gates(offsets).then_some(offsets)
+}
+
+/// `(Δα, Δr)` of `l` against the line `reference = (α, r)`: Δα wrapped,
+/// Δr signed, `l.r − r` at the foot of the normal (issue 14's gate) or,
+/// `at_middle`, the distance of `l.middle` from the reference line,
+/// `middle·n − r`, where the line is
+/// ([`crate::maptruth::TruthConfig::range_gate_at_middle`]). The two agree
+/// for parallel lines.
+pub fn gate_offsets(l: &ScoredLine, reference: (f64, f64), at_middle: bool) -> (f64, f64) {
+    let (alpha, r) = reference;
     let da = lms_scene::wrap_angle(l.alpha - alpha);
-    let dr = p.range_offset(l.r, l.middle, (alpha, r));
-    (da.abs() < GATE_ALPHA_DEG.to_radians() && dr.abs() < GATE_R).then_some((da, dr))
+    let dr = if at_middle {
+        l.middle[0] * alpha.cos() + l.middle[1] * alpha.sin() - r
+    } else {
+        l.r - r
+    };
+    (da, dr)
+}
+
+/// Whether `(Δα, Δr)` passes the matching gates, `|Δα| <`
+/// [`GATE_ALPHA_DEG`] and `|Δr| <` [`GATE_R`].
+pub fn within_gates((da, dr): (f64, f64)) -> bool {
+    da.abs() < GATE_ALPHA_DEG.to_radians() && dr.abs() < GATE_R
 }
 
 /// The walls of matched counted pieces of a frame.
