@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Robustness checks (issue "Nothing breaks it"): property tests with more
+# Robustness checks: property tests with more
 # cases, the faulty-line tables, sustained load (10 000 scans, release), the
 # link-time no-panic proof, the panic sites of the real firmware, and a
 # bounded fuzzing smoke run. Called by .ci/run; runs on its own too:

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Run every cargo-fuzz target for a bounded time, seeded from fuzz/corpus/.
+# Run every cargo-fuzz target for a bounded time, seeded from
+# fuzz/target/corpus/.
 #
 #   fuzz/run.sh [SECONDS_PER_TARGET] [TARGET...]     (default 20 s, all targets)
 #
-# The seeds are written first into fuzz/corpus/<target>/ (git-ignored: they
-# are made from ../shared/data, which is never copied into the repository)
-# by `cargo run --example seeds`; new inputs go to fuzz/work/<target>/
-# (git-ignored).
+# The seeds are written first into fuzz/target/corpus/<target>/ (made from
+# ../shared/data, which is never copied into the repository) by `cargo run
+# --example seeds`; new inputs and the logs go to fuzz/target/work/<target>/.
 # A crash leaves its input in fuzz/artifacts/<target>/ and fails the script.
 # Prints libFuzzer's final line per target (executions, cov, ft) and a table.
 # Needs the nightly toolchain and cargo-fuzz (installed here if missing).
@@ -32,14 +32,14 @@ max_len() {
 
 cargo run -q --release --example seeds
 cargo +nightly fuzz build
-mkdir -p work
+mkdir -p target/work
 summary=()
 status=0
 for t in "${targets[@]}"; do
-  mkdir -p "work/$t"
-  log="work/$t.log"
+  mkdir -p "target/work/$t"
+  log="target/work/$t.log"
   echo "=== $t: ${secs} s"
-  if cargo +nightly fuzz run "$t" "work/$t" "corpus/$t" -- \
+  if cargo +nightly fuzz run "$t" "target/work/$t" "target/corpus/$t" -- \
       -max_total_time="$secs" -max_len="$(max_len "$t")" -timeout=10 -rss_limit_mb=2048 \
       -print_final_stats=1 > "$log" 2>&1; then
     result=ok

@@ -4,13 +4,13 @@
 //! log's own σ (10 mm, what `host-bridge extract LOG` uses without flags)
 //! with and without per-turn extraction (`Params::per_turn`, §10 (d)); and
 //! at 30 passes with `Params::V2` (no footprint weights, no merge across
-//! rejected segments: the defaults up to stop 20), at 5 and 10 mm, for the
-//! cost of §10 (e), (f) as a ratio on the same machine; and at 10 mm with
-//! `Params::STOP22` (windows of consecutive beams), for the cost of
-//! same-turn windows (§10 (a), the default since stop 23), and with
-//! `Params::STOP23`, for the cost of the anchor gate and the turns' offsets
-//! (stop 24), and with `Params::STOP24`, for the cost of the arcs' pairs
-//! and of the strided pass at every stride (stop 25).
+//! rejected segments), at 5 and 10 mm, for the cost of §10 (e), (f) as a
+//! ratio on the same machine; and at 10 mm with the defaults less some of
+//! their additions, for the cost of each: [`CONSECUTIVE_WINDOWS`] (windows
+//! of consecutive beams, for the cost of same-turn windows, §10 (a)),
+//! [`NO_ANCHOR_GATE`] (for the cost of the anchor gate and the turns'
+//! offsets) and [`ARC_PAIRS_KEPT`] (for the cost of the arcs' pairs and of
+//! the strided pass at every stride).
 //!
 //! One benchmark iteration runs every frame of the log once (406 frames), so
 //! the reported time is for the whole log and the throughput is in frames
@@ -26,6 +26,28 @@ use criterion::{
     criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode, Throughput,
 };
 use lms_core::{test_support, Extractor, Frame, Params};
+
+/// The defaults with pairs of lines kept whatever a circle says of them.
+const ARC_PAIRS_KEPT: Params = Params {
+    arc_pairs: false,
+    ..Params::DEFAULT
+};
+
+/// [`ARC_PAIRS_KEPT`] with no anchor gate on the merges and no turn offsets
+/// in the fits' χ².
+const NO_ANCHOR_GATE: Params = Params {
+    merge_anchor_gate: f32::INFINITY,
+    turn_offsets: false,
+    ..ARC_PAIRS_KEPT
+};
+
+/// [`NO_ANCHOR_GATE`] with windows of consecutive beams in every mode
+/// (§2–6) and no work bound on split before reject.
+const CONSECUTIVE_WINDOWS: Params = Params {
+    same_turn_windows: false,
+    split_budget: 0,
+    ..NO_ANCHOR_GATE
+};
 
 /// All FLASER frames of the CSAIL log through the one CARMEN reader
 /// (`lms_core::test_support`; 361 beams, cm error codes invalid).
@@ -70,24 +92,24 @@ fn pipeline(c: &mut Criterion) {
                 },
             ),
             (
-                BenchmarkId::new("stop24_sigma_10mm", 30),
+                BenchmarkId::new("arc_pairs_kept_sigma_10mm", 30),
                 Params {
                     sigma: 0.01,
-                    ..Params::STOP24
+                    ..ARC_PAIRS_KEPT
                 },
             ),
             (
-                BenchmarkId::new("stop23_sigma_10mm", 30),
+                BenchmarkId::new("no_anchor_gate_sigma_10mm", 30),
                 Params {
                     sigma: 0.01,
-                    ..Params::STOP23
+                    ..NO_ANCHOR_GATE
                 },
             ),
             (
-                BenchmarkId::new("stop22_sigma_10mm", 30),
+                BenchmarkId::new("consecutive_windows_sigma_10mm", 30),
                 Params {
                     sigma: 0.01,
-                    ..Params::STOP22
+                    ..CONSECUTIVE_WINDOWS
                 },
             ),
             (BenchmarkId::new("v2", 30), Params::V2),

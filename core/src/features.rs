@@ -44,6 +44,12 @@ macro_rules! declare_stats {
             pub const FIELDS: [(&'static str, fn(&Stats) -> u16); declare_stats!(@count $($field)+)] =
                 [$((stringify!($field), |s: &Stats| s.$field),)+];
 
+            /// Every counter as (name, meaning), in [`Stats::FIELDS`] order:
+            /// the meaning is the field's documentation (rustdoc links
+            /// included), for generated references.
+            pub const MEANINGS: [(&'static str, &'static str); declare_stats!(@count $($field)+)] =
+                [$((stringify!($field), concat!($($doc),+).trim_ascii_start()),)+];
+
             /// All counters zero (`const`, for statics).
             pub const ZERO: Stats = Stats { $($field: 0,)+ };
 
@@ -90,8 +96,8 @@ declare_stats! {
     degenerate_corners,
     /// Corners beyond [`MAX_CORNERS`].
     corner_overflow,
-    /// Split before reject ([`crate::pipeline::split`], off by default): segments
-    /// split in two. Not carried by the `D0` telegram.
+    /// Split before reject ([`crate::pipeline::split`], `Params::split_depth`):
+    /// segments split in two. Not carried by the `D0` telegram.
     splits,
     /// Split before reject: halves dropped for fewer than `min_points` beams.
     split_short,
@@ -103,7 +109,7 @@ declare_stats! {
     /// `valid_beams`; not carried by the `D0` telegram.
     beyond_max_range,
     /// Lines dropped because the standard deviation of their α exceeds
-    /// `Params::max_alpha_sd_deg` (off by default). Not in `D0`.
+    /// `Params::max_alpha_sd_deg`. Not in `D0`.
     rejected_wide,
     /// Lines dropped as pieces of an arc (a pillar, a curved wall): a chain
     /// of at least `Params::arc_chain` touching lines that turn the same
@@ -460,5 +466,22 @@ mod edge_tests {
         e.clear();
         assert_eq!(e, Edges::EMPTY);
         assert_eq!(e.push(5), Ok(()));
+    }
+}
+
+#[cfg(test)]
+mod stats_meanings {
+    use super::Stats;
+
+    #[test]
+    fn every_counter_has_its_meaning() {
+        assert_eq!(Stats::MEANINGS.len(), Stats::FIELDS.len());
+        for ((name, meaning), (field, _)) in Stats::MEANINGS.iter().zip(Stats::FIELDS.iter()) {
+            assert_eq!(name, field);
+            assert!(
+                !meaning.is_empty() && !meaning.starts_with(' ') && meaning.ends_with('.'),
+                "{name}: {meaning:?}"
+            );
+        }
     }
 }

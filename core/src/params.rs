@@ -1,10 +1,13 @@
 //! Parameters of the pipeline with the defaults of ALGORITHM.md, and their
-//! validation.
+//! validation; every parameter by name ([`FIELDS`], [`Params::set`]) and
+//! the named presets ([`PRESETS`]).
 
 use core::fmt;
 
 mod data;
+mod table;
 pub use data::{max_range_of, sigma_for_step, DataProfile, DataSurvey, RangeMode};
+pub use table::{field, preset, Field, Preset, Value, FIELDS, PRESETS};
 
 /// All tunable parameters. Build with [`Params::default`] and adjust the
 /// fields; [`Params::validate`] refuses nonsense and gives the
@@ -62,12 +65,12 @@ pub struct Params {
     /// endpoints closer than `corner_gap`, normals less than
     /// `min_corner_angle_deg` apart) when the refit of their union passes
     /// `max_chi2`, even where the §7.6 gates keep them apart (beyond
-    /// ALGORITHM.md, issue 14 item 6: otherwise an ill-conditioned "corner"
-    /// is reported between two pieces of one wall). Default on; off in v1.
+    /// ALGORITHM.md: otherwise an ill-conditioned "corner" is reported
+    /// between two pieces of one wall). Default on; off in v1.
     pub merge_collinear: bool,
     /// Largest standard deviation of a line's α (degrees): a line less
     /// certain than this is dropped and counted (`Stats::rejected_wide`;
-    /// beyond ALGORITHM.md, issue 14 item 6). `+inf` keeps every line (v1).
+    /// beyond ALGORITHM.md). `+inf` keeps every line (v1).
     pub max_alpha_sd_deg: f32,
     /// Grazing-incidence observation noise `ρ` (dimensionless, ALGORITHM.md
     /// §10 proposal, `docs/ALGORITHM-v3-section10.md`): each window's
@@ -80,15 +83,15 @@ pub struct Params {
     /// otherwise a non-default value fails validation
     /// ([`ParamError::NotInBuild`]).
     pub grazing_noise: f32,
-    /// Same-turn windows (ALGORITHM.md §10 (a), the default since stop 23,
+    /// Same-turn windows (ALGORITHM.md §10 (a),
     /// `docs/ALGORITHM-v3-section10.md` §10.9): in the modes that
     /// interleave mirror turns (0.5°: two, 0.25°: four), window `i` is the
     /// beams `i, i+k, i+2k` of one turn (`k` turns, the filter's angle
     /// `k·γ`), so the offset between turns (platform motion in 13.3 ms) is
     /// no break; a run of windows covers every beam of its windows up to
     /// its neighbours ([`crate::pipeline::segmentation::segment_strided`]).
-    /// `false` is §2–6 (v1, v2, [`Params::STOP22`]); 1° modes are the same
-    /// either way.
+    /// Default on; `false` is §2–6 (v1, v2); 1° modes are the same either
+    /// way.
     pub same_turn_windows: bool,
     /// Range noise of the line fits and their tests (m; §7, split, merge;
     /// ALGORITHM.md §10 proposal): the raw ranges of both mirror turns
@@ -134,14 +137,14 @@ pub struct Params {
     pub footprint: f32,
     /// Fewest consecutive lines taken for an arc — a pillar, a curved wall,
     /// cut into a polyline — and dropped (`Stats::rejected_arc`; beyond
-    /// ALGORITHM.md, issue 14 item 6, `crate::pipeline::arcs`): each line's
+    /// ALGORITHM.md, `crate::pipeline::arcs`): each line's
     /// facing end within `corner_gap` of the next one's, each turning the
     /// same way as the last by `arc_min_turn_deg`..=`arc_max_turn_deg`. A
     /// polyline on a curve is no wall and its "corners" are none. Default 3
     /// (on the realistic synthetic scenes FalsePos 0.160 → 0.144 at 10 mm,
     /// 0.133 → 0.124 at 20 mm, TruePos and the real logs unchanged; two
     /// lines alone cannot be told from an obtuse corner); 0 keeps every
-    /// line (v1, v2, stop 21).
+    /// line (v1, v2).
     pub arc_chain: u8,
     /// Smallest turn between consecutive lines of an arc (degrees): a
     /// gentler bend is one wall's roughness. Default 5.
@@ -155,9 +158,9 @@ pub struct Params {
     /// tested: it goes to §7 whole, which fits it once and applies the χ²
     /// gate, as v1 does. Bounds the MCU's instructions per scan whatever
     /// the data (docs/ALGORITHM-v3-section10.md §10.9). Default 542 (one
-    /// and a half 361-beam scans); 0 is no bound (up to stop 22).
+    /// and a half 361-beam scans); 0 is no bound.
     pub split_budget: u16,
-    /// Anchor gate of the merges (χ²₂; beyond ALGORITHM.md, issue 14,
+    /// Anchor gate of the merges (χ²₂; beyond ALGORITHM.md,
     /// docs/ALGORITHM-v3-section10.md §10.10): §7.6 and §10 (e) merge two
     /// lines only if the union line stays within this Mahalanobis distance
     /// of the larger line's own parameters, under that line's covariance
@@ -166,7 +169,7 @@ pub struct Params {
     /// piece at a bend that moves its α by many of its own σ (on the
     /// realistic synthetic scenes σΔα/CRB 1.43 → 1.15 at 10 mm, 2.21 → 1.25
     /// at 20 mm). Default [`DEFAULT_MERGE_ANCHOR_GATE`] (χ²₂ at 99.9 %);
-    /// `+inf` is no test (stop 23 and before).
+    /// `+inf` is no test.
     pub merge_anchor_gate: f32,
     /// The fits' χ² allows an offset between the interleaved mirror turns
     /// (ALGORITHM.md §10.4, docs/ALGORITHM-v3-section10.md §10.11): in the
@@ -177,11 +180,10 @@ pub struct Params {
     /// reject and the merges' refits, with `turns − 1` fewer degrees of
     /// freedom ([`crate::pipeline::line_fit::residual_dof`]); the line and
     /// its covariance are the fit of all beams, as before. 1° modes are the
-    /// same either way. Default on since stop 24; `false` is §7 as written
-    /// (stop 23 and before).
+    /// same either way. Default on; `false` is §7 as written.
     pub turn_offsets: bool,
     /// Nested-model test of the merges (an F threshold; beyond ALGORITHM.md,
-    /// issue 14, docs/ALGORITHM-v3-section10.md §10.12): two lines are
+    /// docs/ALGORITHM-v3-section10.md §10.12): two lines are
     /// merged only if one line explains their beams not significantly worse
     /// than the two, `F = ((S₁ − S₂)/2) / (S₂/(m − 4)) ≤ merge_f_test`, with
     /// `S₁` the union's weighted residual sum, `S₂` the two lines' own, `m`
@@ -189,15 +191,14 @@ pub struct Params {
     /// where the anchor gate guards the larger only. 0 is no test (the
     /// default).
     pub merge_f_test: f32,
-    /// Two lines alone can be a curve too (beyond ALGORITHM.md, issue 14
-    /// item 6, docs/ALGORITHM-v3-section10.md §10.12): a pair of
+    /// Two lines alone can be a curve too (beyond ALGORITHM.md,
+    /// docs/ALGORITHM-v3-section10.md §10.12): a pair of
     /// consecutive lines linked as in an arc chain (`arc_chain`, whose
     /// `0` turns this off too) is dropped with its lines counted in
     /// `Stats::rejected_arc` when a circle through their beams explains
     /// them within the noise and better than the two lines do by χ²₁'s 95 %
     /// quantile (`crate::pipeline::arcs`); a corner between two straight
-    /// walls does not pass. Default on since stop 25; `false`: pairs are
-    /// kept (stop 24 and before).
+    /// walls does not pass. Default on; `false`: pairs are kept.
     pub arc_pairs: bool,
 }
 
@@ -245,12 +246,11 @@ impl Params {
         }
     }
 
-    /// The defaults, usable in `const` contexts: ALGORITHM.md v2 with the
-    /// project's measured additions (`merge_collinear`, `max_alpha_sd_deg`,
-    /// since stop 21 `bridge_merge` and `footprint`, §10 (e) and (f), and
-    /// since stop 22 `arc_chain`, since stop 23 `same_turn_windows` and
-    /// `split_budget`, since stop 24 `merge_anchor_gate` and `turn_offsets`,
-    /// since stop 25 `arc_pairs`).
+    /// The defaults, usable in `const` contexts (preset `default`):
+    /// ALGORITHM.md v2 with the project's measured additions
+    /// (`merge_collinear`, `max_alpha_sd_deg`, `bridge_merge` and
+    /// `footprint` (§10 (e) and (f)), `arc_chain`, `same_turn_windows`,
+    /// `split_budget`, `merge_anchor_gate`, `turn_offsets` and `arc_pairs`).
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
@@ -285,48 +285,27 @@ impl Params {
         arc_pairs: true,
     };
 
-    /// The defaults of stop 24: [`Params::DEFAULT`] with pairs of lines
-    /// kept whatever a circle says of them.
-    pub const STOP24: Params = Params {
+    /// ALGORITHM.md v2 (preset `v2`) with `merge_collinear` and the σ_α
+    /// gate: windows of consecutive beams, every beam at `sigma`, §7.6
+    /// merging only across `merge_gap_beams`, no arcs dropped, §7's χ² as
+    /// written, no anchor gate and no work bound on split before reject.
+    pub const V2: Params = Params {
+        same_turn_windows: false,
+        bridge_merge: false,
+        footprint: 0.0,
+        arc_chain: 0,
+        split_budget: 0,
+        merge_anchor_gate: f32::INFINITY,
+        turn_offsets: false,
         arc_pairs: false,
         ..Params::DEFAULT
     };
 
-    /// The defaults of stop 23: [`Params::STOP24`] with no anchor gate on
-    /// the merges and no turn offsets in the fits' χ².
-    pub const STOP23: Params = Params {
-        merge_anchor_gate: f32::INFINITY,
-        turn_offsets: false,
-        ..Params::STOP24
-    };
-
-    /// The defaults of stop 22: [`Params::STOP23`] with the windows of
-    /// §2–6 (consecutive beams) in every mode, and no work bound on split
-    /// before reject.
-    pub const STOP22: Params = Params {
-        same_turn_windows: false,
-        split_budget: 0,
-        ..Params::STOP23
-    };
-
-    /// The defaults of stop 21: [`Params::STOP22`] without dropping arcs.
-    pub const STOP21: Params = Params {
-        arc_chain: 0,
-        ..Params::STOP22
-    };
-
-    /// The defaults before §10 (e) and (f) (up to stop 20): ALGORITHM.md v2
-    /// with `merge_collinear` and the σ_α gate, every beam at `sigma`, §7.6
-    /// merging only across `merge_gap_beams`.
-    pub const V2: Params = Params {
-        bridge_merge: false,
-        footprint: 0.0,
-        ..Params::STOP21
-    };
-
-    /// ALGORITHM.md v1: no split before reject, shared corner points in
-    /// both fits, no range limit beyond the sensor's error codes.
-    pub const V1: Params = Params {
+    /// The seed paper's method, ALGORITHM.md v1 (preset `paper`): [`Params::V2`]
+    /// without split before reject, with shared corner points in both fits,
+    /// no range limit beyond the sensor's error codes, no collinear merge and
+    /// no σ_α gate.
+    pub const PAPER: Params = Params {
         fit_shared_points: true,
         split_depth: 0,
         max_range: f32::INFINITY,
@@ -398,10 +377,23 @@ pub enum ParamError {
         /// The field of [`Params`].
         option: &'static str,
     },
+    /// No parameter of that name ([`Params::set`]; the names are those of
+    /// [`FIELDS`]).
+    UnknownName,
+    /// A value that does not read as the parameter's type ([`Params::set`]).
+    BadValue {
+        /// The field of [`Params`].
+        name: &'static str,
+        /// What it takes, e.g. "true or false".
+        expected: &'static str,
+    },
 }
 
 impl fmt::Display for ParamError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let ParamError::BadValue { name, expected } = self {
+            return write!(f, "{name} must be {expected}");
+        }
         if let ParamError::NotInBuild { option } = self {
             return write!(
                 f,
@@ -436,7 +428,8 @@ impl fmt::Display for ParamError {
                 "arc_chain must be 0 (off) or at least 2, and 0 <= arc_min_turn_deg <= \
                  arc_max_turn_deg <= 180 (degrees)"
             }
-            ParamError::NotInBuild { .. } => "",
+            ParamError::UnknownName => "no parameter of that name",
+            ParamError::NotInBuild { .. } | ParamError::BadValue { .. } => "",
         })
     }
 }

@@ -18,6 +18,19 @@ fn per_turn(p: Params) -> Params {
     }
 }
 
+/// The defaults with the windows of §2–6 (consecutive beams over both
+/// turns) in every mode, no work bound on split before reject, no anchor
+/// gate on the merges, no turn offsets in the fits' χ², and pairs of lines
+/// kept whatever a circle says of them.
+const CONSECUTIVE_WINDOWS: Params = Params {
+    same_turn_windows: false,
+    split_budget: 0,
+    merge_anchor_gate: f32::INFINITY,
+    turn_offsets: false,
+    arc_pairs: false,
+    ..Params::DEFAULT
+};
+
 #[test]
 fn interleaved_modes_have_their_turns() {
     let turns = |v: Variant| interleaved_turns(v.geometry().step);
@@ -50,10 +63,10 @@ fn a_turn_is_every_kth_beam_with_its_status() {
 fn an_offset_wall_is_one_line_per_turn_and_broken_at_once() {
     // 2 cm between the turns, σ = 1 cm, ripple ±5 mm, incidences up to 75°.
     let frame = interleaved_wall(0.2, 2.0, 0.02, 0.005);
-    // The windows of §2–6 over both turns (the defaults up to stop 22).
+    // The windows of §2–6 over both turns.
     let spec = Params {
         sigma: 0.01,
-        ..Params::STOP22
+        ..CONSECUTIVE_WINDOWS
     };
     let valid = frame.beams().iter().filter(|b| b.is_valid()).count();
     let mut ex = Extractor::new();

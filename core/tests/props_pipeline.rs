@@ -140,7 +140,7 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             prop_oneof![Just(0u8), 1u8..=lms_core::params::MAX_SPLIT_DEPTH],
             prop_oneof![Just(f32::INFINITY), Just(81.83f32), 0.5f32..100.0],
         ),
-        // The §10 proposals (docs/ALGORITHM-v3-section10.md).
+        // The ALGORITHM.md §10 options (docs/ALGORITHM.md, appendix).
         (
             any::<bool>(),
             prop_oneof![Just(0.0f32), 0.0f32..3.0],
@@ -148,7 +148,7 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             any::<bool>(),
             prop_oneof![Just(0.0f32), 0.0f32..0.02],
         ),
-        // Arcs dropped (issue 14 item 6); the split's work bound; the
+        // Arcs dropped; the split's work bound; the
         // merges' anchor gate.
         (
             prop_oneof![Just(0u8), 2u8..=8],
@@ -278,7 +278,7 @@ fn positive_definite(c: &Sym2) -> bool {
 /// Runs of non-breaking windows in `d` at window stride `stride`: (kept
 /// segments, short runs, edge points), as §6 counts them — at stride 1 a
 /// run of `m` windows covers `m + 2` points; at a larger stride (same-turn
-/// windows, docs/ALGORITHM-v3-section10.md §10.2 (a)) it needs
+/// windows, docs/ALGORITHM.md) it needs
 /// `min_points − 3` windows, covers the beams of its windows from the last
 /// kept segment's last beam to the next run's first middle beam less one,
 /// and must still hold `min_points` beams.

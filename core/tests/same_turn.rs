@@ -1,5 +1,5 @@
-//! `Params::same_turn_windows` (ALGORITHM.md §10 (a), the default since
-//! stop 23, docs/ALGORITHM-v3-section10.md §10.9): in a 0.5° mode the two
+//! `Params::same_turn_windows` (ALGORITHM.md §10 (a), on by default,
+//! docs/ALGORITHM-v3-section10.md §10.9): in a 0.5° mode the two
 //! mirror turns are offset (platform motion in 13.3 ms); windows of one
 //! turn do not break on the offset, windows of §2 do. In 1° modes nothing
 //! changes.
@@ -8,6 +8,19 @@ use lms_core::{Extractor, Params, Trace};
 
 mod common;
 use common::{interleaved_wall, one_degree_room};
+
+/// The defaults with the windows of §2–6 (consecutive beams over both
+/// turns) in every mode, no work bound on split before reject, no anchor
+/// gate on the merges, no turn offsets in the fits' χ², and pairs of lines
+/// kept whatever a circle says of them.
+const CONSECUTIVE_WINDOWS: Params = Params {
+    same_turn_windows: false,
+    split_budget: 0,
+    merge_anchor_gate: f32::INFINITY,
+    turn_offsets: false,
+    arc_pairs: false,
+    ..Params::DEFAULT
+};
 
 fn breaking_windows(trace: &Trace, tau: f32) -> usize {
     trace
@@ -25,7 +38,7 @@ fn a_turn_offset_breaks_spec_windows_but_not_same_turn_windows() {
     let spec = Params {
         sigma: 0.01,
         split_depth: 0,
-        ..Params::STOP22
+        ..CONSECUTIVE_WINDOWS
     };
     let turn = Params {
         same_turn_windows: true,
@@ -52,7 +65,7 @@ fn a_turn_offset_breaks_spec_windows_but_not_same_turn_windows() {
 #[test]
 fn one_degree_modes_are_unchanged() {
     let frame = one_degree_room();
-    let spec = Params::STOP22.validate().unwrap();
+    let spec = CONSECUTIVE_WINDOWS.validate().unwrap();
     let turn = Params::DEFAULT.validate().unwrap();
     assert!(turn.same_turn_windows);
     let mut a = Extractor::new();

@@ -1,9 +1,8 @@
-//! The turns' offsets in the fits' χ² (`Params::turn_offsets`, ALGORITHM.md
-//! §10.4, the default since stop 24, docs/ALGORITHM-v3-section10.md
-//! §10.11): the two mirror turns of a 0.5° scan see a wall a little apart
-//! (the platform moves in 13.3 ms); each turn's mean residual is taken out
-//! of `Σe²`, with one degree of freedom less. Checked against an
-//! independent f64 computation, and on a whole scan.
+//! The turns' offsets in the fits' χ² (`Params::turn_offsets`, on by
+//! default, docs/ALGORITHM.md): the two mirror turns of a 0.5° scan see a
+//! wall a little apart (the platform moves in 13.3 ms); each turn's mean
+//! residual is taken out of `Σe²`, with one degree of freedom less. Checked
+//! against an independent f64 computation, and on a whole scan.
 
 use lms_core::pipeline::line_fit::{fit_piece, residual_dof, Bearings, RawScan};
 use lms_core::test_support::Rng;

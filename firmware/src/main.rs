@@ -56,9 +56,8 @@ mod app {
     /// flash image, nothing copied at boot); [`start`] configures it in place.
     pub const INITIAL: App = CoProcessor::unconfigured();
 
-    /// The defaults of ALGORITHM.md v2 (split before reject, unshared
-    /// corner points; the feature `split-before-reject` is now the
-    /// default) with the passes of this build, validated at compile time
+    /// The defaults (docs/ALGORITHM.md v3) with the passes of this build,
+    /// validated at compile time
     /// (an invalid setting fails the build).
     const PARAMS: ValidParams = {
         let mut p = Params::DEFAULT;

@@ -1,10 +1,10 @@
-//! Writes the seed corpora `fuzz/corpus/<target>/` from real telegrams: the
+//! Writes the seed corpora `fuzz/target/corpus/<target>/` from real telegrams: the
 //! CRC vectors of PROTOCOL.md §4, `B0` telegrams built from the CARMEN logs
 //! in `../shared/data/carmen/`, the feature telegrams of those scans, and
 //! recorded sessions of the LMS emulator and the co-processor.
 //!
 //! ```sh
-//! cd fuzz && cargo run --example seeds            # rewrites corpus/*/
+//! cd fuzz && cargo run --example seeds            # rewrites target/corpus/*/
 //! ```
 //!
 //! Deterministic: the same files every run.
@@ -268,7 +268,7 @@ fn request(r: Request<'_>) -> Vec<u8> {
 fn main() {
     let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let data = here.join("../../shared/data/carmen");
-    let root = here.join("corpus");
+    let root = here.join("target/corpus");
     for target in [
         "framer",
         "parsers",

@@ -429,7 +429,7 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
     let mode = input.u8() % 3;
     let raw: [u32; 12] = core::array::from_fn(|_| input.u32());
     let flags = input.u8();
-    // ALGORITHM.md v2's range limit and the line gate (issue 14).
+    // ALGORITHM.md v2's range limit and the line gate.
     // The ALGORITHM.md §10 proposals: grazing term, fit σ (limits 2, 3);
     // per-turn extraction: the top bit of raw[11]; the merge across
     // rejected segments: flags bit 7; the footprint κ: raw[7]'s top half.

@@ -100,7 +100,7 @@ pub fn read_log(path: &Path, unit: UnitMode) -> Result<CarmenLog> {
         .collect::<Result<Vec<_>, _>>()
         .with_context(|| format!("in {}", path.display()))?;
     if let Some(cut) = reader.cut() {
-        crate::input::warn(&format!(
+        crate::warning::warn(&format!(
             "{}: {cut}; the {} complete scans before it are used",
             path.display(),
             scans.len()

@@ -39,7 +39,6 @@ use crate::serial::{Link, PtyPort, SerialLink};
 use crate::simulate::symlink::Symlink;
 
 mod qemu_bridge;
-pub(crate) use qemu_bridge::QemuIntake;
 
 /// Longest wait for sensor bytes per loop (the host side is polled as often).
 const TICK: Duration = Duration::from_millis(1);

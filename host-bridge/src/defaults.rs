@@ -1,4 +1,4 @@
-//! Defaults per data (issue 14, item 4): the parameters `extract` and `plot`
+//! Defaults per data: the parameters `extract` and `plot`
 //! use for a CARMEN log when no flag says otherwise.
 //!
 //! The whole log is surveyed first ([`lms_core::DataSurvey`]: range mode,

@@ -339,7 +339,7 @@ mod tests {
         assert_eq!(rec, FrameRecord::from_run(7, &frame, &ex, &trace));
     }
 
-    /// Issue 13.14: a NaN pose field is written `null` and read back.
+    /// A NaN pose field is written `null` and read back.
     #[test]
     fn nan_pose_round_trips() {
         let frame = Frame::from_metres(Variant::Fov180Res100.geometry(), &[2.0; 181]).unwrap();

@@ -11,7 +11,7 @@
 //! ([`crate::carmen::decide`]); a forced unit needs none.
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -21,12 +21,7 @@ use lms_core::{Frame, Unit};
 use crate::capture::{self, CaptureScans, MAGIC};
 use crate::carmen;
 use crate::options::UnitArg;
-
-/// A warning on stderr; a closed stderr (a hung-up terminal) is ignored
-/// rather than a panic.
-pub fn warn(message: &str) {
-    let _ = writeln!(std::io::stderr(), "host-bridge: warning: {message}");
-}
+pub use crate::warning::warn;
 
 /// One scan of a file.
 #[derive(Clone, Debug)]

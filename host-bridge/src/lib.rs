@@ -3,7 +3,8 @@
 //! Modules in the order the data flows:
 //!
 //! 1. [`options`] — command-line pipeline parameters, frame selections and
-//!    the range-unit value ([`options::UnitArg`]).
+//!    the range-unit value ([`options::UnitArg`]); [`reference`] lists the
+//!    parameters, presets and stats counters (`host-bridge params`).
 //! 2. Sources of frames: [`carmen`] (recorded CARMEN logs) and
 //!    [`synthetic`] (seeded scenes from `lms-scene`, the no-hardware demo);
 //!    [`input`] streams the scans of a log or a capture alike.
@@ -18,7 +19,8 @@
 //!    and [`capture`] (the file format of recorded scans).
 //!    [`simulate`] — a simulated LMS 2xx on a pseudo-terminal ([`pty`]);
 //!    [`resample`] re-expresses scans for another variant (simulate and
-//!    verify), [`stop`] ends either cleanly on a signal.
+//!    verify), [`stop`] ends either cleanly on a signal, [`warning`] says
+//!    what a command worked around.
 //! 6. [`verify`] — a co-processor (in a thread, under QEMU, or on serial
 //!    ports) checked bit for bit against the std build.
 //!
@@ -39,6 +41,8 @@ pub mod input;
 pub mod options;
 pub mod plot;
 pub mod pty;
+mod qemu_intake;
+pub mod reference;
 pub mod resample;
 pub mod scan;
 pub mod serial;
@@ -46,3 +50,4 @@ pub mod simulate;
 pub mod stop;
 pub mod synthetic;
 pub mod verify;
+pub mod warning;

@@ -8,6 +8,7 @@
 //! * `simulate` — a simulated LMS 2xx on a pseudo-terminal (see `host_bridge::simulate`).
 //! * `verify` — check a co-processor's features bit for bit (see `host_bridge::verify`).
 //! * `coprocessor` — the co-processor natively between a sensor port and a pty (see `host_bridge::coprocessor`).
+//! * `params` — every parameter with its value, unit and meaning, the presets, the stats counters (see `host_bridge::reference`).
 //!
 //! The accuracy evaluation is not here: `lms-lab evaluate` (lab/).
 
@@ -58,6 +59,9 @@ enum Command {
     /// Run the co-processor on this computer: an LMS 2xx on a serial port,
     /// the client on a pseudo-terminal symlinked at --link
     Coprocessor(host_bridge::coprocessor::CoprocessorArgs),
+    /// List every pipeline parameter with its value, unit and meaning (or
+    /// a preset's values, or the counters of a frame's stats)
+    Params(host_bridge::reference::ParamsArgs),
 }
 
 #[derive(Args, Debug)]
@@ -88,6 +92,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => host_bridge::simulate::run(&args),
         Command::Verify(args) => host_bridge::verify::run(&args),
         Command::Coprocessor(args) => host_bridge::coprocessor::run(&args),
+        Command::Params(args) => host_bridge::reference::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,15 +1,24 @@
 //! Command-line options shared by the subcommands: pipeline parameters,
 //! frame selections and range units.
+//!
+//! Parameters come from, lowest precedence first: a preset (`--preset`,
+//! else the defaults; with a log, σ and `max_range` from its data), a
+//! parameter file (`--params`, [`param_file`]), each `--set NAME=VALUE`,
+//! and the everyday flags (`--sigma`, `--iterations`, `--q`, `--tau`,
+//! `--max-range`). Every one is a field of [`Params`] by its name
+//! ([`lms_core::params::FIELDS`]); [`Params::validate`] checks the result.
 
 use std::fmt;
+use std::path::PathBuf;
 use std::str::FromStr;
 
-use anyhow::{anyhow, Result};
+use anyhow::{anyhow, bail, Result};
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, ValueEnum};
+use lms_core::params::{self as core_params, Preset, PRESETS};
 use lms_core::{Params, Unit};
 
-use crate::carmen::UnitMode;
+pub mod param_file;
 
 /// Range unit on the command line: `--unit` of `extract` and `plot` (the
 /// unit of a log's error codes, `auto` by default) and `--units` of `scan`
@@ -25,15 +34,6 @@ pub enum UnitArg {
 }
 
 impl UnitArg {
-    /// How `carmen` reads a log in this unit.
-    pub fn carmen_mode(self) -> UnitMode {
-        match self {
-            UnitArg::Auto => UnitMode::Auto,
-            UnitArg::Cm => UnitMode::Centimetre,
-            UnitArg::Mm => UnitMode::Millimetre,
-        }
-    }
-
     /// The core's unit; `None` for `auto`.
     pub fn unit(self) -> Option<Unit> {
         match self {
@@ -54,208 +54,210 @@ impl UnitArg {
     }
 }
 
-/// Pipeline parameters on the command line; unset ones keep the
-/// [`Params::default`] of ALGORITHM.md.
+/// One `--set NAME=VALUE`: a parameter (a field of [`Params`]) and its
+/// value as text, read as the field's type when given.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Setting {
+    /// The parameter ([`lms_core::params::FIELDS`]).
+    pub name: &'static str,
+    /// Its value as given.
+    pub value: String,
+}
+
+impl FromStr for Setting {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Setting, String> {
+        let (name, value) = s
+            .split_once('=')
+            .ok_or_else(|| format!("`{s}`: give NAME=VALUE, e.g. split_depth=0"))?;
+        let name = parameter(name.trim())?;
+        let mut check = Params::DEFAULT;
+        check.set(name, value).map_err(|e| e.to_string())?;
+        Ok(Setting {
+            name,
+            value: value.trim().to_string(),
+        })
+    }
+}
+
+/// The parameter named `name`, or a message naming it (and the name meant,
+/// for a flag's spelling such as `split-depth`).
+pub fn parameter(name: &str) -> Result<&'static str, String> {
+    if let Some(f) = core_params::field(name) {
+        return Ok(f.name);
+    }
+    let hint = match core_params::field(&name.trim_start_matches('-').replace('-', "_")) {
+        Some(f) => format!("; did you mean {}?", f.name),
+        None => String::new(),
+    };
+    Err(format!(
+        "no parameter `{name}`{hint} (`host-bridge params` lists every one)"
+    ))
+}
+
+/// The preset named `name`, or a message listing them.
+pub fn preset(name: &str) -> Result<&'static Preset, String> {
+    core_params::preset(name).ok_or_else(|| {
+        let names: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
+        format!("no preset `{name}`: give one of {}", names.join(", "))
+    })
+}
+
+/// `--preset`'s values, with their one-line summaries for `--help`.
+pub fn preset_parser() -> impl TypedValueParser<Value = String> {
+    PossibleValuesParser::new(
+        PRESETS
+            .iter()
+            .map(|p| PossibleValue::new(p.name).help(p.summary)),
+    )
+}
+
+/// Pipeline parameters: a preset, a parameter file, `--set NAME=VALUE`,
+/// and the everyday flags, each overriding the one before.
+///
+/// Every parameter is a field of `Params` set by its name: `host-bridge
+/// params` lists them with their values, units and meanings, and
+/// `host-bridge params --preset NAME` a preset's. Without `--preset` the
+/// defaults apply; with a log, σ and max_range come from its data (its
+/// quantisation step and range mode) unless set, under a preset too.
+/// `Params::validate` checks the result and names a parameter out of range.
 #[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct ParamArgs {
     /// Smoothing passes, the first scale parameter (1..=1000) [default: 30]
-    #[arg(long, value_name = "N",
+    #[arg(long, value_name = "N", help_heading = "Parameters",
           value_parser = clap::value_parser!(u16).range(1..=i64::from(lms_core::params::MAX_ITERATIONS)))]
     pub iterations: Option<u16>,
     /// Process noise q (m²), the second scale parameter [default: 0]
-    #[arg(long, value_name = "Q", allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "Q",
+        allow_negative_numbers = true,
+        help_heading = "Parameters"
+    )]
     pub q: Option<f32>,
-    /// Range noise standard deviation sigma (m) [default: 0.005]
-    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    /// Range noise standard deviation σ (m) [default: a log's quantisation
+    /// step (0.01 for cm logs, 0.005 for mm), else 0.005]
+    #[arg(
+        long,
+        value_name = "S",
+        allow_negative_numbers = true,
+        help_heading = "Parameters"
+    )]
     pub sigma: Option<f32>,
-    /// Segmentation gate tau on D [default: 9]
-    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    /// Segmentation gate τ on D [default: 9]
+    #[arg(
+        long,
+        value_name = "T",
+        allow_negative_numbers = true,
+        help_heading = "Parameters"
+    )]
     pub tau: Option<f32>,
-    /// Smallest segment kept, in points (at least 3) [default: 5]
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(3..))]
-    pub min_points: Option<u16>,
-    /// Largest accepted line chi2 [default: 4]
-    #[arg(long, value_name = "X", allow_negative_numbers = true)]
-    pub max_chi2: Option<f32>,
-    /// Do not merge consecutive agreeing lines (ALGORITHM.md §7.6)
-    #[arg(long)]
-    pub no_merge: bool,
-    /// Leave a corner point shared by two segments out of both line fits
-    /// (the default of ALGORITHM.md v2; kept for old command lines)
-    #[arg(long, conflicts_with = "shared_points")]
-    pub no_shared_points: bool,
-    /// Fit a corner point shared by two segments into both lines
-    /// (ALGORITHM.md v1)
-    #[arg(long)]
-    pub shared_points: bool,
-    /// Split before reject: levels a segment that is not one straight line
-    /// may be split before the chi2 gate; 0 is ALGORITHM.md v1 [default: 8]
-    #[arg(long, value_name = "LEVELS",
-          value_parser = clap::value_parser!(u8).range(..=i64::from(lms_core::params::MAX_SPLIT_DEPTH)))]
-    pub split_depth: Option<u8>,
     /// Largest true range (m): beams at or beyond it are invalid (fill
-    /// values); inf for no limit [default: the data's unit and range mode,
-    /// 81.83 m for cm data]
-    #[arg(long, value_name = "M")]
+    /// values); inf for no limit [default: a log's unit and range mode,
+    /// else 81.83]
+    #[arg(long, value_name = "M", help_heading = "Parameters")]
     pub max_range: Option<f32>,
-    /// Per-turn extraction in the interleaved 0.5° and 0.25° modes: each
-    /// mirror turn a scan of its own, the turns' lines of one wall fused
-    /// (ALGORITHM.md §10 proposal (d), docs/ALGORITHM-v3-section10.md; host
-    /// only, the firmware leaves it out)
-    #[arg(long)]
-    pub per_turn: bool,
-    /// Beam-footprint term κ of the range noise (rad): the line fits weight
-    /// a beam at range d and incidence θ by σ²/(σ² + (κ·d·tan θ)²);
-    /// 0 fits every beam at σ, as ALGORITHM.md v2 (ALGORITHM.md §10 (f),
-    /// docs/ALGORITHM-v3-section10.md) [default: 0.003]
-    #[arg(long, value_name = "RAD")]
-    pub footprint: Option<f32>,
-    /// Merge consecutive lines only across invalid beams (or at most three
-    /// valid ones), as ALGORITHM.md v2 §7.6, not across
-    /// rejected segments (ALGORITHM.md §10 (e)); with --footprint 0,
-    /// --merge-anchor-gate inf, --no-same-turn-windows, --split-budget 0 and
-    /// --arc-chain 0 the defaults up to stop 20 (`Params::V2`)
-    #[arg(long)]
-    pub no_bridge_merge: bool,
-    /// Windows of consecutive beams over both mirror turns in the
-    /// interleaved 0.5° and 0.25° modes, as ALGORITHM.md v2 §2–6, instead
-    /// of windows of one turn (ALGORITHM.md §10 (a),
-    /// docs/ALGORITHM-v3-section10.md §10.9); with --split-budget 0 and
-    /// --merge-anchor-gate inf the defaults of stop 22, and --arc-chain 0
-    /// too those of stop 21
-    #[arg(long)]
-    pub no_same_turn_windows: bool,
-    /// Fewest consecutive touching lines, turning the same way by
-    /// --arc-turn-deg each, that are taken for an arc (a pillar, a curved
-    /// wall) and dropped; 0 keeps every line, as ALGORITHM.md v2 [default: 3]
-    #[arg(long, value_name = "N", value_parser = arc_chain_parser)]
-    pub arc_chain: Option<u8>,
-    /// Turn between consecutive lines of an arc, smallest and largest
-    /// (degrees) [default: 5,40]
-    #[arg(long, value_name = "MIN,MAX", value_parser = arc_turns_parser)]
-    pub arc_turn_deg: Option<(f32, f32)>,
-    /// Work bound of split before reject per frame, in beams tested (a
-    /// piece past it goes to the chi2 gate whole, as v1); 0 for no bound,
-    /// as up to stop 22 [default: 542]
-    #[arg(long, value_name = "BEAMS")]
-    pub split_budget: Option<u16>,
-    /// Anchor gate of the merges (chi-square, 2 dof): two lines merge only
-    /// if the union line stays within it of the larger line's own
-    /// parameters; inf for no test, as up to stop 23 [default: 13.8155]
-    #[arg(long, value_name = "CHI2", value_parser = anchor_gate_parser)]
-    pub merge_anchor_gate: Option<f32>,
-    /// Fit χ² without the offsets between the interleaved mirror turns of
-    /// the 0.5° and 0.25° modes (ALGORITHM.md §7 as written); with
-    /// --merge-anchor-gate inf the defaults of stop 23
-    #[arg(long)]
-    pub no_turn_offsets: bool,
-    /// Keep a pair of touching lines that a circle explains better (two
-    /// chords of a curved wall or pillar are dropped by default); with
-    /// the defaults otherwise, those of stop 24
-    #[arg(long)]
-    pub no_arc_pairs: bool,
-    /// Nested-model test of the merges (an F threshold, e.g. 20): two lines
-    /// merge only if one line fits their beams not significantly worse than
-    /// the two; 0 for no test [default: 0]. Host builds only (ALGORITHM.md
-    /// §10 option): the co-processor paths refuse it
-    #[arg(long, value_name = "F", value_parser = f_test_parser)]
-    pub merge_f_test: Option<f32>,
+    /// Start from a named set of parameters [default: default]
+    ///
+    /// Later wins: the preset, then --params, then each --set, then the
+    /// flags above. With a log, sigma and max_range come from its data
+    /// (quantisation step, range mode) unless set, under a preset too.
+    /// `host-bridge params --preset NAME` lists a preset's values.
+    #[arg(long, value_name = "NAME", value_parser = preset_parser(), help_heading = "Parameters")]
+    pub preset: Option<String>,
+    /// Set a parameter by name, e.g. --set split_depth=0 (repeatable)
+    ///
+    /// NAME is a field of the parameters (`host-bridge params` lists every
+    /// one); VALUE a number (inf for infinity), a whole number or
+    /// true/false. Overrides the preset and --params; the everyday flags
+    /// above override it.
+    #[arg(long = "set", value_name = "NAME=VALUE", help_heading = "Parameters")]
+    pub set: Vec<Setting>,
+    /// Read parameters from a TOML file of NAME = VALUE lines
+    ///
+    /// A flat table: each key a parameter as for --set, and an optional
+    /// `preset = "NAME"` (--preset overrides it). E.g.
+    /// `split_depth = 0` and `merge_anchor_gate = inf` on lines of their own.
+    #[arg(long = "params", value_name = "FILE", help_heading = "Parameters")]
+    pub params_file: Option<PathBuf>,
 }
 
-/// `--merge-f-test`: finite and >= 0.
-fn f_test_parser(s: &str) -> std::result::Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(f) if f.is_finite() && f >= 0.0 => Ok(f),
-        _ => Err("give an F threshold >= 0 (e.g. 20), or 0 for no test".into()),
-    }
-}
-
-/// `--merge-anchor-gate`: > 0, or `inf`.
-fn anchor_gate_parser(s: &str) -> std::result::Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(g) if g > 0.0 => Ok(g),
-        _ => Err("give a chi-square gate > 0 (e.g. 13.8), or inf for no test".into()),
-    }
-}
-
-/// `--arc-chain`: 0 or at least 2.
-fn arc_chain_parser(s: &str) -> std::result::Result<u8, String> {
-    match s.parse::<u8>() {
-        Ok(n) if n != 1 => Ok(n),
-        Ok(_) => Err("1 would drop every line: give 0 (off) or at least 2".into()),
-        Err(e) => Err(format!("{e}: give a count, 0 (off) or 2 to 255")),
-    }
-}
-
-/// `--arc-turn-deg MIN,MAX`, 0 ≤ MIN ≤ MAX ≤ 180.
-fn arc_turns_parser(s: &str) -> std::result::Result<(f32, f32), String> {
-    let parsed = s
-        .split_once(',')
-        .and_then(|(a, b)| Some((a.trim().parse::<f32>().ok()?, b.trim().parse::<f32>().ok()?)));
-    match parsed {
-        Some((lo, hi)) if (0.0..=hi).contains(&lo) && hi <= 180.0 => Ok((lo, hi)),
-        _ => Err("give MIN,MAX in degrees with 0 <= MIN <= MAX <= 180, e.g. 5,40".into()),
-    }
-}
+/// The parameters the co-processor runs only in a host build (the firmware
+/// leaves them out, and its `D0` echo could not tell a client of them).
+pub const HOST_ONLY: [&str; 4] = ["per_turn", "merge_f_test", "grazing_noise", "fit_sigma"];
 
 impl ParamArgs {
     /// Refuse what the co-processor cannot run (for `verify` and
-    /// `coprocessor`): `--per-turn`, an ALGORITHM.md §10 option the firmware
-    /// leaves out and the `D0` echo cannot carry.
+    /// `coprocessor`): a value other than the default of a [`HOST_ONLY`]
+    /// parameter, however it was set.
     pub fn ensure_coprocessor_runs_them(&self) -> Result<()> {
-        anyhow::ensure!(
-            !self.per_turn,
-            "--per-turn: the co-processor does not run it (an ALGORITHM.md §10 option the \
-             firmware leaves out, and its D0 echo could not tell a client): use it with \
-             extract or plot"
-        );
-        anyhow::ensure!(
-            self.merge_f_test.is_none_or(|f| f == 0.0),
-            "--merge-f-test: the co-processor does not run it (an ALGORITHM.md §10 option the \
-             firmware leaves out): use it with extract or plot"
-        );
+        let p = self.resolve(None)?;
+        for name in HOST_ONLY {
+            if p.get(name) != Params::DEFAULT.get(name) {
+                bail!(
+                    "{name}: the co-processor does not run it (an ALGORITHM.md §10 option the \
+                     firmware leaves out, and its D0 echo could not tell a client): use it \
+                     with extract or plot"
+                );
+            }
+        }
         Ok(())
     }
 
     /// The parameters, checked with [`Params::validate`].
     pub fn to_params(&self) -> Result<Params> {
-        self.to_params_over(Params::default())
+        self.checked(self.resolve(None)?)
     }
 
-    /// The parameters given, the others from `d` (e.g. the defaults for
-    /// the data, [`lms_core::DataProfile::params`]), checked with
-    /// [`Params::validate`].
-    pub fn to_params_over(&self, d: Params) -> Result<Params> {
-        let p = Params {
-            iterations: self.iterations.unwrap_or(d.iterations),
-            q: self.q.unwrap_or(d.q),
-            sigma: self.sigma.unwrap_or(d.sigma),
-            tau: self.tau.unwrap_or(d.tau),
-            min_points: self.min_points.unwrap_or(d.min_points),
-            max_chi2: self.max_chi2.unwrap_or(d.max_chi2),
-            merge: !self.no_merge,
-            fit_shared_points: self.shared_points
-                || (!self.no_shared_points && d.fit_shared_points),
-            split_depth: self.split_depth.unwrap_or(d.split_depth),
-            max_range: self.max_range.unwrap_or(d.max_range),
-            per_turn: self.per_turn || d.per_turn,
-            footprint: self.footprint.unwrap_or(d.footprint),
-            bridge_merge: !self.no_bridge_merge && d.bridge_merge,
-            same_turn_windows: !self.no_same_turn_windows && d.same_turn_windows,
-            arc_chain: self.arc_chain.unwrap_or(d.arc_chain),
-            arc_min_turn_deg: self.arc_turn_deg.map_or(d.arc_min_turn_deg, |t| t.0),
-            arc_max_turn_deg: self.arc_turn_deg.map_or(d.arc_max_turn_deg, |t| t.1),
-            split_budget: self.split_budget.unwrap_or(d.split_budget),
-            merge_anchor_gate: self.merge_anchor_gate.unwrap_or(d.merge_anchor_gate),
-            turn_offsets: !self.no_turn_offsets && d.turn_offsets,
-            arc_pairs: !self.no_arc_pairs && d.arc_pairs,
-            merge_f_test: self.merge_f_test.unwrap_or(d.merge_f_test),
-            ..d
+    /// The parameters for data whose own defaults are `data` (e.g.
+    /// [`lms_core::DataProfile::params`]): without a preset `data`, with one
+    /// the preset with σ and `max_range` of `data`; then the file, the
+    /// settings and the flags. Checked with [`Params::validate`].
+    pub fn to_params_over(&self, data: Params) -> Result<Params> {
+        self.checked(self.resolve(Some(data))?)
+    }
+
+    /// The preset, the file, the settings and the flags over the base
+    /// (`data`, see [`ParamArgs::to_params_over`]), not validated.
+    fn resolve(&self, data: Option<Params>) -> Result<Params> {
+        let file = match &self.params_file {
+            Some(path) => param_file::ParamFile::read(path)?,
+            None => param_file::ParamFile::default(),
         };
+        let chosen = match &self.preset {
+            Some(name) => Some(preset(name).map_err(|e| anyhow!("--preset: {e}"))?),
+            None => file.preset,
+        };
+        let mut p = match (chosen, data) {
+            (None, Some(d)) => d,
+            (None, None) => Params::DEFAULT,
+            (Some(pre), None) => pre.params,
+            (Some(pre), Some(d)) => Params {
+                sigma: d.sigma,
+                max_range: d.max_range,
+                ..pre.params
+            },
+        };
+        file.apply(&mut p)?;
+        for s in &self.set {
+            p.set(s.name, &s.value)
+                .map_err(|e| anyhow!("--set {}={}: {}", s.name, s.value, e))?;
+        }
+        p.iterations = self.iterations.unwrap_or(p.iterations);
+        p.q = self.q.unwrap_or(p.q);
+        p.sigma = self.sigma.unwrap_or(p.sigma);
+        p.tau = self.tau.unwrap_or(p.tau);
+        p.max_range = self.max_range.unwrap_or(p.max_range);
+        Ok(p)
+    }
+
+    /// `p` validated, with a warning for an implausible σ.
+    fn checked(&self, p: Params) -> Result<Params> {
         p.validate()
             .map_err(|e| anyhow!("invalid parameters: {e}"))?;
         if p.sigma > SIGMA_WARN_M {
-            crate::input::warn(&format!(
+            crate::warning::warn(&format!(
                 "--sigma {} m is far above an LMS's range noise (0.005–0.01 m): \
                  every window passes the gate tau, so segments, lines and corners \
                  may be few or none",
@@ -468,5 +470,86 @@ mod tests {
             ..ParamArgs::default()
         };
         assert!(bad.to_params().is_err());
+    }
+
+    #[test]
+    fn later_sources_win() {
+        let set = |s: &str| s.parse::<Setting>().unwrap();
+        let data = Params {
+            sigma: 0.01,
+            max_range: 50.0,
+            ..Params::DEFAULT
+        };
+        // No preset: the data's defaults; a preset: its values, σ and
+        // max_range from the data.
+        assert_eq!(ParamArgs::default().to_params_over(data).unwrap(), data);
+        let paper = ParamArgs {
+            preset: Some("paper".into()),
+            ..ParamArgs::default()
+        };
+        assert_eq!(paper.to_params().unwrap(), Params::PAPER);
+        assert_eq!(
+            paper.to_params_over(data).unwrap(),
+            Params {
+                sigma: 0.01,
+                max_range: 50.0,
+                ..Params::PAPER
+            }
+        );
+        // --set over the preset, the flags over --set.
+        let args = ParamArgs {
+            sigma: Some(0.02),
+            set: vec![
+                set("sigma=0.03"),
+                set("split_depth=2"),
+                set("split_depth=3"),
+            ],
+            ..paper
+        };
+        let p = args.to_params_over(data).unwrap();
+        assert_eq!((p.sigma, p.split_depth, p.max_range), (0.02, 3, 50.0));
+    }
+
+    #[test]
+    fn settings_are_checked_when_read() {
+        assert_eq!(
+            "max_range = inf".parse::<Setting>(),
+            Ok(Setting {
+                name: "max_range",
+                value: "inf".into()
+            })
+        );
+        let e = "max_rang=inf".parse::<Setting>().unwrap_err();
+        assert!(e.starts_with("no parameter `max_rang`"), "{e}");
+        let e = "--split-depth=3".parse::<Setting>().unwrap_err();
+        assert!(e.contains("did you mean split_depth?"), "{e}");
+        let e = "iterations=many".parse::<Setting>().unwrap_err();
+        assert!(e.contains("iterations must be a whole number"), "{e}");
+        // Ranges are for validate, which names the parameter.
+        let args = ParamArgs {
+            set: vec!["min_points=2".parse().unwrap()],
+            ..ParamArgs::default()
+        };
+        let e = args.to_params().unwrap_err().to_string();
+        assert!(e.contains("min_points must be at least 3"), "{e}");
+    }
+
+    #[test]
+    fn the_coprocessor_refuses_host_only_values() {
+        for setting in [
+            "per_turn=true",
+            "merge_f_test=20",
+            "grazing_noise=0.5",
+            "fit_sigma=0.01",
+        ] {
+            let args = ParamArgs {
+                set: vec![setting.parse().unwrap()],
+                ..ParamArgs::default()
+            };
+            let e = args.ensure_coprocessor_runs_them().unwrap_err().to_string();
+            let name = setting.split('=').next().unwrap();
+            assert!(e.starts_with(&format!("{name}: the co-processor")), "{e}");
+        }
+        assert!(ParamArgs::default().ensure_coprocessor_runs_them().is_ok());
     }
 }

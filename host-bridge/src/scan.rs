@@ -459,7 +459,7 @@ pub fn run(args: &ScanArgs) -> Result<()> {
     };
     print_summary(args, &plan, &summary, &capture_line);
     if let Some(e) = &summary.restore_error {
-        crate::input::warn(&format!(
+        crate::warning::warn(&format!(
             "scan: could not put the sensor back at 9600 Bd: {e}"
         ));
     }

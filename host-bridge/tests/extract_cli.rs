@@ -216,7 +216,7 @@ fn output_file_matches_stdout_and_params_apply() {
 
     // Per-turn extraction (0.5° log: two mirror turns) gives other lines;
     // the co-processor paths refuse it by name.
-    let d = run(&[&args[..], &["--per-turn"]].concat());
+    let d = run(&[&args[..], &["--set", "per_turn=true"]].concat());
     assert!(d.status.success(), "{}", String::from_utf8_lossy(&d.stderr));
     let lines = |out: &[u8]| -> Vec<Value> {
         out.split(|&c| c == b'\n')
@@ -225,9 +225,11 @@ fn output_file_matches_stdout_and_params_apply() {
             .collect()
     };
     assert_ne!(lines(&c.stdout), lines(&d.stdout));
-    let e = run(&["verify", "--host", "--count", "1", "--per-turn"]);
+    let e = run(&["verify", "--host", "--count", "1", "--set", "per_turn=true"]);
     assert!(!e.status.success());
-    assert!(String::from_utf8_lossy(&e.stderr).contains("--per-turn"));
+    assert!(
+        String::from_utf8_lossy(&e.stderr).contains("per_turn: the co-processor does not run it")
+    );
     let _ = std::fs::remove_dir_all(dir);
 }
 
@@ -315,9 +317,38 @@ fn bad_arguments_fail() {
         (vec!["--iterations", "0"], "iterations"),
         (vec!["--tau", "0"], "tau"),
         (vec!["--q", "-0.5"], "q must be"),
-        (vec!["--arc-chain", "1"], "would drop every line"),
-        (vec!["--arc-turn-deg", "40,5"], "MIN <= MAX"),
-        (vec!["--arc-turn-deg", "5"], "MIN,MAX"),
+        (
+            vec!["--set", "arc_chain=1"],
+            "arc_chain must be 0 (off) or at least 2",
+        ),
+        (
+            vec![
+                "--set",
+                "arc_min_turn_deg=40",
+                "--set",
+                "arc_max_turn_deg=5",
+            ],
+            "arc_min_turn_deg <= arc_max_turn_deg",
+        ),
+        (
+            vec!["--set", "arc_turn_deg=5"],
+            "no parameter `arc_turn_deg`",
+        ),
+        (vec!["--set", "split-depth=3"], "did you mean split_depth?"),
+        (vec!["--set", "split_depth"], "give NAME=VALUE"),
+        (vec!["--set", "merge=yes"], "merge must be true or false"),
+        (
+            vec!["--preset", "v1"],
+            "possible values: default, v2, paper",
+        ),
+        (
+            vec!["--params", "/nonexistent/p.toml"],
+            "/nonexistent/p.toml: cannot read",
+        ),
+        (
+            vec!["--min-points", "4"],
+            "unexpected argument '--min-points'",
+        ),
     ] {
         let out = run(&[&["extract", log][..], &args[..]].concat());
         let err = String::from_utf8_lossy(&out.stderr);
@@ -355,8 +386,8 @@ fn synthetic_scene_is_the_default() {
     assert!(!both.status.success());
 }
 
-/// `json` without the `"rejected_arc":0` of each record's `stats` (the
-/// counter stop 22 added): the JSON as `extract` wrote it before.
+/// `json` without the `"rejected_arc":0` of each record's `stats` (always 0
+/// with arcs kept): the JSON as pinned without that counter.
 fn without_arc_counter(json: &[u8]) -> Vec<u8> {
     const TEXT: &[u8] = b",\"rejected_arc\":0";
     let mut out = Vec::with_capacity(json.len());
@@ -371,20 +402,18 @@ fn without_arc_counter(json: &[u8]) -> Vec<u8> {
 
 /// `extract LOG` (defaults) on every shared log gives exactly the JSON it
 /// gave when these digests were pinned (FNV-1a-64 of stdout): no field, no
-/// bit of any float may change. Re-pin only for an intended change (last:
-/// the arcs' pairs, stop 25; see tools/feature-bits/tests/digests.rs).
-/// The digests before it are what `--no-arc-pairs` gives (stop 24), with
-/// `--merge-anchor-gate inf --no-turn-offsets` too (stop 23), with `--no-same-turn-windows --split-budget 0` too (stop 22),
-/// with `--arc-chain 0` (stop 21) and with `--footprint 0
-/// --no-bridge-merge` too (v2), the last two bit for bit once the counter
-/// `rejected_arc` that stop 22 added to every record's `stats` is taken
-/// out of the text.
+/// bit of any float may change. Re-pin only for an intended change (see
+/// tools/feature-bits/tests/digests.rs). Pinned too: the defaults less some
+/// of their additions, set with `--set`, a parameter file and `--preset`,
+/// as tools/feature-bits/tests/digests.rs pins them: pairs of lines kept,
+/// and no anchor gate or turn offsets too, and consecutive windows with no
+/// split budget too, and arcs kept too, and `--preset v2`; the last two
+/// bit for bit with the counter `rejected_arc` (always 0 there) taken out
+/// of the text.
 #[test]
 fn extract_json_of_every_shared_log_is_pinned() {
-    // (log stem, defaults, `--no-arc-pairs`, with `--merge-anchor-gate inf
-    // --no-turn-offsets` too, with
-    // `--no-same-turn-windows --split-budget 0`, with `--arc-chain 0`,
-    // and with `--footprint 0 --no-bridge-merge`)
+    // (log stem, defaults, pairs kept, no anchor gate, consecutive
+    // windows, arcs kept, v2)
     const PINNED: [(&str, u64, u64, u64, u64, u64, u64); 7] = [
         (
             "acapulco-corrected",
@@ -451,31 +480,49 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
     ];
     let mut wrong = Vec::new();
-    // An older stop's flags: the newer stop's, and off what the newer added.
-    let stop24 = ["--no-arc-pairs"];
-    let stop23 = [
-        &stop24[..],
-        &["--merge-anchor-gate", "inf", "--no-turn-offsets"],
+    // Each set: the one before, less one more addition of the defaults.
+    let pairs = ["--set", "arc_pairs=false"];
+    let gate = [
+        &pairs[..],
+        &[
+            "--set",
+            "merge_anchor_gate=inf",
+            "--set",
+            "turn_offsets=false",
+        ],
     ]
     .concat();
-    let stop22 = [
-        &stop23[..],
-        &["--no-same-turn-windows", "--split-budget", "0"],
+    let windows = [
+        &gate[..],
+        &[
+            "--set",
+            "same_turn_windows=false",
+            "--set",
+            "split_budget=0",
+        ],
     ]
     .concat();
-    let stop21 = [&stop22[..], &["--arc-chain", "0"]].concat();
-    let v2 = [&stop21[..], &["--footprint", "0", "--no-bridge-merge"]].concat();
-    for (stem, pinned, pinned_stop24, pinned_stop23, pinned_stop22, pinned_stop21, pinned_v2) in
-        PINNED
+    // Arcs kept, written as v2 and back what v2 leaves out, in a file.
+    let dir = scratch("pinned");
+    let file = dir.join("arcs-kept.toml");
+    std::fs::write(
+        &file,
+        "preset = \"v2\"\n# v2 and the footprint and bridge merge:\nfootprint = 0.003\n\
+         bridge_merge = true\n",
+    )
+    .unwrap();
+    let arcs = ["--params", file.to_str().unwrap()];
+    let v2 = ["--preset", "v2"];
+    for (stem, pinned, pinned_pairs, pinned_gate, pinned_windows, pinned_arcs, pinned_v2) in PINNED
     {
         let path = data(&format!("{stem}.log.gz"));
         let path = path.to_str().unwrap();
         for (flags, pinned, counter) in [
             (&[][..], pinned, true),
-            (&stop24[..], pinned_stop24, true),
-            (&stop23[..], pinned_stop23, true),
-            (&stop22[..], pinned_stop22, true),
-            (&stop21[..], pinned_stop21, false),
+            (&pairs[..], pinned_pairs, true),
+            (&gate[..], pinned_gate, true),
+            (&windows[..], pinned_windows, true),
+            (&arcs[..], pinned_arcs, false),
             (&v2[..], pinned_v2, false),
         ] {
             let out = run(&[&["extract", path][..], flags].concat());
@@ -504,12 +551,12 @@ fn extract_json_of_every_shared_log_is_pinned() {
     );
 }
 
-/// `--footprint`, `--no-bridge-merge`, `--no-same-turn-windows`,
-/// `--merge-anchor-gate` and `--no-turn-offsets` reach
-/// the core (CSAIL is a 0.5° log); a bad footprint
-/// is refused with the reason.
+/// `--set` reaches the core (CSAIL is a 0.5° log) for the footprint, the
+/// bridge merge, same-turn windows, the anchor gate and the turn offsets;
+/// the default values change nothing; a bad value is refused naming the
+/// parameter.
 #[test]
-fn footprint_and_bridge_flags_apply() {
+fn settings_reach_the_core() {
     let log = data("csail-corrected.log.gz");
     let args = ["extract", log.to_str().unwrap(), "--frames", "0..200"];
     let digest = |flags: &[&str]| {
@@ -518,35 +565,52 @@ fn footprint_and_bridge_flags_apply() {
         feature_bits::digest_of(&out.stdout[..]).unwrap()
     };
     let default = digest(&[]);
-    for flags in [
-        &["--footprint", "0.005"][..],
-        &["--no-bridge-merge"][..],
-        &["--no-same-turn-windows"][..],
-        &["--merge-anchor-gate", "inf"][..],
-        &["--no-turn-offsets"][..],
+    for setting in [
+        "footprint=0.005",
+        "bridge_merge=false",
+        "same_turn_windows=false",
+        "merge_anchor_gate=inf",
+        "turn_offsets=false",
     ] {
-        assert_ne!(digest(flags), default, "{flags:?} changed nothing");
+        assert_ne!(
+            digest(&["--set", setting]),
+            default,
+            "{setting} changed nothing"
+        );
     }
     assert_eq!(
-        digest(&["--footprint", "0.003"]),
+        digest(&["--set", "footprint=0.003"]),
         default,
         "0.003 rad is the default"
     );
     assert_eq!(
-        digest(&["--merge-anchor-gate", "13.81551"]),
+        digest(&["--set", "merge_anchor_gate=13.81551", "--preset", "default"]),
         default,
         "chi2_2 at 99.9 % is the default"
     );
-    let bad = run(&[&args[..], &["--footprint=-0.001"]].concat());
-    assert!(!bad.status.success());
-    assert!(common::stderr(&bad).contains("footprint must be finite and >= 0"));
-    for gate in ["0", "-1", "nan", "wide"] {
-        let flag = format!("--merge-anchor-gate={gate}");
-        let bad = run(&[&args[..], &[flag.as_str()]].concat());
-        assert!(!bad.status.success(), "--merge-anchor-gate {gate} accepted");
+    // The everyday flag wins over --set.
+    assert_eq!(
+        digest(&["--sigma", "0.01", "--set", "sigma=0.02"]),
+        digest(&["--sigma", "0.01"])
+    );
+    for (setting, says) in [
+        ("footprint=-0.001", "footprint must be finite and >= 0"),
+        ("merge_anchor_gate=0", "merge_anchor_gate must be > 0"),
+        ("merge_anchor_gate=-1", "merge_anchor_gate must be > 0"),
+        (
+            "merge_anchor_gate=nan",
+            "merge_anchor_gate must be a number",
+        ),
+        (
+            "merge_anchor_gate=wide",
+            "merge_anchor_gate must be a number",
+        ),
+    ] {
+        let bad = run(&[&args[..], &["--set", setting]].concat());
+        assert!(!bad.status.success(), "{setting} accepted");
         assert!(
-            common::stderr(&bad).contains("give a chi-square gate > 0"),
-            "{gate}: {}",
+            common::stderr(&bad).contains(says),
+            "{setting}: {}",
             common::stderr(&bad)
         );
     }

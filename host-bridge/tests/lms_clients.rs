@@ -1071,13 +1071,23 @@ fn requests_the_face_does_not_interpret_are_simulates_to_answer() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The release firmware, if built (`cd firmware && cargo build --release`).
-fn firmware_elf() -> Option<PathBuf> {
+/// The release firmware (`cd firmware && cargo build --release`) with
+/// `qemu-system-arm` on PATH, or a failure that names what is missing.
+fn firmware_elf() -> PathBuf {
     let elf = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../firmware/target/thumbv7em-none-eabihf/release/lms-firmware");
     let qemu = std::env::var_os("PATH")
         .is_some_and(|p| std::env::split_paths(&p).any(|d| d.join("qemu-system-arm").exists()));
-    (elf.exists() && qemu).then_some(elf)
+    assert!(
+        qemu,
+        "qemu-system-arm is not on PATH (apt-get install qemu-system-arm)"
+    );
+    assert!(
+        elf.is_file(),
+        "no firmware ELF at {} (cd firmware && cargo build --release)",
+        elf.display()
+    );
+    elf
 }
 
 /// The clients that run through the firmware under QEMU in CI: every
@@ -1124,9 +1134,9 @@ fn qemu_chains() -> Vec<Vec<(Behaviour, u32)>> {
 /// QEMU; CI runs it after the firmware build:
 /// `cargo test -p host-bridge --test lms_clients -- --ignored --nocapture`.
 #[test]
-#[ignore = "needs the release firmware and qemu-system-arm (CI: after the firmware build)"]
+#[ignore = "needs qemu-system-arm and the firmware ELF: cd firmware && cargo build --release"]
 fn lms_clients_through_the_firmware_under_qemu() {
-    let elf = firmware_elf().expect("the release firmware and qemu-system-arm");
+    let elf = firmware_elf();
     let dir = std::env::temp_dir().join(format!("host-bridge-lms-qemu-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();

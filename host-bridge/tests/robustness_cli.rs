@@ -1,7 +1,7 @@
-//! Issue 13 from the user's side: every command reads logs and captures
+//! Robustness from the user's side: every command reads logs and captures
 //! alike, cut files keep their complete scans, no argument panics, and the
-//! messages say what happened (one test per point; `scan` and the sensor
-//! search are in `scan_e2e.rs`).
+//! messages say what happened (`scan` and the sensor search are in
+//! `scan_e2e.rs`).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -57,7 +57,7 @@ fn fails(args: &[&str], needles: &[&str]) -> String {
     err
 }
 
-/// Point 4: `plot` and `verify --replay` read captures (and `extract`
+/// `plot` and `verify --replay` read captures (and `extract`
 /// does): the same frame gives the same record.
 #[test]
 fn plot_and_verify_read_captures() {
@@ -96,7 +96,7 @@ fn plot_and_verify_read_captures() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Points 2 and 5: a cut log keeps its complete scans and says where; the
+/// A cut log keeps its complete scans and says where; the
 /// reading stops after the selected frames (a damaged line 3 is never read
 /// with `--frames 0..2` and a forced unit).
 #[test]
@@ -151,7 +151,7 @@ fn cut_logs_are_salvaged_and_reading_stops_after_the_selection() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Point 6: durations and counts are checked when the arguments are read;
+/// Durations and counts are checked when the arguments are read;
 /// nothing panics.
 #[test]
 fn no_argument_panics() {
@@ -169,8 +169,18 @@ fn no_argument_panics() {
             "too large",
         ),
         (&["extract", "--iterations", "1000000"][..], "1..=1000"),
-        (&["extract", "--min-points", "2"][..], "3.."),
-        (&["extract", "--split-depth", "17"][..], "0..=16"),
+        (
+            &["extract", "--set", "min_points=2"][..],
+            "min_points must be at least 3",
+        ),
+        (
+            &["extract", "--set", "split_depth=17"][..],
+            "split_depth must be at most 16",
+        ),
+        (
+            &["extract", "--set", "split_depth=300"][..],
+            "split_depth must be a whole number 0..=255",
+        ),
         (
             &["verify", "--qemu", "/bin/sh"][..],
             "not a 32-bit little-endian ARM ELF",
@@ -182,7 +192,7 @@ fn no_argument_panics() {
         // The firmware runs the defaults: a parameter it does not echo is
         // refused by name, not reported as mismatches scan after scan.
         (
-            &["verify", "--qemu", "--merge-anchor-gate", "inf"][..],
+            &["verify", "--qemu", "--set", "merge_anchor_gate=inf"][..],
             "merge_anchor_gate: inf would be checked",
         ),
         (
@@ -191,16 +201,27 @@ fn no_argument_panics() {
                 "--ports",
                 "/dev/null",
                 "/dev/null",
-                "--no-turn-offsets",
+                "--set",
+                "turn_offsets=false",
             ][..],
             "turn_offsets: false would be checked",
         ),
         // The merges' F test is a host-only option; its threshold is checked.
         (
-            &["verify", "--host", "--count", "1", "--merge-f-test", "20"][..],
-            "--merge-f-test: the co-processor does not run it",
+            &[
+                "verify",
+                "--host",
+                "--count",
+                "1",
+                "--set",
+                "merge_f_test=20",
+            ][..],
+            "merge_f_test: the co-processor does not run it",
         ),
-        (&["extract", "--merge-f-test=-1"][..], "F threshold >= 0"),
+        (
+            &["extract", "--set", "merge_f_test=-1"][..],
+            "merge_f_test must be finite and >= 0",
+        ),
     ] {
         let out = run(args);
         let err = stderr(&out);
@@ -210,7 +231,7 @@ fn no_argument_panics() {
     }
 }
 
-/// Point 11: one 3-decimal value does not turn a cm log into mm; the
+/// One 3-decimal value does not turn a cm log into mm; the
 /// decision names the value and suggests --unit; a genuine 32.76 m stays
 /// a distance.
 #[test]
@@ -257,7 +278,7 @@ fn unit_detection_explains_itself() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Point 12: empty files, binary garbage and unsupported captures are
+/// Empty files, binary garbage and unsupported captures are
 /// named for what they are, without a word about --frames.
 #[test]
 fn files_without_scans_are_explained() {
@@ -307,7 +328,7 @@ fn files_without_scans_are_explained() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Point 14: the smaller items.
+/// The smaller items.
 #[test]
 fn smaller_items() {
     let dir = scratch("smaller");

@@ -208,7 +208,7 @@ impl Link for MidTelegram {
     }
 }
 
-/// Issue 13.1: a stream left running at 500 kBd; the new client drops into
+/// A stream left running at 500 kBd; the new client drops into
 /// the middle of a telegram whose data bytes read as `NAK`s and `ACK`s. They
 /// are not answers: the sensor is found at 500 kBd all the same.
 #[test]
@@ -249,8 +249,8 @@ fn fake_stray_nak_and_ack_bytes_in_a_stream_left_running_are_not_handshakes() {
     }
 }
 
-/// Issue 13.10: a peer that answers only NAKs: the message says what came
-/// back at each rate instead of "waited up to 0 ms".
+/// A peer that answers only NAKs: the message says what came back at each
+/// rate (not a bare "waited up to 0 ms").
 #[test]
 fn fake_no_sensor_message_says_what_the_peer_sent() {
     let mut client = fake_client(fake_sensor());
@@ -488,13 +488,13 @@ fn cli_bad_arguments_are_explained() {
             "not a serial port",
         ),
         (&["scan"][..], "--port"),
-        // Issue 13.3: no -o and no --no-save: refused before anything is sent.
+        // No -o and no --no-save: refused before anything is sent.
         (&["scan", "--port", "/dev/null"][..], "--output"),
         (
             &["scan", "--port", "/dev/null", "-o", "x.lmscap", "--no-save"][..],
             "cannot be used with",
         ),
-        // Issue 13.8: a directory, or a directory that does not exist.
+        // A directory, or a directory that does not exist.
         (
             &["scan", "--port", "/dev/null", "-o", "/tmp"][..],
             "that is a directory",
@@ -543,7 +543,7 @@ fn cli_extract_reads_a_capture_and_rejects_a_broken_one() {
     let r0 = rec["ranges"][1].as_f64().unwrap();
     assert!((r0 - f64::from(sent.values()[1]) / 1000.0).abs() < 1e-6);
 
-    // Issue 13.2: cut inside the second record (a kill, a power loss):
+    // Cut inside the second record (a kill, a power loss):
     // the complete first record is read, and the warning says where and why.
     let bytes = std::fs::read(&path).unwrap();
     let cut = dir.join("cut.lmscap");
@@ -571,7 +571,7 @@ fn cli_extract_reads_a_capture_and_rejects_a_broken_one() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Acceptance of issue 13: a capture cut at any byte yields every complete
+/// A capture cut at any byte yields every complete
 /// record before the cut, and says where it is cut.
 #[test]
 fn capture_cut_at_every_byte_keeps_every_complete_record() {
@@ -1080,7 +1080,7 @@ fn pty_cli_scan_interrupted_leaves_the_sensor_quiet() {
     }
 }
 
-/// Issue 13.7: SIGTERM while `scan` looks for a sensor that does not
+/// SIGTERM while `scan` looks for a sensor that does not
 /// answer ends the search at once, and the error says why.
 #[test]
 fn pty_cli_scan_signal_during_the_search_ends_it() {
@@ -1123,7 +1123,7 @@ impl CaptureFileExt {
     }
 }
 
-/// Issue 13.1 as reported: a client killed with SIGKILL leaves the sensor
+/// A client killed with SIGKILL leaves the sensor
 /// streaming at 500 kBd; the next `scan` finds it every time.
 #[test]
 fn pty_cli_scan_after_a_killed_scan_finds_the_sensor() {
@@ -1230,7 +1230,7 @@ fn pty_cli_sensor_that_does_not_answer() {
         "{err}"
     );
     assert!(err.contains("9600, 19200, 38400, 500000"), "{err}");
-    // Issue 13.9: a failed search leaves no file at all.
+    // A failed search leaves no file at all.
     assert!(
         err.contains("no scan was recorded (nothing saved)"),
         "{err}"

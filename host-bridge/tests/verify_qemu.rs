@@ -1,13 +1,13 @@
 //! `host-bridge verify --qemu`: the firmware under QEMU, checked bit for bit.
-//! Runs only if `qemu-system-arm` is on PATH and the firmware ELF is built
-//! (`cd firmware && cargo build --release`); otherwise it prints why it
-//! skipped and passes. `LMS_FIRMWARE_ELF` may name another ELF.
+//! The tests that need `qemu-system-arm` (and the firmware ELF) are
+//! ignored by default; `cargo test -p host-bridge --test verify_qemu --
+//! --ignored` runs them after `cd firmware && cargo build --release`, and
+//! fails naming whatever is still missing. `LMS_FIRMWARE_ELF` may name
+//! another ELF.
 
 use std::path::Path;
 
 mod common;
-
-use common::{elf, on_path};
 
 /// Run `host-bridge verify ARGS`, printing its output (shown on failure).
 fn verify(args: &[&str]) -> (bool, String, String) {
@@ -19,28 +19,10 @@ fn verify(args: &[&str]) -> (bool, String, String) {
     )
 }
 
-/// The reason to skip, if QEMU or the ELF is missing.
-fn skip() -> Option<String> {
-    if !on_path("qemu-system-arm") {
-        return Some("qemu-system-arm is not on PATH".into());
-    }
-    let elf = elf();
-    if !elf.is_file() {
-        return Some(format!(
-            "no firmware ELF at {} (cd firmware && cargo build --release)",
-            elf.display()
-        ));
-    }
-    None
-}
-
 #[test]
+#[ignore = "needs qemu-system-arm and the firmware ELF: cd firmware && cargo build --release"]
 fn verify_qemu_firmware_is_bit_identical() {
-    if let Some(why) = skip() {
-        println!("skipped: {why}");
-        return;
-    }
-    let elf = elf();
+    let elf = common::qemu_firmware();
     let elf = elf.to_str().unwrap();
     let (ok, text, _) = verify(&["--qemu", elf, "--count", "10", "--timeout", "60"]);
     assert!(ok, "{text}");
@@ -48,28 +30,24 @@ fn verify_qemu_firmware_is_bit_identical() {
     assert!(text.contains("firmware report: "), "{text}");
 
     let log = common::csail();
-    if log.exists() {
-        let (ok, text, _) = verify(&[
-            "--qemu",
-            elf,
-            "--replay",
-            log.to_str().unwrap(),
-            "--frames",
-            "200..210",
-            "--timeout",
-            "60",
-        ]);
-        assert!(ok, "{text}");
-        assert!(text.contains("10/10 scans bit-identical; 0 lost"), "{text}");
-    }
+    let (ok, text, _) = verify(&[
+        "--qemu",
+        elf,
+        "--replay",
+        log.to_str().unwrap(),
+        "--frames",
+        "200..210",
+        "--timeout",
+        "60",
+    ]);
+    assert!(ok, "{text}");
+    assert!(text.contains("10/10 scans bit-identical; 0 lost"), "{text}");
 }
 
 #[test]
+#[ignore = "needs qemu-system-arm: apt-get install qemu-system-arm"]
 fn verify_qemu_reports_a_firmware_that_does_not_boot() {
-    if !on_path("qemu-system-arm") {
-        println!("skipped: qemu-system-arm is not on PATH");
-        return;
-    }
+    common::require_qemu();
     // Not an ELF: refused before QEMU starts.
     let not_elf = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
     let (ok, _, err) = verify(&["--qemu", not_elf.to_str().unwrap(), "--count", "3"]);

@@ -6,10 +6,11 @@
 //! second of the power-on (on the sensor's clock).
 //!
 //! Natively (`--host`, pseudo-terminals: the line rates are real termios
-//! settings) and under QEMU (the real firmware). QEMU ignores line rates;
-//! verify models them from the rate the firmware programmed (USART2's
-//! `BRR`, read through QEMU's monitor), so the `90` at 9600 Bd reaches a
-//! firmware listening at 500 kBd as noise, as on a wire.
+//! settings) and under QEMU (the real firmware; ignored by default, run
+//! with `--ignored` after `cd firmware && cargo build --release`). QEMU
+//! ignores line rates; verify models them from the rate the firmware
+//! programmed (USART2's `BRR`, read through QEMU's monitor), so the `90` at
+//! 9600 Bd reaches a firmware listening at 500 kBd as noise, as on a wire.
 //!
 //! `--reset-mcu-after N` (QEMU only) resets the MCU in the middle of the
 //! run while the LMS keeps streaming at 500 kBd: the firmware boots at
@@ -18,8 +19,6 @@
 //! come back within one second of the reset (the client's set-up included).
 
 mod common;
-
-use common::{elf, on_path};
 
 /// The milliseconds after `key` in the summary line that contains `line`.
 fn ms_after(text: &str, line: &str, key: &str) -> f64 {
@@ -79,12 +78,9 @@ fn host_coprocessor_streams_again_after_a_sensor_power_cycle() {
 }
 
 #[test]
+#[ignore = "needs qemu-system-arm and the firmware ELF: cd firmware && cargo build --release"]
 fn firmware_under_qemu_streams_again_after_a_sensor_power_cycle() {
-    if !on_path("qemu-system-arm") || !elf().is_file() {
-        println!("skipped: qemu-system-arm or the firmware ELF is missing");
-        return;
-    }
-    let elf = elf();
+    let elf = common::qemu_firmware();
     let text = power_cycle(&["--qemu", elf.to_str().unwrap()]);
     // The `90` at 9600 Bd reached the firmware, at 500 kBd, as noise.
     assert!(garbled_to_firmware(&text) > 0, "{text}");
@@ -98,12 +94,9 @@ fn firmware_under_qemu_streams_again_after_a_sensor_power_cycle() {
 /// QEMU's socket ahead of the search, and one CI rehearsal in about five got
 /// its first scan back only after 7.7 s.
 #[test]
+#[ignore = "needs qemu-system-arm and the firmware ELF: cd firmware && cargo build --release"]
 fn firmware_under_qemu_finds_the_sensor_again_after_an_mcu_reset() {
-    if !on_path("qemu-system-arm") || !elf().is_file() {
-        println!("skipped: qemu-system-arm or the firmware ELF is missing");
-        return;
-    }
-    let elf = elf();
+    let elf = common::qemu_firmware();
     let args = [
         "verify",
         "--qemu",

@@ -1,15 +1,13 @@
-//! Pairs of lines on curves (`Params::arc_pairs`, issue 14 item 6,
-//! docs/ALGORITHM-v3-section10.md §10.12): the defaults against stop 24's
-//! (pairs kept), and the merges' nested-model test (`Params::merge_f_test`)
-//! at several thresholds, on the realistic synthetic scenes (SCANS per
-//! family and σ₀) and the real logs' map truth (every EVERY-th frame),
-//! pooled.
+//! Pairs of lines on curves (`Params::arc_pairs`; docs/DESIGN.md, "Arcs"):
+//! the defaults against the defaults with pairs kept, and the merges'
+//! nested-model test (`Params::merge_f_test`, not a default) at several
+//! thresholds, on the realistic synthetic scenes (`SCANS` per family and
+//! σ₀) and the real logs' map truth (every `EVERY`-th frame), pooled.
 //!
 //! `cargo run --release -p lms-lab --example arc_pairs -- [EVERY] [SCANS]`
 
 use anyhow::Result;
 use lms_core::Params;
-use lms_lab::realtruth::on_data;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 fn main() -> Result<()> {
@@ -17,16 +15,19 @@ fn main() -> Result<()> {
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
     let variants: Vec<(&'static str, Adjust)> = vec![
         ("defaults", |p| p),
-        ("stop 24 (pairs kept)", |p| on_data(Params::STOP24, p)),
-        ("merge F test 20", |p| Params {
+        ("arc_pairs=false", |p| Params {
+            arc_pairs: false,
+            ..p
+        }),
+        ("merge_f_test=20", |p| Params {
             merge_f_test: 20.0,
             ..p
         }),
-        ("merge F test 30", |p| Params {
+        ("merge_f_test=30", |p| Params {
             merge_f_test: 30.0,
             ..p
         }),
-        ("merge F test 50", |p| Params {
+        ("merge_f_test=50", |p| Params {
             merge_f_test: 50.0,
             ..p
         }),

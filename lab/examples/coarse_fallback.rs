@@ -6,7 +6,7 @@
 //! beams no fine line holds — the lines of the beams the fine pass left
 //! alone — with and without per-turn extraction; realistic synthetic
 //! scenes (100 scans per family and σ₀) and real logs (every 5th frame),
-//! pooled (docs/ALGORITHM-v3-section10.md §10.8).
+//! pooled (docs/DESIGN.md, "Open questions").
 //!
 //! `cargo run --release -p lms-lab --example coarse_fallback -- [EVERY] [SCANS]`
 

@@ -3,11 +3,14 @@
 //! (then the evaluation's classes: a duplicate of a matched piece, a piece
 //! too short to resolve, off the gates, mixed), with the median points,
 //! length and σ_α of each class and how many of each class have a range
-//! jump (> 0.3 m) or a no-echo beam next to both of their ends. The
-//! defaults, or stop 24's (`--stop24`: pairs of lines on a curve kept).
-//! docs/ALGORITHM-v3-section10.md §10.12.
+//! jump (> 0.3 m) or a no-echo beam next to both of their ends. For each
+//! false line on a curved wall, the noise-free hits' χ² about their own
+//! best line at σ: what any test of "curve against line" could see. The
+//! defaults, or with `--pairs-kept` the defaults with pairs of lines on a
+//! curve kept (`arc_pairs = false`); `--list` prints each false line.
+//! docs/DESIGN.md, "Open questions".
 //!
-//! `cargo run --release -p lms-lab --example false_lines -- [SCANS] [--stop24]`
+//! `cargo run --release -p lms-lab --example false_lines -- [SCANS] [--pairs-kept] [--list]`
 
 use std::collections::BTreeMap;
 
@@ -143,8 +146,11 @@ fn print_straight(scan: &ScoredScan<'_>, e: usize, l: &Line) {
 
 fn main() -> Result<()> {
     let (scans, args) = count_and_flags(100)?;
-    let base = if args.iter().any(|a| a == "--stop24") {
-        Params::STOP24
+    let base = if args.iter().any(|a| a == "--pairs-kept") {
+        Params {
+            arc_pairs: false,
+            ..Params::DEFAULT
+        }
     } else {
         Params::DEFAULT
     };

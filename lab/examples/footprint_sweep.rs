@@ -1,69 +1,43 @@
-//! The footprint-weighted fit (`Params::footprint`, ALGORITHM.md §10 (f))
-//! and merging across rejected segments (`Params::bridge_merge`, §10 (e)):
-//! each alone, together at κ = 2–5 mrad, and with per-turn extraction, on
-//! the realistic synthetic scenes (100 scans per family and σ₀) and the
-//! real logs' map truth, pooled (`docs/ALGORITHM-v3-section10.md` §10.7).
-//! Measured at stop 21, before the lines of arcs were dropped: every
-//! variant has `arc_chain: 0` (`arc_sweep` measures that step), and all
-//! run on stop 22's windows of consecutive beams (`same_turn_windows:
-//! false`; `tau_sweep` measures same-turn windows).
+//! The footprint-weighted fits (`Params::footprint`, κ) and the merge
+//! across rejected segments (`Params::bridge_merge`) (docs/DESIGN.md,
+//! "Fits" and "Merges"): each off, both off, and κ = 2–5 mrad, on the
+//! defaults: realistic synthetic scenes (`SCANS` per family and σ₀) and
+//! the real logs' map truth (every `EVERY`-th frame), pooled.
 //!
 //! `cargo run --release -p lms-lab --example footprint_sweep -- [EVERY] [SCANS]`
 
 use anyhow::Result;
 use lms_core::Params;
-use lms_lab::realtruth::on_data;
-use lms_lab::sweep::{print_sweep_over, Adjust};
+use lms_lab::sweep::{print_sweep, Adjust};
 
 /// The variants, each applied to the defaults (the per-data defaults on
 /// real logs, σ₀ on synthetic scenes).
 fn variants() -> Vec<(&'static str, Adjust)> {
     vec![
-        ("v2 (Params::V2)", |p| Params {
+        ("defaults (footprint=0.003, bridge_merge=true)", |p| p),
+        ("footprint=0", |p| Params {
+            footprint: 0.0,
+            ..p
+        }),
+        ("bridge_merge=false", |p| Params {
+            bridge_merge: false,
+            ..p
+        }),
+        ("footprint=0, bridge_merge=false", |p| Params {
             footprint: 0.0,
             bridge_merge: false,
-            arc_chain: 0,
             ..p
         }),
-        ("v2 + bridge", |p| Params {
-            footprint: 0.0,
-            arc_chain: 0,
-            ..p
-        }),
-        ("v2 + footprint 3 mrad", |p| Params {
-            bridge_merge: false,
-            arc_chain: 0,
-            ..p
-        }),
-        ("defaults (footprint 3 mrad + bridge)", |p| Params {
-            arc_chain: 0,
-            ..p
-        }),
-        ("footprint 2 mrad + bridge", |p| Params {
+        ("footprint=0.002", |p| Params {
             footprint: 0.002,
-            arc_chain: 0,
             ..p
         }),
-        ("footprint 4 mrad + bridge", |p| Params {
+        ("footprint=0.004", |p| Params {
             footprint: 0.004,
-            arc_chain: 0,
             ..p
         }),
-        ("footprint 5 mrad + bridge", |p| Params {
+        ("footprint=0.005", |p| Params {
             footprint: 0.005,
-            arc_chain: 0,
-            ..p
-        }),
-        ("defaults + per turn", |p| Params {
-            per_turn: true,
-            arc_chain: 0,
-            ..p
-        }),
-        ("v2 + per turn", |p| Params {
-            footprint: 0.0,
-            bridge_merge: false,
-            per_turn: true,
-            arc_chain: 0,
             ..p
         }),
     ]
@@ -72,5 +46,5 @@ fn variants() -> Vec<(&'static str, Adjust)> {
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
-    print_sweep_over(|p| on_data(Params::STOP22, p), &variants(), every, scans)
+    print_sweep(&variants(), every, scans)
 }

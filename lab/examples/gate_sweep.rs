@@ -1,6 +1,7 @@
-//! The usefulness gate (issue 14, item 6) swept on the real logs' map
-//! truth: `Params::max_alpha_sd_deg` and `min_points` at the no-flag
-//! defaults, pooled over every shared log.
+//! The usefulness gates (docs/DESIGN.md, "Gates") swept on the real logs' map
+//! truth: `Params::max_alpha_sd_deg`, `min_points` and `min_length` at
+//! the no-flag defaults, with and without per-turn extraction, pooled over
+//! every shared log (`UNVERIFIED=1`: against the unverified truth).
 //!
 //! `cargo run --release -p lms-lab --example gate_sweep -- [EVERY]`
 
@@ -23,67 +24,67 @@ fn main() -> Result<()> {
         adjust,
     };
     let mut ms = vec![
-        m("no flags (α sd ≤ 1.67°)", |p| p),
-        m("α sd ≤ 1.0°", |p| Params {
+        m("defaults (max_alpha_sd_deg=1.67)", |p| p),
+        m("max_alpha_sd_deg=1.0", |p| Params {
             max_alpha_sd_deg: 1.0,
             ..p
         }),
-        m("α sd ≤ 0.75°", |p| Params {
+        m("max_alpha_sd_deg=0.75", |p| Params {
             max_alpha_sd_deg: 0.75,
             ..p
         }),
-        m("α sd ≤ 0.5°", |p| Params {
+        m("max_alpha_sd_deg=0.5", |p| Params {
             max_alpha_sd_deg: 0.5,
             ..p
         }),
-        m("min_points 10", |p| Params {
+        m("min_points=10", |p| Params {
             min_points: 10,
             ..p
         }),
-        m("min_points 10, α sd ≤ 1.0°", |p| Params {
+        m("min_points=10, max_alpha_sd_deg=1.0", |p| Params {
             min_points: 10,
             max_alpha_sd_deg: 1.0,
             ..p
         }),
-        m("min_points 15", |p| Params {
+        m("min_points=15", |p| Params {
             min_points: 15,
             ..p
         }),
-        m("min_length 0.3 m", |p| Params {
+        m("min_length=0.3", |p| Params {
             min_length: 0.3,
             ..p
         }),
-        m("min_length 0.5 m", |p| Params {
+        m("min_length=0.5", |p| Params {
             min_length: 0.5,
             ..p
         }),
     ];
     ms.extend([
-        m("per turn", |p| Params {
+        m("per_turn=true", |p| Params {
             per_turn: true,
             ..p
         }),
-        m("per turn, α sd ≤ 1.0°", |p| Params {
+        m("per_turn=true, max_alpha_sd_deg=1.0", |p| Params {
             per_turn: true,
             max_alpha_sd_deg: 1.0,
             ..p
         }),
-        m("per turn, α sd ≤ 0.75°", |p| Params {
+        m("per_turn=true, max_alpha_sd_deg=0.75", |p| Params {
             per_turn: true,
             max_alpha_sd_deg: 0.75,
             ..p
         }),
-        m("per turn, min_points 8", |p| Params {
+        m("per_turn=true, min_points=8", |p| Params {
             per_turn: true,
             min_points: 8,
             ..p
         }),
-        m("per turn, σ ≥ 15 mm", |p| Params {
+        m("per_turn=true, σ ≥ 15 mm", |p| Params {
             per_turn: true,
             sigma: p.sigma.max(0.015),
             ..p
         }),
-        m("per turn, σ ≥ 20 mm", |p| Params {
+        m("per_turn=true, σ ≥ 20 mm", |p| Params {
             per_turn: true,
             sigma: p.sigma.max(0.02),
             ..p

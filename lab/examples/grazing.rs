@@ -1,10 +1,12 @@
-//! Where true walls break on real scans (issue 14 item 3, ALGORITHM.md §10):
-//! `D` of the last pass on the windows of the map truth's counted pieces,
+//! Where true walls break on real scans (docs/DESIGN.md, "Windows"): `D`
+//! of the last pass on the windows of the map truth's counted pieces,
 //! against incidence, range and interleave parity; and the fate of each
 //! counted piece under the no-flag defaults (matched, no line, or which
-//! gate a covering line misses).
+//! gate a covering line misses). Windows of consecutive beams
+//! (`same_turn_windows = false`), or with `turn` same-turn windows (the
+//! default).
 //!
-//! `cargo run --release -p lms-lab --example grazing -- [EVERY] [RHO]`
+//! `cargo run --release -p lms-lab --example grazing -- [EVERY] [RHO] [turn]`
 //! (EVERY-th frame of every shared log, default 5; RHO the grazing term
 //! `Params::grazing_noise`, default 0).
 

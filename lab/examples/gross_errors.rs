@@ -3,13 +3,13 @@
 //! 10.83 (χ²₁ at 99.9 %), which dominate σΔα/CRB (`lab/src/metrics.rs`).
 //! Each is classed by the noise-free hits of its beams: beams on another
 //! surface than the piece's (a wall past a corner, a pillar beside the
-//! wall), or every beam on the piece's own wall. `--stop23` runs
-//! `Params::STOP23` (no anchor gate on the merges), `--merge-f-test=F` the
-//! merges' nested-model test (`Params::merge_f_test`, §10.12), `--list`
-//! prints each.
-//! docs/ALGORITHM-v3-section10.md §10.10.
+//! wall), or every beam on the piece's own wall. `--no-anchor-gate` runs
+//! the defaults without the merges' anchor gate (`merge_anchor_gate =
+//! inf`), `--merge-f-test=F` with the merges' nested-model test
+//! (`Params::merge_f_test`), `--list` prints each. docs/DESIGN.md,
+//! "Merges".
 //!
-//! `cargo run --release -p lms-lab --example gross_errors -- [SCANS] [--stop23] [--merge-f-test=F] [--list]`
+//! `cargo run --release -p lms-lab --example gross_errors -- [SCANS] [--no-anchor-gate] [--merge-f-test=F] [--list]`
 
 use anyhow::Result;
 use lms_core::Params;
@@ -22,8 +22,11 @@ const GROSS: f64 = 10.83;
 
 fn main() -> Result<()> {
     let (scans, args) = count_and_flags(100)?;
-    let base = if args.iter().any(|a| a == "--stop23") {
-        Params::STOP23
+    let base = if args.iter().any(|a| a == "--no-anchor-gate") {
+        Params {
+            merge_anchor_gate: f32::INFINITY,
+            ..Params::DEFAULT
+        }
     } else {
         Params::DEFAULT
     };

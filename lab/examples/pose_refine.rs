@@ -2,7 +2,7 @@
 //! (`TruthConfig::refine_pose`) against the SLAM poses as they are: per log
 //! the registration's corrections, the share of pieces the frame confirms,
 //! and the defaults, the split-and-merge baseline and the oracle scored
-//! against both truths (docs/ALGORITHM-v3-section10.md §10.13).
+//! against both truths (docs/DESIGN.md, "Evaluation").
 //!
 //! `cargo run --release -p lms-lab --example pose_refine -- [EVERY]`
 

@@ -3,8 +3,7 @@
 //! with one setting of `TruthConfig` changed at a time — shorter map walls,
 //! a wider band of on-wall hits, cells occupied from fewer frames, sparser
 //! walls, Δr measured at the line's middle instead of at the foot of its
-//! normal (§10.14) — pooled over the logs (docs/ALGORITHM-v3-section10.md
-//! §10.8).
+//! normal — pooled over the logs (docs/DESIGN.md, "Open questions").
 //!
 //! `cargo run --release -p lms-lab --example truth_sensitivity -- [EVERY]`
 

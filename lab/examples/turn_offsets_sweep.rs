@@ -1,34 +1,37 @@
-//! The turns' offsets in the fits' χ² (`Params::turn_offsets`, ALGORITHM.md
-//! §10.4, the default since stop 24) with and without the merges' anchor
-//! gate and same-turn windows. Realistic synthetic scenes (`SCANS` per
-//! family and σ₀) and the real logs' map truth (every 5th frame), pooled
-//! (docs/ALGORITHM-v3-section10.md §10.11).
+//! The turns' offsets out of the fits' χ² (`Params::turn_offsets`;
+//! docs/DESIGN.md, "Fits") with and without the merges' anchor gate, the
+//! defaults with windows of consecutive beams, and per-turn extraction.
+//! Realistic synthetic scenes (`SCANS` per family and σ₀) and the real
+//! logs' map truth (every 5th frame), pooled.
 //!
 //! `cargo run --release -p lms-lab --example turn_offsets_sweep -- [SCANS]`
 
 use anyhow::Result;
 use lms_core::Params;
-use lms_lab::realtruth::on_data;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 fn main() -> Result<()> {
     let scans: usize = std::env::args().nth(1).map_or(Ok(100), |s| s.parse())?;
     let v: Vec<(&'static str, Adjust)> = vec![
-        ("stop 23 (neither)", |p| on_data(Params::STOP23, p)),
-        ("anchor gate only", |p| Params {
+        ("turn_offsets=false, merge_anchor_gate=inf", |p| Params {
+            turn_offsets: false,
+            merge_anchor_gate: f32::INFINITY,
+            ..p
+        }),
+        ("turn_offsets=false (anchor gate only)", |p| Params {
             turn_offsets: false,
             ..p
         }),
-        ("turn offsets only", |p| Params {
+        ("merge_anchor_gate=inf (turn offsets only)", |p| Params {
             merge_anchor_gate: f32::INFINITY,
             ..p
         }),
         ("defaults (both)", |p| p),
-        ("defaults, windows of §2 (no same-turn)", |p| Params {
+        ("same_turn_windows=false", |p| Params {
             same_turn_windows: false,
             ..p
         }),
-        ("defaults + per turn (§10 d)", |p| Params {
+        ("per_turn=true", |p| Params {
             per_turn: true,
             ..p
         }),

@@ -263,8 +263,8 @@ pub fn split_and_merge(
             }
         }
     }
-    // The peer's merge has no anchor gate (the core's since stop 24): its
-    // figures stay those measured before it.
+    // The peer's merge has no anchor gate (the core's defaults have one):
+    // it is the textbook split-and-merge.
     let peer = Params {
         merge_anchor_gate: f32::INFINITY,
         ..*params

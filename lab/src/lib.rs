@@ -22,6 +22,7 @@
 //!   figures, drawn with [`charts`].
 #![forbid(unsafe_code)]
 
+pub mod ablation;
 pub mod baselines;
 pub mod charts;
 pub mod figures;
@@ -113,9 +114,10 @@ pub struct TruthArgs {
     pub synthetic_scans: usize,
 }
 
-/// The issue-14 parts of the report (sections 5–7).
+/// The real-scan parts of the report (sections 5–7): the map truth, the
+/// sensor model and the realistic synthetic scenes.
 #[derive(Clone, Debug, Default)]
-pub struct Issue14 {
+pub struct RealSections {
     /// Real logs against map-derived truth.
     pub truth: Vec<realtruth::LogTruth>,
     /// The sensor model fitted to each log.
@@ -126,7 +128,7 @@ pub struct Issue14 {
     pub realistic_scans: usize,
 }
 
-impl Issue14 {
+impl RealSections {
     /// Sections 5–7 in Markdown (those that ran).
     pub fn markdown(&self, every: usize) -> String {
         let mut md = String::new();
@@ -211,12 +213,13 @@ impl Method {
     }
 
     /// The parameters for scans with noise `sigma`: ALGORITHM.md v1's
-    /// defaults ([`Params::V1`], "the spec" of every table; the baselines
-    /// and variants replicate its back end) with σ, then the method's changes.
+    /// defaults ([`Params::PAPER`], "the spec" of every table; the
+    /// baselines and variants replicate its back end) with σ, then the
+    /// method's changes.
     pub fn params(&self, sigma: f64) -> Params {
         (self.adjust)(Params {
             sigma: sigma as f32,
-            ..Params::V1
+            ..Params::PAPER
         })
     }
 
@@ -252,7 +255,7 @@ fn no_shared(p: Params) -> Params {
 }
 
 /// Name of the spec's method in every table.
-pub const SPEC: &str = "spec (defaults)";
+pub const SPEC: &str = "spec (--preset paper)";
 /// Name of the `fit_shared_points = false` method.
 pub const NO_SHARED: &str = "fit_shared_points = false";
 /// Name of the split-and-merge baseline.
@@ -626,13 +629,13 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         real: (t3 - t2).as_secs_f64(),
         total: started.elapsed().as_secs_f64(),
     };
-    let issue14 = Issue14 {
+    let sections = RealSections {
         truth,
         fits,
         realistic,
         realistic_scans: args.scans,
     };
-    let path = report::write(args, &synthetic, &scale, (&real, &issue14), timing)?;
+    let path = report::write(args, &synthetic, &scale, (&real, &sections), timing)?;
     append_left_out(&path, &left_out)?;
     bar.finish_and_clear();
     ensure!(

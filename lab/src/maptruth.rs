@@ -1,4 +1,4 @@
-//! Ground truth on real scans, from the map (issue 14, item 5).
+//! Ground truth on real scans, from the map.
 //!
 //! The shared CARMEN logs carry SLAM-corrected laser poses. From them:
 //!
@@ -22,8 +22,8 @@
 //!    front of a wall, or a hit past the map, is on no wall); of several
 //!    such walls, the one whose line is nearest the hit. With
 //!    [`TruthConfig::refine_pose`] the frame's pose is first registered to
-//!    the walls ([`refine_pose`]; off by default: it changed nothing
-//!    measurable, docs/ALGORITHM-v3-section10.md §10.13).
+//!    the walls ([`refine_pose`]; off by default: it changes nothing
+//!    measurable, `cargo run --release -p lms-lab --example pose_refine`).
 //!    Runs of beams on one wall, bridging at most
 //!    [`TruthConfig::gap_beams`] beams on no wall (ALGORITHM.md §7.6's
 //!    merge gap), are the frame's *true pieces*; the pieces with at least
@@ -96,10 +96,10 @@ pub struct TruthConfig {
     /// ([`refine_pose`]): the SLAM pose corrected by the frame's own hits.
     pub refine_pose: bool,
     /// Measure the matching's and the verification's Δr where the line is,
-    /// at its middle, instead of at the foot of its normal (issue 14's
-    /// gate, the default). A line far from its foot point misses the 0.1 m
-    /// gate there with a sub-degree α error while lying on the wall
-    /// ([`gate_offsets`]; docs/ALGORITHM-v3-section10.md §10.14).
+    /// at its middle, instead of at the foot of its normal (the default
+    /// gate). A line far from its foot point misses the 0.1 m gate there
+    /// with a sub-degree α error while lying on the wall ([`gate_offsets`];
+    /// docs/DESIGN.md, "Open questions").
     pub range_gate_at_middle: bool,
 }
 

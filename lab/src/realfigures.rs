@@ -17,8 +17,12 @@ const TRUTH: RGBColor = RGBColor(0x33, 0xA0, 0x2C);
 const MATCHED: RGBColor = RGBColor(0x1F, 0x78, 0xB4);
 const FALSE: RGBColor = RGBColor(0xE3, 0x1A, 0x1C);
 const POINTS: RGBColor = RGBColor(0x99, 0x99, 0x99);
-/// Methods drawn (indices into the method list: no flags, v1 no flags, split-and-merge).
-const DRAWN: [usize; 3] = [0, 1, 6];
+/// Methods drawn, by name: the defaults, ALGORITHM.md v1, split-and-merge.
+const DRAWN: [&str; 3] = [
+    crate::realtruth::NO_FLAGS,
+    crate::realtruth::PAPER_NO_FLAGS,
+    crate::realtruth::SPLIT_MERGE,
+];
 
 fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("cannot draw the truth figure: {e}")
@@ -73,7 +77,7 @@ pub fn draw(
         let mut ex = Extractor::new();
         let tables = Tables::for_frame(&scan.frame);
         for (area, &m) in areas[1..].iter().zip(&DRAWN) {
-            let Some(method) = methods.get(m) else {
+            let Some(method) = methods.iter().find(|x| x.name == m) else {
                 continue;
             };
             let lines = extract(method, log.unit, no_flags, &mut ex, scan, &tables, &truth);

@@ -1,4 +1,4 @@
-//! Synthetic scenes from the realistic sensor model (issue 14, Goals):
+//! Synthetic scenes from the realistic sensor model:
 //! the scene families of [`crate::scenes`] scanned by
 //! [`lms_scene::LmsModel`] with the values fitted to the CSAIL log
 //! ([`realistic_model`]; `docs/evaluation` section 6) at σ₀ = 10 and 20 mm,
@@ -21,6 +21,7 @@ use lms_core::{Extractor, Params};
 use lms_scene::{seeded_rng, Bearings, LmsModel, LogMode};
 use rand::Rng;
 
+use crate::ablation;
 use crate::metrics::{Gates, Tally};
 use crate::scenes::{self, Family, Sample};
 use crate::{score_sample, Kind, Method};
@@ -84,79 +85,63 @@ pub fn sample(
     })
 }
 
-/// The methods: ALGORITHM.md v1's defaults, v2's (`Params::V2`), stop
-/// 21's (§10 (e), (f): `Params::STOP21`), stop 22's (and the lines of arcs
-/// dropped: `Params::STOP22`), stop 23's (and same-turn windows, §10 (a):
-/// `Params::STOP23`), stop 24's (and the merges' anchor gate and the
-/// turns' offsets out of the fits' χ²: `Params::STOP24`), the defaults (and
-/// the pairs of lines on a curve dropped), §10 options on them,
-/// split-and-merge.
+/// The methods: ALGORITHM.md v1 ([`Params::PAPER`]) and v2
+/// ([`Params::V2`]); the defaults with groups of their decisions turned off,
+/// each on top of the one before ([`crate::ablation`]); the defaults; the
+/// defaults with one option that is not a default; split-and-merge.
 pub fn methods() -> Vec<Method> {
+    let core = |name: &str, adjust| Method::with(name, Kind::Core, adjust);
+    // The first method's parameters also define the truth (`score_sample`).
     vec![
-        Method::with("v1 defaults (Params::V1)", Kind::Core, |p| Params {
+        core("paper (--preset paper)", |p| Params {
             sigma: p.sigma,
-            ..Params::V1
+            ..Params::PAPER
         }),
-        Method::with("v2 defaults (Params::V2)", Kind::Core, |p| Params {
-            sigma: p.sigma,
-            ..Params::V2
-        }),
-        Method::with("stop-21 defaults (Params::STOP21)", Kind::Core, |p| {
-            Params {
-                sigma: p.sigma,
-                ..Params::STOP21
-            }
-        }),
-        Method::with("stop-22 defaults (Params::STOP22)", Kind::Core, |p| {
-            Params {
-                sigma: p.sigma,
-                ..Params::STOP22
-            }
-        }),
-        Method::with("stop-23 defaults (Params::STOP23)", Kind::Core, |p| {
-            Params {
-                sigma: p.sigma,
-                ..Params::STOP23
-            }
-        }),
-        Method::with("stop-24 defaults (Params::STOP24)", Kind::Core, |p| {
-            Params {
-                sigma: p.sigma,
-                ..Params::STOP24
-            }
-        }),
-        Method::with("defaults (Params::default)", Kind::Core, |p| Params {
+        core("defaults", |p| Params {
             sigma: p.sigma,
             ..Params::default()
         }),
-        Method::with("defaults + merge F test 20 (§10.12)", Kind::Core, |p| {
-            Params {
-                sigma: p.sigma,
-                merge_f_test: 20.0,
-                ..Params::default()
-            }
+        core(ablation::ARC_PAIRS_KEPT_NAME, |p| Params {
+            sigma: p.sigma,
+            ..ablation::ARC_PAIRS_KEPT
         }),
-        Method::with("defaults + grazing ρ = 0.5", Kind::Core, |p| Params {
+        core(ablation::NO_ANCHOR_NO_OFFSETS_NAME, |p| Params {
+            sigma: p.sigma,
+            ..ablation::NO_ANCHOR_NO_OFFSETS
+        }),
+        core(ablation::CONSECUTIVE_WINDOWS_NAME, |p| Params {
+            sigma: p.sigma,
+            ..ablation::CONSECUTIVE_WINDOWS
+        }),
+        core(ablation::ARC_CHAINS_KEPT_NAME, |p| Params {
+            sigma: p.sigma,
+            ..ablation::ARC_CHAINS_KEPT
+        }),
+        core("v2 (--preset v2)", |p| Params {
+            sigma: p.sigma,
+            ..Params::V2
+        }),
+        core("defaults, merge_f_test=20", |p| Params {
+            sigma: p.sigma,
+            merge_f_test: 20.0,
+            ..Params::default()
+        }),
+        core("defaults, grazing_noise=0.5", |p| Params {
             sigma: p.sigma,
             grazing_noise: 0.5,
             ..Params::default()
         }),
-        Method::with("defaults + fit σ = 1.5σ", Kind::Core, |p| Params {
+        core("defaults, fit_sigma=1.5σ", |p| Params {
             sigma: p.sigma,
             fit_sigma: 1.5 * p.sigma,
             ..Params::default()
         }),
-        Method::with("defaults + fit σ = 2σ", Kind::Core, |p| Params {
+        core("defaults, fit_sigma=2σ", |p| Params {
             sigma: p.sigma,
             fit_sigma: 2.0 * p.sigma,
             ..Params::default()
         }),
-        Method::with("stop-22 defaults, fit σ = 2σ", Kind::Core, |p| Params {
-            sigma: p.sigma,
-            fit_sigma: 2.0 * p.sigma,
-            ..Params::STOP22
-        }),
-        Method::with("defaults + per turn (§10 d)", Kind::Core, |p| Params {
+        core("defaults, per_turn=true", |p| Params {
             sigma: p.sigma,
             per_turn: true,
             ..Params::default()
@@ -209,7 +194,7 @@ pub fn markdown(res: &[(f64, String, Tally)], scans: usize) -> String {
          CSAIL log (`lab/src/realistic.rs`: κ = 3.8 mrad, interleaved turns {} mm apart, \
          0.25° footprint with 30 % mixed pixels, 1 % dropouts, mm ranges); σ = σ₀ given to \
          every method. Truth at the scan's mid-time pose (the turns' mean); the CRB with \
-         the model's per-beam noise σ₀² + (κ·d·tan θ)². Goals (issue 14): σ₀ = 10 mm \
+         the model's per-beam noise σ₀² + (κ·d·tan θ)². Goals: σ₀ = 10 mm \
          TruePos ≥ 0.95, FalsePos ≤ 0.02; σ₀ = 20 mm TruePos ≥ 0.95, FalsePos ≤ 0.05; \
          σΔα, σΔr ≤ 1.2 × CRB.\n",
         DELTA * 1e3

@@ -1,7 +1,6 @@
-//! Real scans against the map-derived truth of [`crate::maptruth`]
-//! (issue 14, item 5): per log and method, TruePos, FalsePos, lines on no
-//! map wall, coverage, the errors Δα and Δr, repeatability and
-//! fragmentation.
+//! Real scans against the map-derived truth of [`crate::maptruth`]: per
+//! log and method, TruePos, FalsePos, lines on no map wall, coverage, the
+//! errors Δα and Δr, repeatability and fragmentation.
 //!
 //! # Matching
 //! A line and a true piece are a candidate pair if at least half of the
@@ -32,21 +31,16 @@
 //!
 //! # Methods
 //! `no flags` is what `host-bridge extract LOG` does without options
-//! ([`no_flag_params`]: the defaults — ALGORITHM.md v2's `split_depth = 8`,
-//! `fit_shared_points = false`, since stop 21 the footprint weights and
-//! the merge across rejected segments of §10 (e), (f), since stop 22 the
-//! lines of arcs dropped, since stop 23 same-turn windows (§10 (a)), since
-//! stop 24 the merges' anchor gate and the turns' offsets out of the fits'
-//! χ², since stop 25 the pairs of lines on a curve dropped — with σ and
-//! `max_range` from the data); `stop 24` is the same with pairs kept
-//! ([`Params::STOP24`]); `stop 23` without the anchor gate and the offsets
-//! too ([`Params::STOP23`]);
-//! `stop 22` with windows of consecutive beams too ([`Params::STOP22`];
-//! stop 21's [`Params::STOP21`] gives the same on these logs); `v2` the same
-//! with [`Params::V2`]'s footprint and merge (the defaults up to stop 20);
-//! `v1` is
-//! [`Params::V1`], the defaults before v2; `σ by unit` is 10 mm for
-//! cm logs and 5 mm for mm logs ([`crate::real::sigma_for`]); the oracle is a
+//! ([`no_flag_params`]: the defaults with σ and `max_range` from the data).
+//! The rows below it turn groups of the defaults' decisions off, each on
+//! top of the one before ([`crate::ablation`]): pairs of lines on a curve
+//! kept; then no anchor gate on the merges and no turn offsets in the fits'
+//! χ²; then windows of consecutive beams and no work bound on split before
+//! reject (the same figures as with every line of an arc kept too: no line
+//! of these logs is dropped as an arc); `v2` is [`Params::V2`] (no
+//! footprint weights, no bridge merge either); `paper` is
+//! [`Params::PAPER`], ALGORITHM.md v1. `σ by unit` is 10 mm for cm logs
+//! and 5 mm for mm logs ([`crate::real::sigma_for`]); the oracle is a
 //! total-least-squares fit to each counted piece's own on-wall hits — what
 //! an extractor that knew the walls would report, so its TruePos is the
 //! ceiling of this truth and its σ the truth's own error.
@@ -61,6 +55,7 @@ use host_bridge::carmen::{self, Scan, Unit, UnitMode};
 use host_bridge::options::UnitArg;
 use lms_core::{Extractor, Line, Params};
 
+use crate::ablation;
 use crate::baselines::{self, run_core, Extraction, Tables};
 use crate::maptruth::{build_map, frame_truth, FrameTruth, Map, TruthConfig};
 use crate::metrics::{mean, std_dev};
@@ -73,7 +68,7 @@ pub const GATE_R: f64 = 0.1;
 pub const GATE_OVERLAP: f64 = 0.5;
 /// Counted sightings a wall needs to enter the per-wall fragmentation figure.
 pub const MIN_SIGHTINGS: usize = 5;
-/// Share of a wall's sightings it may be fragmented in (the issue's goal).
+/// Share of a wall's sightings it may be fragmented in (the goal).
 pub const FRAGMENT_GOAL: f64 = 0.05;
 
 /// The parameters `host-bridge extract LOG` uses without options: the
@@ -113,7 +108,7 @@ pub fn load_with_map(path: &Path, cfg: &TruthConfig) -> Result<LogWithMap> {
     })
 }
 
-/// `preset` (an older stop's defaults, say) on the data of `data`: its σ
+/// `preset` (a set of [`crate::ablation`], say) on the data of `data`: its σ
 /// and range limit, the only fields in which the per-data defaults
 /// ([`no_flag_params`]) and the synthetic scenes' σ₀ differ from
 /// [`Params::DEFAULT`].
@@ -130,10 +125,9 @@ pub fn on_data(preset: Params, data: Params) -> Params {
 pub enum Base {
     /// As without flags ([`no_flag_params`]: the defaults, per data).
     NoFlags,
-    /// ALGORITHM.md v1's defaults ([`Params::V1`]: σ = 5 mm, no split
-    /// before reject, shared corner points, no range limit) — what `extract`
-    /// without flags did before v2.
-    V1,
+    /// ALGORITHM.md v1's defaults ([`Params::PAPER`]: σ = 5 mm, no split
+    /// before reject, shared corner points, no range limit).
+    Paper,
 }
 
 /// How a method picks σ.
@@ -178,7 +172,7 @@ impl RealMethod {
     pub fn params(&self, unit: Unit, no_flags: &Params) -> Params {
         let base = match self.base {
             Base::NoFlags => *no_flags,
-            Base::V1 => Params::V1,
+            Base::Paper => Params::PAPER,
         };
         let sigma = match self.sigma {
             SigmaChoice::Base => base.sigma,
@@ -190,30 +184,28 @@ impl RealMethod {
 }
 
 /// Name of the no-flags method.
-pub const NO_FLAGS: &str =
-    "defaults, no flags (per data; footprint + bridge + arcs + same-turn windows + anchor gate + turn offsets + arc pairs)";
-/// Name of the no-flags method with the defaults of stop 24
-/// (`Params::STOP24`: pairs of lines on a curve kept).
-pub const STOP24_NO_FLAGS: &str = "stop-24 defaults, no flags (--no-arc-pairs)";
-/// Name of the no-flags method with the defaults of stop 23
-/// (`Params::STOP23`: no anchor gate on the merges, no turn offsets in the
-/// fits' χ²).
-pub const STOP23_NO_FLAGS: &str =
-    "stop-23 defaults, no flags (stop 24's and --merge-anchor-gate inf --no-turn-offsets)";
-/// Name of the no-flags method with the defaults of stop 22
-/// (`Params::STOP22`: windows of consecutive beams over both turns). On
-/// the real logs stop 21's defaults (`Params::STOP21`, no lines of arcs
-/// dropped) give the same figures: no line of them is dropped as an arc
-/// (`tools/feature-bits/tests/digests.rs`).
-pub const STOP22_NO_FLAGS: &str =
-    "stop-22 defaults, no flags (stop 23's and --no-same-turn-windows --split-budget 0)";
-/// Name of the no-flags method with the defaults up to stop 20
-/// (`Params::V2`: no footprint weights, no merge across rejected segments).
-pub const V2_NO_FLAGS: &str = "v2 defaults, no flags (per data)";
-/// Name of v1's no-flags method.
-pub const V1_NO_FLAGS: &str = "v1 defaults, no flags (σ 5 mm)";
+pub const NO_FLAGS: &str = "defaults, no flags (per data)";
+/// Name of the defaults with pairs of lines on a curve kept
+/// ([`crate::ablation::ARC_PAIRS_KEPT`]).
+pub const ARC_PAIRS_KEPT: &str = ablation::ARC_PAIRS_KEPT_NAME;
+/// Name of [`ARC_PAIRS_KEPT`] with no anchor gate on the merges and no
+/// turn offsets in the fits' χ² ([`crate::ablation::NO_ANCHOR_NO_OFFSETS`]).
+pub const NO_ANCHOR_NO_OFFSETS: &str = ablation::NO_ANCHOR_NO_OFFSETS_NAME;
+/// Name of [`NO_ANCHOR_NO_OFFSETS`] with windows of consecutive beams over
+/// both turns and no work bound on split before reject
+/// ([`crate::ablation::CONSECUTIVE_WINDOWS`]). On the real logs every line
+/// of an arc kept too ([`crate::ablation::ARC_CHAINS_KEPT`]) gives the same
+/// figures: no line of them is dropped as an arc.
+pub const CONSECUTIVE_WINDOWS: &str = ablation::CONSECUTIVE_WINDOWS_NAME;
+/// Name of ALGORITHM.md v2's defaults on the data ([`Params::V2`]: no
+/// footprint weights, no merge across rejected segments either).
+pub const V2_NO_FLAGS: &str = "v2 (--preset v2, σ per data)";
+/// Name of ALGORITHM.md v1's defaults ([`Params::PAPER`]).
+pub const PAPER_NO_FLAGS: &str = "paper (--preset paper, σ 5 mm)";
 /// Name of per-turn extraction (`Params::per_turn`) at the no-flag parameters.
-pub const PER_TURN: &str = "no flags + per turn (§10 d)";
+pub const PER_TURN: &str = "defaults, per_turn=true";
+/// Name of the split-and-merge baseline.
+pub const SPLIT_MERGE: &str = "split-and-merge (4σ), σ by unit";
 /// Name of the oracle.
 pub const ORACLE: &str = "oracle (LS fit to the true beams)";
 
@@ -226,49 +218,44 @@ pub fn methods() -> Vec<RealMethod> {
         sigma,
         adjust: |p| p,
     };
-    // No flags with changes (docs/ALGORITHM-v3-section10.md).
+    // The defaults per data with changes (docs/DESIGN.md).
     let g = |name, adjust| RealMethod {
         adjust,
         ..m(name, RealKind::Core, Base::NoFlags, SigmaChoice::Base)
     };
-    use Base::{NoFlags, V1};
+    use Base::{NoFlags, Paper};
     use RealKind::*;
     use SigmaChoice::{ByUnit, Fixed};
     let own = SigmaChoice::Base;
     vec![
         m(NO_FLAGS, Core, NoFlags, own),
-        g(STOP24_NO_FLAGS, |p| on_data(Params::STOP24, p)),
-        g(STOP23_NO_FLAGS, |p| on_data(Params::STOP23, p)),
-        g(STOP22_NO_FLAGS, |p| on_data(Params::STOP22, p)),
+        g(ARC_PAIRS_KEPT, |p| on_data(ablation::ARC_PAIRS_KEPT, p)),
+        g(NO_ANCHOR_NO_OFFSETS, |p| {
+            on_data(ablation::NO_ANCHOR_NO_OFFSETS, p)
+        }),
+        g(CONSECUTIVE_WINDOWS, |p| {
+            on_data(ablation::CONSECUTIVE_WINDOWS, p)
+        }),
         g(V2_NO_FLAGS, |p| on_data(Params::V2, p)),
-        m(V1_NO_FLAGS, Core, V1, own),
-        m("v1, σ by unit (10 mm cm, 5 mm mm)", Core, V1, ByUnit),
+        m(PAPER_NO_FLAGS, Core, Paper, own),
+        m("paper, σ by unit (10 mm cm, 5 mm mm)", Core, Paper, ByUnit),
         m("defaults, σ by unit", Core, NoFlags, ByUnit),
         m("defaults, σ = 20 mm", Core, NoFlags, Fixed(0.02)),
         m("defaults, σ = 30 mm", Core, NoFlags, Fixed(0.03)),
-        m(
-            "split-and-merge (4σ), σ by unit",
-            SplitMerge(4.0),
-            NoFlags,
-            ByUnit,
-        ),
-        g("no flags + grazing ρ = 0.5", |p| Params {
+        m(SPLIT_MERGE, SplitMerge(4.0), NoFlags, ByUnit),
+        g("defaults, grazing_noise=0.5", |p| Params {
             grazing_noise: 0.5,
             ..p
         }),
-        g("no flags + fit σ = 1.5σ", |p| Params {
+        g("defaults, fit_sigma=1.5σ", |p| Params {
             fit_sigma: 1.5 * p.sigma,
             ..p
         }),
-        g("no flags + fit σ = 2σ", |p| Params {
+        g("defaults, fit_sigma=2σ", |p| Params {
             fit_sigma: 2.0 * p.sigma,
             ..p
         }),
-        g("fit σ = 2σ (windows as v2)", |p| Params {
-            fit_sigma: 2.0 * p.sigma,
-            ..on_data(Params::STOP22, p)
-        }),
-        g("no flags + merge F test 20 (§10.12)", |p| Params {
+        g("defaults, merge_f_test=20", |p| Params {
             merge_f_test: 20.0,
             ..p
         }),
@@ -276,7 +263,7 @@ pub fn methods() -> Vec<RealMethod> {
             per_turn: true,
             ..p
         }),
-        g("v2 + per turn", |p| Params {
+        g("v2, per_turn=true", |p| Params {
             per_turn: true,
             ..on_data(Params::V2, p)
         }),
@@ -482,7 +469,7 @@ pub fn candidate(l: &ScoredLine, p: &crate::maptruth::Piece) -> Option<(f64, f64
 }
 
 /// `(Δα, Δr)` of `l` against the line `reference = (α, r)`: Δα wrapped,
-/// Δr signed, `l.r − r` at the foot of the normal (issue 14's gate) or,
+/// Δr signed, `l.r − r` at the foot of the normal (the default gate) or,
 /// `at_middle`, the distance of `l.middle` from the reference line,
 /// `middle·n − r`, where the line is
 /// ([`crate::maptruth::TruthConfig::range_gate_at_middle`]). The two agree
@@ -935,14 +922,14 @@ pub fn run_standalone(args: &crate::TruthArgs) -> Result<PathBuf> {
         Vec::new()
     };
     bar.finish_and_clear();
-    let issue14 = crate::Issue14 {
+    let sections = crate::RealSections {
         truth,
         fits,
         realistic,
         realistic_scans: args.synthetic_scans,
     };
     let path = output.join("real-truth.md");
-    std::fs::write(&path, issue14.markdown(args.every))
+    std::fs::write(&path, sections.markdown(args.every))
         .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path)
 }

@@ -263,7 +263,7 @@ pub fn write(
     args: &EvaluateArgs,
     syn: &Synthetic,
     scale: &Scale,
-    (real, issue14): (&[LogResult], &crate::Issue14),
+    (real, sections): (&[LogResult], &crate::RealSections),
     timing: Timing,
 ) -> Result<PathBuf> {
     let figures = !args.no_plots && fonts_available();
@@ -288,7 +288,7 @@ pub fn write(
     diagnosis(&mut md, &ctx)?;
     scale_space(&mut md, &ctx)?;
     real_scans(&mut md, &ctx);
-    md.push_str(&issue14.markdown(args.real_every));
+    md.push_str(&sections.markdown(args.real_every));
     reproduce(&mut md, &ctx, &timing);
     let path = args.output.join("README.md");
     std::fs::write(&path, md).with_context(|| format!("cannot write {}", path.display()))?;

@@ -85,7 +85,7 @@ pub fn run(args: &EvaluateArgs, bar: &indicatif::ProgressBar) -> Result<Scale> {
                 let tables = Tables::for_frame(&s.frame);
                 let base = Params {
                     sigma: sigma as f32,
-                    ..Params::V1
+                    ..Params::PAPER
                 };
                 let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
                 detectable += truth.pieces.iter().filter(|p| p.detectable).count();

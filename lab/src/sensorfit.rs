@@ -1,5 +1,5 @@
 //! The realistic sensor model ([`lms_scene::LmsModel`]) fitted to the
-//! shared real logs (issue 14, item 2), with the map-derived truth of
+//! shared real logs, with the map-derived truth of
 //! [`crate::maptruth`] telling which beams are on walls.
 //!
 //! # The statistic

@@ -37,21 +37,9 @@ pub fn count_and_flags(default: usize) -> Result<(usize, Vec<String>)> {
 /// (`scans` per family and σ₀) and the real logs' map-truth figures
 /// (every `every`-th frame, pooled), as Markdown tables.
 pub fn print_sweep(variants: &[(&'static str, Adjust)], every: usize, scans: usize) -> Result<()> {
-    print_sweep_over(|p| p, variants, every, scans)
-}
-
-/// [`print_sweep`] with every variant applied to `base(defaults)` instead
-/// of the defaults: an older stop's sweep on that stop's defaults (e.g.
-/// `|p| realtruth::on_data(Params::STOP22, p)` for stop 22's).
-pub fn print_sweep_over(
-    base: Adjust,
-    variants: &[(&'static str, Adjust)],
-    every: usize,
-    scans: usize,
-) -> Result<()> {
     let names: Vec<&str> = variants.iter().map(|v| v.0).collect();
     print_sweep_with(&names, every, scans, &|k, ex, frame, params| {
-        run_core(ex, frame, &(variants[k].1)(base(*params)))
+        run_core(ex, frame, &(variants[k].1)(*params))
     })
 }
 

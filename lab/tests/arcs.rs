@@ -1,9 +1,10 @@
 //! Arcs are not walls (`Params::arc_chain`, `lms_core::pipeline::arcs`), on
 //! the realistic synthetic scenes (rooms with boxes, clutter and pillars;
 //! corridors; a room with a box; rooms with curved walls) at σ₀ = 10 mm:
-//! stop 24's defaults against the same without dropping arcs
-//! (`Params::STOP21`), and the defaults (pairs of lines on a curve dropped
-//! too, `Params::arc_pairs`) against stop 24's.
+//! the defaults with chains of lines dropped but pairs kept
+//! (`arc_pairs = false`) against the same without dropping arcs
+//! (`arc_chain = 0`), and the defaults (pairs of lines on a curve dropped
+//! too, `Params::arc_pairs`) against the defaults with pairs kept.
 //!
 //! Asserted: lines are dropped as arcs and counted; FalsePos falls by at
 //! least 0.008 (chains; measured 0.160 → 0.144 over 100 scans per family)
@@ -11,6 +12,7 @@
 //! by no more than 0.002 (measured: unchanged).
 
 use lms_core::{Extractor, Params};
+use lms_lab::ablation;
 use lms_lab::baselines::run_core;
 use lms_lab::metrics::{scan_truth, Gates, Tally};
 use lms_lab::realistic::{realistic_model, sample, DELTA};
@@ -86,19 +88,23 @@ fn assert_gain(on: &lms_lab::metrics::Summary, off: &lms_lab::metrics::Summary, 
 
 #[test]
 fn dropping_arcs_removes_false_lines_and_keeps_the_walls() {
-    let [(on, dropped_on), (off, dropped_off)] = compare(Params::STOP24, Params::STOP21);
+    let no_arcs = Params {
+        arc_chain: 0,
+        ..ablation::ARC_PAIRS_KEPT
+    };
+    let [(on, dropped_on), (off, dropped_off)] = compare(ablation::ARC_PAIRS_KEPT, no_arcs);
     println!("chains dropped {dropped_on} lines");
     assert!(dropped_on > 0 && dropped_off == 0);
     assert_gain(&on, &off, 0.008);
 }
 
-/// Pairs of lines on a curve (`Params::arc_pairs`, stop 25, §10.12): the
-/// defaults against stop 24's (pairs kept). Measured: FalsePos 0.116 →
+/// Pairs of lines on a curve (`Params::arc_pairs`): the defaults against
+/// the defaults with pairs kept. Measured: FalsePos 0.116 →
 /// 0.112 over these 50 scans per family (4 of 1 700 lines; 0.118 → 0.108
 /// over 100), TruePos unchanged.
 #[test]
 fn dropping_pairs_on_curves_removes_false_lines_and_keeps_the_walls() {
-    let [(on, dropped_on), (off, dropped_off)] = compare(Params::DEFAULT, Params::STOP24);
+    let [(on, dropped_on), (off, dropped_off)] = compare(Params::DEFAULT, ablation::ARC_PAIRS_KEPT);
     println!("pairs and chains dropped {dropped_on} lines, chains alone {dropped_off}");
     assert!(dropped_on > dropped_off);
     assert_gain(&on, &off, 0.003);

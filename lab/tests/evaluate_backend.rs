@@ -28,7 +28,7 @@ fn evaluate_back_end_and_smoothing_replicas_match_the_core_bit_for_bit() {
                     sigma: sigma as f32,
                     fit_shared_points: shared,
                     iterations,
-                    ..Params::V1
+                    ..Params::PAPER
                 };
                 let tables = Tables::for_frame(&s.frame);
                 let mut trace = lms_core::Trace::new();

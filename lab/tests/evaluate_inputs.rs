@@ -1,4 +1,4 @@
-//! `lms-lab evaluate --data` (issue 13.13): a missing or mistyped folder,
+//! `lms-lab evaluate --data`: a missing or mistyped folder,
 //! or one without logs, fails instead of evaluating no real scans; one bad
 //! log is left out and listed in the report, the others are evaluated, and
 //! the run then fails saying so.

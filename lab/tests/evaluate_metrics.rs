@@ -336,7 +336,7 @@ fn evaluate_corners_match_within_the_gate_one_to_one() {
 fn evaluate_truth_of_a_built_in_corner_scene() {
     let scene = Scene::two_walls_corner(90.0);
     let truth = scene.cast(&Bearings::lms_180_half_deg(), Pose::IDENTITY);
-    let params = Params::V1;
+    let params = Params::PAPER;
     let t = scan_truth(&truth, &scene, &params, 0.005, &Gates::default());
     assert_eq!(t.pieces.len(), 2);
     assert!(t.pieces.iter().all(|p| p.resolvable));
@@ -357,7 +357,7 @@ fn evaluate_baselines_on_a_noise_free_corner() {
     let readings = truth.noise_free();
     let frame = host_bridge::synthetic::frame_from_readings(&readings).unwrap();
     let tables = Tables::for_frame(&frame);
-    let params = Params::V1;
+    let params = Params::PAPER;
     let t = scan_truth(&truth, &scene, &params, 0.005, &Gates::default());
     let x = split_and_merge(&frame, &tables, &params, 4.0);
     let s = score_lines(&t, &x.lines, frame.beams(), 0.005, &Gates::default());

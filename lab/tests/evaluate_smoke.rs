@@ -83,7 +83,7 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
     }
     // Every main method has a row per σ in the detection table.
     for m in [
-        "spec (defaults)",
+        lms_lab::SPEC,
         "fit_shared_points = false",
         "split-and-merge (4σ)",
         "Gaussian mask (s = 1.35)",
@@ -99,7 +99,7 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
         &md[..600]
     );
     if have_log {
-        assert!(md.contains("| csail-corrected.log.gz | 5 × 361 (cm) | spec (defaults) |"));
+        assert!(md.contains("| csail-corrected.log.gz | 5 × 361 (cm) | spec (--preset paper) |"));
         // The map-derived truth: the map from all 406 frames, 5 scored.
         assert!(md.contains("## 5. Real scans against map-derived truth"));
         assert!(

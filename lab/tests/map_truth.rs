@@ -148,7 +148,7 @@ fn piece(first: usize, last: usize, alpha: f64, r: f64) -> Piece {
 }
 
 /// A wall seen at grazing incidence, far from the foot of its normal: a
-/// line 1° off that crosses it at its middle misses issue 14's Δr gate at
+/// line 1° off that crosses it at its middle misses the default Δr gate at
 /// the foot (by 0.14 m) and passes it where the line is.
 #[test]
 fn the_range_gate_at_the_middle_keeps_a_line_on_a_far_grazing_wall() {

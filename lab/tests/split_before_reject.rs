@@ -88,10 +88,9 @@ fn core_split_matches_the_prototype_and_finds_the_walls() {
         core.crb_alpha,
         proto.crb_alpha,
     );
-    // Since ALGORITHM.md v2 the core tests straightness by two bounds and
-    // leaves shared beams out of its split tests (wt-i14core), not the
-    // prototype's way: the pieces differ in some scans (140 of 160 identical
-    // when this changed), the scores below must still agree.
+    // The core tests straightness by two bounds and leaves shared beams out
+    // of its split tests, not the prototype's way: the pieces differ in some
+    // scans (140 of 160 identical), the scores below must still agree.
     assert!(same * 100 >= scans * 80, "{same} of {scans} identical");
     assert!(core.true_pos >= 0.9, "TruePos {}", core.true_pos);
     assert!((core.true_pos - proto.true_pos).abs() <= 0.03);

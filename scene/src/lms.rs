@@ -1,4 +1,4 @@
-//! A sensor model that looks like a real LMS 2xx (issue 14, item 2), beside
+//! A sensor model that looks like a real LMS 2xx, beside
 //! the plain [`NoiseModel`](crate::NoiseModel) (which stays as it was: the
 //! existing tests and pinned results use it).
 //!

@@ -113,7 +113,7 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
     const DRAWS: usize = 400;
     // "As extracted" is ALGORITHM.md v1 (the shared beam in both fits, no
     // split before reject); the v2 default is the refit below.
-    let params = Params::V1;
+    let params = Params::PAPER;
     let mut rng = ChaCha8Rng::seed_from_u64(90);
     let mut ex = Extractor::new();
     let mut ex_excluding = Extractor::new();

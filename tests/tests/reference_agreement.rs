@@ -1,19 +1,40 @@
 //! The core (`f32`, closed-form symmetric solve) agrees with the independent
-//! `f64` reference (`workspace_tests::reference`, Gaussian elimination with an
-//! explicit gain) on the smoothed ranges and on `D`, after 1 and after 30
-//! passes, on random polygon scenes and on real CARMEN scans; and the
-//! segmentations agree wherever `D` is not within a hair of `tau`.
+//! `f64` reference (`workspace_tests::reference`, written from
+//! `docs/ALGORITHM.md` v3) on random polygon scenes and on real CARMEN
+//! scans:
 //!
-//! # Tolerances (measured first, then set with a margin of about 2)
+//! * §1–6 — the smoothed ranges and `D` after 1 and after 30 passes, and the
+//!   segmentation wherever `D` is not within a hair of `tau`, in the v3
+//!   default windows (one mirror turn: stride 2 at 0.5°, 4 at 0.25°, 1 at 1°)
+//!   and, in the interleaved modes, also in the windows of consecutive
+//!   beams (`same_turn_windows = false`, ALGORITHM.md v2 §2); beams at or
+//!   beyond `max_range` take part in nothing;
+//! * §7.1–7.5 — every line the core reports (in those runs, and in a run of
+//!   the whole default pipeline: split before reject, merges, arcs) against
+//!   the reference's footprint-weighted fit of the same usable beams, with
+//!   the turns' offsets out of χ²: the number of points exactly, α, r, the
+//!   covariance, χ² and the endpoints within named tolerances;
+//! * §8 — a corner for exactly the consecutive pairs whose facing endpoints
+//!   are closer than `corner_gap`, and each corner's position, covariance,
+//!   angle and conditioning against the reference's intersection of the same
+//!   two lines.
+//!
+//! Which segments split before reject cuts, which lines merge and which are
+//! dropped (χ², length, σ_α, arcs) the reference does not decide: those
+//! decisions are the core's, and the lines they leave are checked.
+//!
+//! # Tolerances (measured first, then set with a margin of about 2–3)
 //!
 //! Both sides start from the same `f32` ranges (the reference widens them to
 //! `f64` exactly), so the deviations measure only the core's `f32` rounding
-//! (unit roundoff `ε ≈ 6e-8`) and how it accumulates over passes. The
-//! measured maxima below are from 12 random scenes (3 748 windows, 181/361/401
-//! beams, noise 2–20 mm, 1 % no-echo beams, two with `q = 1e-4`), 50 CSAIL
-//! frames (17 950 windows) and 50 Intel frames (8 900 windows); the test
-//! prints them (`cargo test -p workspace-tests --test reference_agreement --
-//! --nocapture`).
+//! (unit roundoff `ε ≈ 6e-8`), its own trigonometry and bearing table
+//! (within 3 units of 2⁻²⁴), and how they accumulate over passes. The
+//! measured maxima below are from 12 random scenes (6 780 windows,
+//! 181/361/401 beams, noise 2–20 mm, 1 % no-echo beams, two with
+//! `q = 1e-4`), 4 random scenes with the range limit at 9 m, 50 CSAIL frames
+//! (35 900 windows in both window modes) and 50 Intel frames (8 900
+//! windows); the test prints them (`cargo test -p workspace-tests --test
+//! reference_agreement -- --nocapture`).
 //!
 //! * **Ranges**: `|d_core − d_ref| ≤ range_tol(passes) · max(1 m, d_ref)`,
 //!   `range_tol(passes) = 4e-7 · passes`. A pass computes each new range as a
@@ -23,19 +44,19 @@
 //!   walk (√passes, 1.7e-7 → 8e-7 on a plain noisy wall) and linear growth
 //!   (where the roundings keep their sign, e.g. near jumps of real scans), so
 //!   the tolerance grows linearly with the passes.
-//!   Measured: 1.9e-7 after 1 pass (≈ 3 ε; tolerance 4e-7), 5.6e-6 after 30
-//!   passes (≈ 1.9e-7 per pass, Intel frame 18 beam 6; tolerance 1.2e-5),
-//!   i.e. tens of µm at indoor ranges (the tolerance allows 1 mm at 82 m) —
-//!   negligible against sigma = 5 mm. A genuine
-//!   formula error fails by orders of magnitude: changing the weight to
-//!   `exp(−0.45·D)` gives 7e-5 after one pass and 6e-3 after 30.
+//!   Measured: 2.0e-7 after 1 pass (≈ 3 ε; tolerance 4e-7), 3.6e-6 after 30
+//!   passes (CSAIL frame 7; tolerance 1.2e-5), i.e. tens of µm at indoor
+//!   ranges (the tolerance allows 1 mm at 82 m) — negligible against
+//!   sigma = 5 mm. A genuine formula error fails by orders of magnitude:
+//!   changing the weight to `exp(−0.45·D)` gives 7e-5 after one pass and
+//!   6e-3 after 30.
 //! * **D**: `|D_core − D_ref| ≤ d_tol(passes) · max(1, D_ref)` with
 //!   `d_tol = 1e-3` after 1 pass and `1.5e-2` after 30. `D = vᵀS⁻¹v` depends on
 //!   the innovation `v = z − f(z)`, a difference of ranges of size `d` that is
 //!   itself only of size `sigma·√D`: a range error `δ` becomes an error of about
 //!   `2√D·δ/sigma` in `D`, an amplification of `d/sigma` (400 at 2 m, 1.6e4 at
-//!   80 m) of the relative range error. Measured: 4.1e-4 after 1 pass (at
-//!   `D ≈ 1`) and 7.3e-3 after 30 passes (at `D ≈ 1.07`, where the 30-pass
+//!   80 m) of the relative range error. Measured: 4.5e-4 after 1 pass (at
+//!   `D ≈ 1`) and 7.0e-3 after 30 passes (at `D ≈ 1.8`, where the 30-pass
 //!   range drift above feeds the same amplification). Large `D` (corners,
 //!   jumps) agree far better in the relative sense. The weight mutation above
 //!   changes `D` by a factor of up to 5.
@@ -44,18 +65,38 @@
 //!   `|D_ref − tau| ≤ d_tol(passes) · tau` (9e-3 absolute after one pass,
 //!   0.135 after 30): outside that band the `D` check above already decides
 //!   both sides alike, and inside it `f32` rounding may legitimately decide
-//!   either way. (Measured: 8 CSAIL windows had `D_ref` within 1e-3 relative
-//!   of `tau`; none broke differently.) Segments and edge points must then be
-//!   equal exactly to the reference's §6 segmentation of `D_ref`, with the
-//!   core's decision taken for those borderline windows.
+//!   either way. (Measured: 14 windows had `D_ref` within 1e-3 relative of
+//!   `tau`; none broke differently.) Segments and edge points must then be
+//!   equal exactly to the reference's v3 §6 segmentation of `D_ref` at the
+//!   run's stride, with the core's decision taken for those borderline
+//!   windows.
 //! * Invalid windows (`+inf`) must be invalid on both sides; a window that
 //!   is `+inf` on one side only fails.
+//! * **Lines** (2 629): the points
+//!   exactly; `|Δα| ≤ 1e-5` rad (measured 3.0e-6, a 6-beam CSAIL line);
+//!   `|Δr| ≤ 1e-5 · max(1 m, r)` (4.0e-6); each covariance entry within
+//!   5e-4 of `[αα, √(αα·rr), rr]` (the off-diagonal nearly cancels;
+//!   measured 1.9e-4); `|Δχ²| ≤ 1e-3 · max(1, χ²)` (2.8e-4); endpoints
+//!   within 1e-6 · max(1 m, |p|) (3.1e-7). The `f32` fit sums residuals of
+//!   size σ computed from ranges of size `d`, and the bearing table is within
+//!   3 units of 2⁻²⁴: short lines seen at an angle are the worst. A genuine
+//!   error fails by orders of magnitude: the reference without the
+//!   footprint weights is 1.1e-2 rad off in α and 110 off in the
+//!   covariance; without the turns' offsets 0.98 off in χ².
+//! * **Corners** (381): position within 5e-5 · max(1 m, |p|) (measured
+//!   2.5e-5 on an Intel frame: the lines' own rounding, amplified by
+//!   1/sin of the angle between them); each covariance
+//!   entry within 3e-4 of `[xx, √(xx·yy), yy]` (1.1e-4); the angle within
+//!   5e-5° (1.2e-5°); `well_conditioned` as the reference's angle says
+//!   unless that angle is within the angle tolerance of the gate. The pairs
+//!   with a corner: those whose facing endpoints (the core's, in `f64`) are
+//!   closer than `corner_gap`, unless within 1e-6 of it.
 
 use lms_core::test_support;
-use lms_core::{Extractor, Frame, Geometry, Invalid, Params};
+use lms_core::{Extractor, Features, Frame, Geometry, Invalid, Params};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use workspace_tests::reference::{self, RefParams};
+use workspace_tests::reference::{self, FitSettings, RefGeometry, RefParams};
 use workspace_tests::synth;
 
 /// Relative tolerance on smoothed ranges after `passes` passes (see the module docs).
@@ -71,6 +112,23 @@ fn d_tol(passes: u16) -> f64 {
     }
 }
 
+/// Line fits (§7.1–7.5; see the module docs): α (rad, absolute).
+const LINE_ALPHA_TOL: f64 = 1e-5;
+/// r (relative to max(1 m, r)).
+const LINE_R_TOL: f64 = 1e-5;
+/// Covariance, each entry relative to `[αα, √(αα·rr), rr]`.
+const LINE_COV_TOL: f64 = 5e-4;
+/// χ² per degree of freedom, relative to max(1, χ²).
+const LINE_CHI2_TOL: f64 = 1e-3;
+/// Endpoints (relative to max(1 m, |p|)).
+const LINE_END_TOL: f64 = 1e-6;
+/// Corners (§8; see the module docs): position (relative to max(1 m, |p|)).
+const CORNER_POS_TOL: f64 = 5e-5;
+/// Corner covariance, each entry relative to `[xx, √(xx·yy), yy]`.
+const CORNER_COV_TOL: f64 = 3e-4;
+/// Corner angle (degrees, absolute).
+const CORNER_ANGLE_TOL: f64 = 5e-5;
+
 /// Relative band about `tau` counted in the report (how often `D` comes
 /// close to the gate at all).
 const NEAR_TAU_REPORT: f64 = 1e-3;
@@ -85,7 +143,7 @@ struct Case {
     params: Params,
 }
 
-/// Worst deviations seen, for the report.
+/// Worst deviations of §2–6 seen, for the report.
 #[derive(Default, Debug)]
 struct WorstAt {
     range_rel: f64,
@@ -95,6 +153,42 @@ struct WorstAt {
     windows: usize,
     near_tau: usize,
     differing_breaks: usize,
+}
+
+/// Worst deviations of §7–8 seen, for the report.
+#[derive(Default, Debug)]
+struct WorstFit {
+    lines: usize,
+    alpha: (f64, String),
+    r: (f64, String),
+    cov: (f64, String),
+    chi2: (f64, String),
+    end: (f64, String),
+    corners: usize,
+    corner_pos: (f64, String),
+    corner_cov: (f64, String),
+    corner_angle: (f64, String),
+}
+
+/// `x ≤ tol`, and false for NaN.
+fn within(x: f64, tol: f64) -> bool {
+    x <= tol
+}
+
+/// Keep the larger deviation `x` (seen at `at`) in `slot`.
+fn note(slot: &mut (f64, String), x: f64, at: impl FnOnce() -> String) {
+    if x > slot.0 || x.is_nan() {
+        *slot = (x, at());
+    }
+}
+
+/// Everything the comparisons of one test gathered.
+#[derive(Default)]
+struct Report {
+    /// §2–6 after 1 and after 30 passes.
+    passes: [WorstAt; 2],
+    fits: WorstFit,
+    failures: Vec<String>,
 }
 
 fn frame_of(case: &Case) -> Frame {
@@ -117,54 +211,103 @@ fn ref_params(p: &Params) -> RefParams {
         q: p.q as f64,
         tau: p.tau as f64,
         min_points: p.min_points as usize,
+        max_range: p.max_range as f64,
+        footprint: p.footprint as f64,
+        same_turn_windows: p.same_turn_windows,
+        turn_offsets: p.turn_offsets,
     }
 }
 
-/// Compare one frame at 1 and at 30 passes; returns the failures (empty if none).
-fn compare(case: &Case, worst_by_pass: &mut [WorstAt; 2]) -> Vec<String> {
-    let mut failures = Vec::new();
+/// The window modes to compare a case in: the v3 default (windows of one
+/// mirror turn in the interleaved modes) and, where that differs, the
+/// windows of consecutive beams of ALGORITHM.md v2 §2.
+fn window_modes(case: &Case) -> Vec<bool> {
+    if reference::interleaved_turns(case.step as f64) > 1 {
+        vec![true, false]
+    } else {
+        vec![true]
+    }
+}
+
+/// Compare one frame: §2–6 at 1 and 30 passes in every window mode (with
+/// the fits and corners of those runs), then the whole default pipeline.
+fn compare(case: &Case, report: &mut Report) {
     let frame = frame_of(case);
-    let rp = ref_params(&case.params);
     let raw: Vec<f64> = frame.ranges().iter().map(|&r| r as f64).collect();
     let valid: Vec<bool> = frame.beams().iter().map(|b| b.is_valid()).collect();
-    let ref_passes = reference::smooth(&raw, &valid, case.step as f64, &rp, 30);
+    for same_turn in window_modes(case) {
+        let params = Params {
+            same_turn_windows: same_turn,
+            ..case.params
+        };
+        let label = if same_turn {
+            case.label.clone()
+        } else {
+            format!("{} (consecutive windows)", case.label)
+        };
+        compare_windows(case, &label, &frame, &raw, &valid, &params, report);
+    }
+    // The whole default pipeline (split before reject, merges, arcs): the
+    // fit of every line it reports and the corner of every pair.
+    let params = case.params.validate().expect("valid params");
+    let mut ex = Extractor::new();
+    ex.run(&frame, &params);
+    let label = format!("{} defaults", case.label);
+    check_fits(
+        case,
+        &label,
+        &raw,
+        &valid,
+        &case.params,
+        ex.features(),
+        report,
+    );
+}
+
+/// §2–6 with the windows of `params` at 1 and 30 passes, and §7–8 of those
+/// runs' lines.
+fn compare_windows(
+    case: &Case,
+    label: &str,
+    frame: &Frame,
+    raw: &[f64],
+    valid: &[bool],
+    params: &Params,
+    report: &mut Report,
+) {
+    let rp = ref_params(params);
+    let usable = reference::usable(raw, valid, rp.max_range);
+    let stride = reference::window_stride(case.step as f64, &rp);
+    let ref_passes = reference::smooth(raw, valid, case.step as f64, &rp, 30);
 
     for (slot, passes) in [1u16, 30].into_iter().enumerate() {
-        let worst = &mut worst_by_pass[slot];
         let range_tol = range_tol(passes);
         let d_tol = d_tol(passes);
-        // §2–6 only: with split before reject (§7.4, v2) the core's
-        // `segments()` are the pieces it fits, not §6's segments; the split
-        // is checked against the evaluation's f64 prototype instead
+        // §2–6 only: with split before reject (§7) the core's `segments()`
+        // are the pieces it fits, not §6's segments; the split is checked
+        // against the evaluation's f64 prototype instead
         // (lab/tests/split_before_reject.rs).
-        // The reference implements §2's windows of consecutive beams:
-        // same-turn windows (the default since stop 23) are off here. Their
-        // pass is two such passes, one per turn, bit for bit (lms-core's
-        // `stride_two_is_two_independent_sub_scans_bit_for_bit`), so this
-        // comparison covers their arithmetic too.
-        let params = Params {
+        let run = Params {
             iterations: passes,
             split_depth: 0,
-            same_turn_windows: false,
-            ..case.params
+            ..*params
         };
         let mut ex = Extractor::new();
         let mut trace = lms_core::Trace::new();
-        ex.run_traced(
-            &frame,
-            &params.validate().expect("valid params"),
-            &mut trace,
-        );
+        ex.run_traced(frame, &run.validate().expect("valid params"), &mut trace);
+        let worst = &mut report.passes[slot];
+        let failures = &mut report.failures;
         let (ref_ranges, ref_d) = &ref_passes[passes as usize - 1];
         let core_ranges = ex.smoothed();
         let core_d = trace.mahalanobis();
-        let at = |what: &str, i: usize| format!("{} pass {passes} {what} {i}", case.label);
+        let at = |what: &str, i: usize| format!("{label} pass {passes} {what} {i}");
 
-        // Ranges: invalid beams untouched, valid ones within range_tol.
+        // Ranges: beams that take part in nothing untouched, the others
+        // within range_tol.
         for j in 0..raw.len() {
-            if !valid[j] {
+            if !usable[j] {
                 if core_ranges[j] != frame.ranges()[j] {
-                    failures.push(format!("{}: invalid beam modified", at("beam", j)));
+                    failures.push(format!("{}: unusable beam modified", at("beam", j)));
                 }
                 continue;
             }
@@ -186,8 +329,7 @@ fn compare(case: &Case, worst_by_pass: &mut [WorstAt; 2]) -> Vec<String> {
         // D: both +inf, or close in the relative sense.
         if core_d.len() != ref_d.len() {
             failures.push(format!(
-                "{}: {} windows vs {}",
-                case.label,
+                "{label}: {} windows vs {}",
                 core_d.len(),
                 ref_d.len()
             ));
@@ -243,7 +385,7 @@ fn compare(case: &Case, worst_by_pass: &mut [WorstAt; 2]) -> Vec<String> {
         // Segments and edges equal to the reference's, borderline windows
         // decided as the core decided them.
         {
-            let (segs, edges) = reference::segment(&mixed_d, rp.tau, rp.min_points);
+            let (segs, edges) = reference::segment_strided(&mixed_d, stride, rp.tau, rp.min_points);
             let f = ex.features();
             let core_segs: Vec<(usize, usize)> = f
                 .segments()
@@ -254,28 +396,202 @@ fn compare(case: &Case, worst_by_pass: &mut [WorstAt; 2]) -> Vec<String> {
             let core_edges: Vec<usize> = f.edges().iter().map(|e| e as usize).collect();
             if core_segs != ref_segs {
                 failures.push(format!(
-                    "{} pass {passes}: segments core {core_segs:?} ref {ref_segs:?}",
-                    case.label
+                    "{label} pass {passes}: segments core {core_segs:?} ref {ref_segs:?}"
                 ));
             }
             if core_edges != edges {
                 failures.push(format!(
-                    "{} pass {passes}: edges core {core_edges:?} ref {edges:?}",
-                    case.label
+                    "{label} pass {passes}: edges core {core_edges:?} ref {edges:?}"
                 ));
             }
         }
+        let fits_label = format!("{label} pass {passes}");
+        check_fits(case, &fits_label, raw, valid, &run, ex.features(), report);
     }
-    failures
+}
+
+/// §7.1–7.5 and §8 of the core's features: every line against the
+/// reference's fit of the same beams, every corner against the reference's
+/// intersection of the same two lines, and the corners where §8 puts them.
+fn check_fits(
+    case: &Case,
+    label: &str,
+    raw: &[f64],
+    valid: &[bool],
+    params: &Params,
+    f: &Features,
+    report: &mut Report,
+) {
+    let rp = ref_params(params);
+    let usable = reference::usable(raw, valid, rp.max_range);
+    let geometry = RefGeometry {
+        first: case.first as f64,
+        step: case.step as f64,
+    };
+    let fit = FitSettings::of(&rp, case.step as f64);
+    let worst = &mut report.fits;
+    let failures = &mut report.failures;
+    for (k, l) in f.lines().iter().enumerate() {
+        worst.lines += 1;
+        let at = || format!("{label} line {k} ({}..={})", l.first, l.last);
+        let Some(rl) = reference::fit_line(
+            raw,
+            &usable,
+            geometry,
+            l.first as usize,
+            l.last as usize,
+            fit,
+        ) else {
+            failures.push(format!("{}: no reference fit", at()));
+            continue;
+        };
+        if rl.points != l.points as usize {
+            failures.push(format!(
+                "{}: points core {} ref {}",
+                at(),
+                l.points,
+                rl.points
+            ));
+        }
+        let da = reference::wrap(l.alpha as f64 - rl.alpha).abs();
+        note(&mut worst.alpha, da, at);
+        if !within(da, LINE_ALPHA_TOL) {
+            failures.push(format!(
+                "{}: α core {} ref {} ({da:.2e})",
+                at(),
+                l.alpha,
+                rl.alpha
+            ));
+        }
+        let dr = (l.r as f64 - rl.r).abs() / rl.r.max(1.0);
+        note(&mut worst.r, dr, at);
+        if !within(dr, LINE_R_TOL) {
+            failures.push(format!("{}: r core {} ref {} ({dr:.2e})", at(), l.r, rl.r));
+        }
+        let c = &rl.cov;
+        let scale = [c[0][0], (c[0][0] * c[1][1]).sqrt(), c[1][1]];
+        for (e, (&x, &y)) in [l.cov.a, l.cov.b, l.cov.c]
+            .iter()
+            .zip(&[c[0][0], c[0][1], c[1][1]])
+            .enumerate()
+        {
+            let err = (x as f64 - y).abs() / scale[e];
+            note(&mut worst.cov, err, at);
+            if !within(err, LINE_COV_TOL) {
+                failures.push(format!("{}: cov[{e}] core {x} ref {y} ({err:.2e})", at()));
+            }
+        }
+        let dc = (l.chi2 as f64 - rl.chi2).abs() / rl.chi2.max(1.0);
+        note(&mut worst.chi2, dc, at);
+        if !within(dc, LINE_CHI2_TOL) {
+            failures.push(format!(
+                "{}: χ² core {} ref {} ({dc:.2e})",
+                at(),
+                l.chi2,
+                rl.chi2
+            ));
+        }
+        for (e, (p, q)) in l.endpoints.iter().zip(&rl.endpoints).enumerate() {
+            let dist = (p[0] as f64 - q[0]).hypot(p[1] as f64 - q[1]);
+            let rel = dist / q[0].hypot(q[1]).max(1.0);
+            note(&mut worst.end, rel, at);
+            if !within(rel, LINE_END_TOL) {
+                failures.push(format!("{}: endpoint {e} core {p:?} ref {q:?}", at()));
+            }
+        }
+    }
+    // §8: every pair of consecutive lines whose facing endpoints are closer
+    // than corner_gap (away from the border, in f64) has its corner, and no
+    // other pair has one.
+    let lines = f.lines();
+    let as_ref = |l: &lms_core::Line| {
+        let c = l.cov;
+        let (a, b, cc) = (c.a as f64, c.b as f64, c.c as f64);
+        (l.alpha as f64, l.r as f64, [[a, b], [b, cc]])
+    };
+    for (i, pair) in lines.windows(2).enumerate() {
+        let (p, q) = (pair[0].endpoints[1], pair[1].endpoints[0]);
+        let gap = (q[0] as f64 - p[0] as f64).hypot(q[1] as f64 - p[1] as f64);
+        let found = f
+            .corners()
+            .iter()
+            .any(|c| usize::from(c.line_a) == i && usize::from(c.line_b) == i + 1);
+        let gate = params.corner_gap as f64;
+        let borderline = (gap - gate).abs() <= 1e-6 * gate.max(1.0);
+        if !borderline && found != (gap < gate) {
+            failures.push(format!(
+                "{label} lines {i}, {}: gap {gap} (corner_gap {gate}), corner {found}",
+                i + 1
+            ));
+        }
+    }
+    for c in f.corners() {
+        worst.corners += 1;
+        let (a, b) = (usize::from(c.line_a), usize::from(c.line_b));
+        let at = || format!("{label} corner of lines {a}, {b}");
+        if b != a + 1 || b >= lines.len() {
+            failures.push(format!("{}: not two consecutive lines", at()));
+            continue;
+        }
+        let Some(rc) = reference::corner(as_ref(&lines[a]), as_ref(&lines[b])) else {
+            failures.push(format!("{}: parallel in the reference", at()));
+            continue;
+        };
+        let dist = (c.x as f64 - rc.x).hypot(c.y as f64 - rc.y) / rc.x.hypot(rc.y).max(1.0);
+        note(&mut worst.corner_pos, dist, at);
+        if !within(dist, CORNER_POS_TOL) {
+            failures.push(format!(
+                "{}: core ({}, {}) ref ({}, {})",
+                at(),
+                c.x,
+                c.y,
+                rc.x,
+                rc.y
+            ));
+        }
+        let v = &rc.cov;
+        let scale = [v[0][0], (v[0][0] * v[1][1]).sqrt(), v[1][1]];
+        for (e, (&x, &y)) in [c.cov.a, c.cov.b, c.cov.c]
+            .iter()
+            .zip(&[v[0][0], v[0][1], v[1][1]])
+            .enumerate()
+        {
+            let err = (x as f64 - y).abs() / scale[e];
+            note(&mut worst.corner_cov, err, at);
+            if !within(err, CORNER_COV_TOL) {
+                failures.push(format!("{}: cov[{e}] core {x} ref {y} ({err:.2e})", at()));
+            }
+        }
+        let da = (c.angle_deg as f64 - rc.angle_deg).abs();
+        note(&mut worst.corner_angle, da, at);
+        if !within(da, CORNER_ANGLE_TOL) {
+            failures.push(format!(
+                "{}: angle core {} ref {}",
+                at(),
+                c.angle_deg,
+                rc.angle_deg
+            ));
+        }
+        let gate = params.min_corner_angle_deg as f64;
+        if (rc.angle_deg - gate).abs() > CORNER_ANGLE_TOL
+            && c.well_conditioned != (rc.angle_deg >= gate)
+        {
+            failures.push(format!(
+                "{}: well_conditioned {} at {}°",
+                at(),
+                c.well_conditioned,
+                rc.angle_deg
+            ));
+        }
+    }
 }
 
 fn check_all(name: &str, cases: &[Case]) {
-    let mut worst: [WorstAt; 2] = Default::default();
-    let mut failures = Vec::new();
+    let mut report = Report::default();
     for case in cases {
-        failures.extend(compare(case, &mut worst));
+        compare(case, &mut report);
     }
-    for (w, passes) in worst.iter().zip([1, 30]) {
+    for (w, passes) in report.passes.iter().zip([1, 30]) {
         eprintln!(
             "{name}, {passes} pass(es): {} frames, {} windows; max range deviation {:.3e} rel ({}); \
              max D deviation {:.3e} rel ({}); {} windows within {NEAR_TAU_REPORT} of tau, {} with differing breaks",
@@ -289,6 +605,33 @@ fn check_all(name: &str, cases: &[Case]) {
             w.differing_breaks
         );
     }
+    let w = &report.fits;
+    eprintln!(
+        "{name}, fits: {} lines; max |Δα| {:.3e} rad ({}); Δr {:.3e} rel ({}); cov {:.3e} ({}); \
+         χ² {:.3e} ({}); endpoints {:.3e} rel ({})",
+        w.lines,
+        w.alpha.0,
+        w.alpha.1,
+        w.r.0,
+        w.r.1,
+        w.cov.0,
+        w.cov.1,
+        w.chi2.0,
+        w.chi2.1,
+        w.end.0,
+        w.end.1
+    );
+    eprintln!(
+        "{name}, corners: {}; max position {:.3e} rel ({}); cov {:.3e} ({}); angle {:.3e}° ({})",
+        w.corners,
+        w.corner_pos.0,
+        w.corner_pos.1,
+        w.corner_cov.0,
+        w.corner_cov.1,
+        w.corner_angle.0,
+        w.corner_angle.1
+    );
+    let failures = &report.failures;
     assert!(
         failures.is_empty(),
         "{} disagreements, first ones:\n{}",
@@ -302,45 +645,87 @@ fn check_all(name: &str, cases: &[Case]) {
     );
 }
 
+/// A random room's scan: `variant`, true noise `sigma_true`, 1 % sporadic
+/// no-echo beams.
+fn random_case(seed: u64, variant: lms_core::Variant, sigma_true: f64, params: Params) -> Case {
+    let mut rng = ChaCha8Rng::seed_from_u64(0xA5E0 + seed);
+    let walls = synth::random_room(&mut rng);
+    let g = variant.geometry();
+    let truth = synth::true_ranges(
+        &walls,
+        g.first_bearing as f64,
+        g.step as f64,
+        variant.beams(),
+    );
+    let (ranges, valid) = synth::noisy_scan(&truth, sigma_true, 0.01, &mut rng);
+    Case {
+        label: format!("seed {seed} ({variant:?}, noise {sigma_true})"),
+        ranges,
+        valid,
+        first: g.first_bearing,
+        step: g.step,
+        params,
+    }
+}
+
 /// Random rooms with a box, several LMS variants, noise levels and seeds,
 /// 1 % sporadic no-echo beams; two of the parameter sets use `q > 0`.
 #[test]
 fn random_scenes_agree_with_the_f64_reference() {
     use lms_core::Variant;
-    let mut cases = Vec::new();
     let variants = [
         Variant::Fov180Res50,
         Variant::Fov180Res100,
         Variant::Fov100Res25,
     ];
-    for seed in 0..12u64 {
-        let mut rng = ChaCha8Rng::seed_from_u64(0xA5E0 + seed);
-        let walls = synth::random_room(&mut rng);
-        let variant = variants[seed as usize % variants.len()];
-        let g = variant.geometry();
-        let truth = synth::true_ranges(
-            &walls,
-            g.first_bearing as f64,
-            g.step as f64,
-            variant.beams(),
-        );
-        // Noise at, below and above the filter's sigma.
-        let sigma_true = [0.005, 0.002, 0.01, 0.02][seed as usize % 4];
-        let (ranges, valid) = synth::noisy_scan(&truth, sigma_true, 0.01, &mut rng);
-        let params = Params {
-            q: if seed % 6 == 5 { 1e-4 } else { 0.0 },
-            ..Params::default()
-        };
-        cases.push(Case {
-            label: format!("seed {seed} ({variant:?}, noise {sigma_true})"),
-            ranges,
-            valid,
-            first: g.first_bearing,
-            step: g.step,
-            params,
-        });
-    }
+    let cases: Vec<Case> = (0..12u64)
+        .map(|seed| {
+            let variant = variants[seed as usize % variants.len()];
+            // Noise at, below and above the filter's sigma.
+            let sigma_true = [0.005, 0.002, 0.01, 0.02][seed as usize % 4];
+            let params = Params {
+                q: if seed % 6 == 5 { 1e-4 } else { 0.0 },
+                ..Params::default()
+            };
+            random_case(seed, variant, sigma_true, params)
+        })
+        .collect();
     check_all("random scenes", &cases);
+}
+
+/// Random rooms (walls 1–15 m away) with the range limit at 9 m: the beams
+/// beyond it take part in no window and no fit (v3 §1), in every mode.
+#[test]
+fn beams_beyond_the_range_limit_agree_with_the_f64_reference() {
+    use lms_core::Variant;
+    let variants = [
+        Variant::Fov180Res50,
+        Variant::Fov100Res25,
+        Variant::Fov180Res100,
+        Variant::Fov100Res50,
+    ];
+    let cases: Vec<Case> = (12..16u64)
+        .map(|seed| {
+            let params = Params {
+                max_range: 9.0,
+                sigma: 0.01,
+                ..Params::default()
+            };
+            random_case(seed, variants[seed as usize % 4], 0.01, params)
+        })
+        .collect();
+    let beyond: usize = cases
+        .iter()
+        .map(|c| {
+            c.ranges
+                .iter()
+                .zip(&c.valid)
+                .filter(|&(&d, &v)| v && d >= 9.0)
+                .count()
+        })
+        .sum();
+    assert!(beyond > 100, "only {beyond} beams beyond the limit");
+    check_all("range limit", &cases);
 }
 
 fn real_cases(stem: &str, frames: usize) -> Vec<Case> {

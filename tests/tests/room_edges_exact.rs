@@ -10,12 +10,25 @@
 //! ranges). The test requires set equality on every one of 20 noise seeds.
 //!
 //! These are the edge points of §2–6 as written, windows of consecutive
-//! beams (`Params::STOP22`); the defaults' same-turn windows (since stop 23,
-//! docs/ALGORITHM-v3-section10.md §10.9) span five beams and mark the beams
+//! beams ([`CONSECUTIVE_WINDOWS`]); the defaults' same-turn windows
+//! (docs/ALGORITHM-v3-section10.md §10.9) span five beams and mark the beams
 //! of one turn around a corner instead (`core/tests/same_turn.rs`).
 
 use lms_core::{Extractor, Frame, Params, Variant};
 use lms_scene::{seeded_rng, to_f32_metres, Bearings, NoiseModel, Point, Pose, Scene, TrueScan};
+
+/// The defaults with the windows of §2–6 (consecutive beams over both
+/// turns) in every mode, no work bound on split before reject, no anchor
+/// gate on the merges, no turn offsets in the fits' χ², and pairs of lines
+/// kept whatever a circle says of them.
+const CONSECUTIVE_WINDOWS: Params = Params {
+    same_turn_windows: false,
+    split_budget: 0,
+    merge_anchor_gate: f32::INFINITY,
+    turn_offsets: false,
+    arc_pairs: false,
+    ..Params::DEFAULT
+};
 
 const SIGMA: f64 = 0.005;
 
@@ -113,7 +126,7 @@ fn noise_free_edge_points_lines_and_corners_are_exact() {
     let ranges: Vec<f32> = to_f32_metres(&truth.noise_free(), 0.0);
     let frame = Frame::from_metres(Variant::Fov180Res50.geometry(), &ranges).unwrap();
     let mut extractor = Extractor::new();
-    let features = extractor.run(&frame, &Params::STOP22.validate().unwrap());
+    let features = extractor.run(&frame, &CONSECUTIVE_WINDOWS.validate().unwrap());
     let edges: Vec<u16> = features.edges().iter().collect::<Vec<u16>>();
     assert_eq!(edges, expected);
     // Six lines: right wall, front wall (right of the box), two box faces,
@@ -145,11 +158,11 @@ fn noise_free_edge_points_lines_and_corners_are_exact() {
 #[test]
 fn noisy_edge_points_are_exactly_the_true_corners_and_jumps_and_converge_with_scale() {
     let (truth, expected) = room_truth();
-    let at_30 = Params::STOP22;
+    let at_30 = CONSECUTIVE_WINDOWS;
     let (exact_30, false_30) = exact_scans(&truth, &expected, &at_30, 100);
     let at_100 = Params {
         iterations: 100,
-        ..Params::STOP22
+        ..CONSECUTIVE_WINDOWS
     };
     let (exact_100, false_100) = exact_scans(&truth, &expected, &at_100, 100);
     println!("exact: {exact_30}/100 at 30 passes ({false_30} false edges), {exact_100}/100 at 100 ({false_100})");

@@ -3,8 +3,8 @@
 //! that the line-model mask keeps a corner where a Gaussian mask moves it.
 //!
 //! The edge-point tests check §2–6 as written, windows of consecutive beams
-//! (`Params::STOP22`): the defaults' same-turn windows (since stop 23)
-//! span five beams in the 0.5° and 0.25° modes and mark the beams of one
+//! ([`CONSECUTIVE_WINDOWS`]): the defaults' same-turn windows span five
+//! beams in the 0.5° and 0.25° modes and mark the beams of one
 //! turn around a vertex (`core/tests/same_turn.rs`, and the segments in
 //! `core/src/pipeline/segmentation.rs`).
 //!
@@ -49,6 +49,19 @@
 use lms_core::{Extractor, Frame, Params, Variant};
 use lms_scene::{seeded_rng, Bearings, NoiseModel, Pose, Scene, TrueScan, WindowTruth};
 use workspace_tests::reference;
+
+/// The defaults with the windows of §2–6 (consecutive beams over both
+/// turns) in every mode, no work bound on split before reject, no anchor
+/// gate on the merges, no turn offsets in the fits' χ², and pairs of lines
+/// kept whatever a circle says of them.
+const CONSECUTIVE_WINDOWS: Params = Params {
+    same_turn_windows: false,
+    split_budget: 0,
+    merge_anchor_gate: f32::INFINITY,
+    turn_offsets: false,
+    arc_pairs: false,
+    ..Params::DEFAULT
+};
 
 const SIGMA: f64 = 0.005;
 
@@ -136,7 +149,7 @@ fn noise_free_edge_points_are_the_true_corners_and_jumps() {
                     &frame,
                     &Params {
                         iterations,
-                        ..Params::STOP22
+                        ..CONSECUTIVE_WINDOWS
                     }
                     .validate()
                     .unwrap(),
@@ -202,7 +215,7 @@ fn noisy_edge_points_find_every_corner_and_jump() {
         for seed in 0..SEEDS {
             let frame = frame_of(variant, &truth, &noise, seed);
             let mut trace = lms_core::Trace::new();
-            ex.run_traced(&frame, &Params::STOP22.validate().unwrap(), &mut trace);
+            ex.run_traced(&frame, &CONSECUTIVE_WINDOWS.validate().unwrap(), &mut trace);
             let edges: Vec<usize> = ex.features().edges().iter().map(|e| e as usize).collect();
             let d = trace.mahalanobis();
             let at = format!("{variant:?} seed {seed}: edges {edges:?}, truth {true_edges:?}");

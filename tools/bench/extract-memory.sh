@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Peak resident memory of `host-bridge extract` on a long log (issue 13:
-# memory independent of the log's length; acceptance: under 50 MB for a
+# Peak resident memory of `host-bridge extract` on a long log (memory
+# independent of the log's length; the bound: under 50 MB for a
 # 100,000-frame log). Builds the release binary, writes a 100,000-frame
 # log to a temporary folder (the CSAIL log's 406 frames repeated, gzip),
 # a 1 GB gzip bomb (one 64 MiB-compressed run of zeros), and measures with

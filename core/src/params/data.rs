@@ -1,4 +1,4 @@
-//! Defaults per data (issue 14, item 4): the range limit of a unit and range
+//! Defaults per data: the range limit of a unit and range
 //! mode (ALGORITHM.md v2 §1), and σ from the quantisation seen in the data.
 //!
 //! [`DataSurvey`] is fed frames (e.g. every frame of a recorded log, or the

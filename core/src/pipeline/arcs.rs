@@ -1,6 +1,5 @@
-//! Arcs are not walls (beyond ALGORITHM.md; issue 14 item 6,
-//! `docs/ALGORITHM-v3-section10.md` §10.8): drop the lines of a polyline
-//! that follows a curve.
+//! Arcs are not walls (beyond ALGORITHM.md v2; `docs/DESIGN.md`, arcs):
+//! drop the lines of a polyline that follows a curve.
 //!
 //! Split before reject leaves a curved wall or a pillar whole when a circle
 //! explains its segment ([`crate::pipeline::split`]), but where §6 has
@@ -15,8 +14,8 @@
 //! alone are no chain: an obtuse corner looks the same.
 //!
 //! Such a pair is dropped too when [`curve_not_corner`] tells it from a
-//! corner with its beams (`Params::arc_pairs`,
-//! docs/ALGORITHM-v3-section10.md §10.12): a circle through the union
+//! corner with its beams (`Params::arc_pairs`, docs/DESIGN.md, pairs of
+//! lines on a curve): a circle through the union
 //! explains a curved wall within the noise and better than its two chords
 //! do, but not the kink of a corner between two straight walls.
 //!
@@ -87,7 +86,7 @@ const ARC_PAIR_REFINE: u8 = 2;
 /// χ²₁ at 95 %. A bend of 10–15° between two 0.4 m walls at σ = 1 cm is
 /// explained by a circle about as well as by its two lines; the margin
 /// keeps 99 % of them (Akaike's criterion, a margin of −2, lost 9–14 %;
-/// `core/tests/arc_pairs.rs`, docs/ALGORITHM-v3-section10.md §10.12).
+/// `core/tests/arc_pairs.rs`, docs/DESIGN.md).
 const ARC_PAIR_MARGIN: f32 = 3.841_459;
 
 /// Whether the two linked lines `pair` are two chords of a curve rather
@@ -258,7 +257,12 @@ mod tests {
         assert_eq!(drop_arcs(&mut lines, &Params::DEFAULT), 0);
         let p = arc(0.0, 0.0, 3.0, -0.5, 15f32.to_radians(), 4);
         let mut lines = polyline(&p[..5]);
-        assert_eq!(drop_arcs(&mut lines, &Params::STOP21), 0);
+        let off = Params {
+            arc_chain: 0,
+            arc_pairs: false,
+            ..Params::DEFAULT
+        };
+        assert_eq!(drop_arcs(&mut lines, &off), 0);
         assert_eq!(lines.len(), 4);
     }
 }

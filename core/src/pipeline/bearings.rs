@@ -4,8 +4,7 @@
 //! [`BearingTable`] is what a fit needs: the cosine and sine of beam `j`.
 //! Two sources implement it:
 //!
-//! - [`Bearings`](crate::pipeline::line_fit::Bearings): a caller's own
-//!   per-beam tables (two slices);
+//! - [`Bearings`]: a caller's own per-beam tables (two slices);
 //! - [`TwoLevelBearings`]: what the [`Extractor`](crate::Extractor) keeps,
 //!   336 B instead of 3 208 B of full tables. Beam `j = FINE·k + l` has the
 //!   bearing `A_k + B_l` with `A_k = phi_{FINE·k}` (coarse) and
@@ -66,7 +65,16 @@ pub fn relative(c: f32, s: f32, ca: f32, sa: f32) -> (f32, f32) {
     (c * ca + s * sa, s * ca - c * sa)
 }
 
-impl BearingTable for crate::pipeline::line_fit::Bearings<'_> {
+/// The bearing tables of a frame: `cos phi_j`, `sin phi_j`.
+#[derive(Clone, Copy, Debug)]
+pub struct Bearings<'a> {
+    /// `cos phi_j` for every beam.
+    pub cos: &'a [f32],
+    /// `sin phi_j` for every beam.
+    pub sin: &'a [f32],
+}
+
+impl BearingTable for Bearings<'_> {
     #[inline]
     fn beams(&self) -> usize {
         self.cos.len().min(self.sin.len())
@@ -268,7 +276,7 @@ mod tests {
         for j in 0..MAX_BEAMS {
             (cos[j], sin[j]) = t.cos_sin(j);
         }
-        let b = crate::pipeline::line_fit::Bearings {
+        let b = Bearings {
             cos: &cos[..frame.len()],
             sin: &sin[..frame.len()],
         };

@@ -425,7 +425,7 @@ fn count_usable(frame: &Frame, max_range: f32) -> (u16, u16) {
 }
 
 /// The interleaved turns whose offsets the fits' χ² allows
-/// ([`Params::turn_offsets`], §10.11): the scan's mirror turns (2 at 0.5°,
+/// ([`Params::turn_offsets`]): the scan's mirror turns (2 at 0.5°,
 /// 4 at 0.25°), or 1 (§7 as written).
 fn fit_turns(params: &Params, geometry: Geometry) -> u8 {
     if params.turn_offsets {

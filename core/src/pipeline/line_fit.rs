@@ -25,7 +25,7 @@
 use crate::features::Line;
 use crate::frame::Beam;
 use crate::maths::{atan2, cos_sin, wrap_angle, Sym2};
-pub use crate::pipeline::bearings::BearingTable;
+pub use crate::pipeline::bearings::{BearingTable, Bearings};
 
 /// Most Gauss–Newton steps per fit (§7.2).
 pub const MAX_GN_STEPS: usize = 5;
@@ -61,15 +61,6 @@ impl core::fmt::Display for FitError {
 #[cfg(feature = "std")]
 impl std::error::Error for FitError {}
 
-/// The bearing tables of a frame: `cos phi_j`, `sin phi_j`.
-#[derive(Clone, Copy, Debug)]
-pub struct Bearings<'a> {
-    /// `cos phi_j` for every beam.
-    pub cos: &'a [f32],
-    /// `sin phi_j` for every beam.
-    pub sin: &'a [f32],
-}
-
 /// The raw ranges of a frame with its bearing table and beam status: what
 /// the fits of §7 (and split before reject) read. §7 fits the raw, not the
 /// smoothed, ranges.
@@ -89,8 +80,8 @@ pub struct RawScan<'a, B: BearingTable = Bearings<'a>> {
     /// beam `σ` (§7 as written).
     pub footprint: f32,
     /// Interleaved mirror turns whose offsets the fits' χ² allows
-    /// ([`crate::Params::turn_offsets`], docs/ALGORITHM-v3-section10.md
-    /// §10.11): beam `j` belongs to turn `j mod turns`, each turn's weighted
+    /// ([`crate::Params::turn_offsets`], docs/ALGORITHM.md, turns'
+    /// offsets): beam `j` belongs to turn `j mod turns`, each turn's weighted
     /// mean residual is taken out of `Σe²` and the χ² has `turns − 1` fewer
     /// degrees of freedom ([`residual_dof`]). The line `(α, r)` and its
     /// covariance are the fit of all beams, as before. `1`: §7 as written;
@@ -183,7 +174,7 @@ pub fn fit_piece<B: BearingTable>(
         a => a,
     };
     // 3.–4. Covariance and chi2 at the solution (the turns' offsets taken
-    // out of Σe² where `scan.turns` asks for it, §10.11).
+    // out of Σe² where `scan.turns` asks for it).
     let points = m.min(u16::MAX as u32) as u16;
     let turns = offset_turns(points, scan.turns);
     let (jtj, sum_e2) = span.normal_matrix_and_residual(ca, sa, r, turns)?;
@@ -362,7 +353,7 @@ impl<'a, B: BearingTable> Span<'a, B> {
     }
 
     /// §7.3–7.4: `JᵀJ` and `Σ e²` at the solution `(cos α, sin α, r)`;
-    /// with `turns` > 1 (§10.11) `Σ e²` less what each turn's weighted mean
+    /// with `turns` > 1 `Σ e²` less what each turn's weighted mean
     /// residual `ē_t` explains beyond the common one,
     /// `Σ_t W_t ē_t² − W ē²` (`W_t = Σ_t w_j`; never below 0).
     fn normal_matrix_and_residual(
@@ -412,9 +403,9 @@ impl<'a, B: BearingTable> Span<'a, B> {
     }
 }
 
-/// Per-turn sums of a weighted residual (§10.11): for turn `t = j mod
-/// turns` of beam `j`, `S_t = Σ w_j e_j` and `W_t = Σ w_j`. With one turn
-/// nothing is summed and nothing taken out.
+/// Per-turn sums of a weighted residual (the turns' offsets): for turn
+/// `t = j mod turns` of beam `j`, `S_t = Σ w_j e_j` and `W_t = Σ w_j`. With
+/// one turn nothing is summed and nothing taken out.
 pub(crate) struct TurnSums {
     e: [f32; MAX_TURNS],
     w: [f32; MAX_TURNS],

@@ -76,11 +76,11 @@ pub fn try_merge<B: BearingTable>(
 /// own parameters: `Δᵀ Σ⁻¹ Δ ≤ gate · max(1, χ²)` with `Σ`, `χ²` (per
 /// point) those of `larger`'s own fit, so a part whose beams scatter more
 /// than `σ` says has its covariance scaled up by that excess (beyond
-/// ALGORITHM.md; issue 14, docs/ALGORITHM-v3-section10.md §10.10). A merge
+/// ALGORITHM.md v2; docs/DESIGN.md, the merges' anchor gate). A merge
 /// must not move the better-determined line off its own evidence: §7.6's
 /// χ² per point of the union is an average, and a long line with a short
 /// piece at a 5–25° bend passes it while its α moves many σ. `+inf`: no
-/// test (§7.6 as written, stop 23 and before).
+/// test (§7.6 as written, ALGORITHM.md v2).
 fn anchored(larger: &Line, merged: &Line, gate: f32) -> bool {
     gate == f32::INFINITY
         || mahalanobis(&larger.cov, larger, merged)

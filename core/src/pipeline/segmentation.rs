@@ -192,7 +192,7 @@ impl<'a, const S: usize, L: EdgeList> Segmenter<'a, S, L> {
     /// `min_points` beams); `min_points − 3` at a larger stride, whose run
     /// covers `2·stride` beams more than it has windows (at the default 5:
     /// two windows, one of each turn at stride 2, six beams; three lost 3×
-    /// more clean corners, docs/ALGORITHM-v3-section10.md §10.9).
+    /// more clean corners, docs/DESIGN.md, same-turn windows).
     fn windows_needed(&self) -> usize {
         let spare = if self.stride > 1 { 3 } else { 2 };
         (self.min_points as usize).saturating_sub(spare).max(1)

@@ -336,9 +336,8 @@ struct StridedBlock {
 }
 
 /// [`smoothing_pass`] with windows of stride `k` (same-turn windows,
-/// `Params::same_turn_windows`, the default since stop 23 in the
-/// interleaved 0.5° and 0.25° modes; docs/ALGORITHM-v3-section10.md
-/// §10.9): window `i` is beams
+/// `Params::same_turn_windows`, the default in the interleaved 0.5° and
+/// 0.25° modes; docs/ALGORITHM.md): window `i` is beams
 /// `i, i+k, i+2k` (the filter built for the angle `k·γ`), point `j` is
 /// blended from windows `j, j−k, j−2k` in that order; there are `n − 2k`
 /// windows (the sink hears of no window beyond them; `window_ok` bits

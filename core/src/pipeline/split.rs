@@ -122,7 +122,7 @@ fn straightness_bounds<B: BearingTable>(
     let half_diff = (sxx - syy) / 2.0;
     let root = libm::sqrtf(half_diff * half_diff + sxy * sxy);
     let least = (sxx + syy) / 2.0 - root;
-    // The turns' offsets (§10.11) are taken out where they apply; then λ
+    // The turns' offsets are taken out where they apply; then λ
     // bounds nothing (the turns' own lines may lie closer than one line).
     let points = m.min(u32::from(u16::MAX)) as u16;
     let turns = offset_turns(points, scan.turns);
@@ -511,7 +511,7 @@ mod tests {
         let frame = corner_frame();
         let spec = Params {
             sigma: SIGMA,
-            ..Params::V1
+            ..Params::PAPER
         };
         let mut ex = Extractor::new();
         let f = ex.run(&frame, &spec.validate().unwrap()).clone();
@@ -543,7 +543,7 @@ mod tests {
         let base = Params {
             sigma: SIGMA,
             split_depth: 8,
-            ..Params::V1
+            ..Params::PAPER
         };
         let mut ex = Extractor::new();
         let whole = ex.run(&frame, &base.validate().unwrap()).clone();

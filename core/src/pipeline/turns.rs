@@ -4,7 +4,7 @@
 //! In the LMS's interleaved modes (0.5°: two mirror turns, 0.25°: four) the
 //! turns of one scan are 13.3 ms apart, so on a moving platform their hits
 //! on one wall are parallel point sets a few mm to cm apart
-//! (`docs/ALGORITHM-v3-section10.md` §10.1). The three-point windows of §2
+//! (`docs/DESIGN.md`). The three-point windows of §2
 //! mix the turns and break along such walls; within one turn they do not.
 //! So each turn `t` of `k` — beams `t, t+k, t+2k, …` — runs through §2–8
 //! as a scan of its own at bearing step `k·γ` ([`turn_frame`]), and the

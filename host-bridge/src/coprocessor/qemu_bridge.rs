@@ -13,9 +13,10 @@
 //! `20 25` answered 5.8 s after it was sent, relayed requests unanswered).
 //! A real 500 kBd line never queues: so [`SensorFeed`] passes the sensor's
 //! stream telegrams (`B0`, `B6`/`B7`/`BF`) only while its estimate of what
-//! QEMU has not yet taken is under [`QEMU_QUEUE_BYTES`], dropping the others
-//! whole (counted, said at exit: the firmware sees a slower sensor), and
-//! every reply, `ACK` and `NAK` at once.
+//! QEMU has not yet taken is under
+//! [`QEMU_QUEUE_BYTES`](crate::qemu_intake::QEMU_QUEUE_BYTES), dropping the
+//! others whole (counted, said at exit: the firmware sees a slower sensor),
+//! and every reply, `ACK` and `NAK` at once.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -24,60 +25,12 @@ use anyhow::{Context, Result};
 use embedded_io::{Read as _, ReadReady as _, Write as _};
 use lms_core::telegram::{Baud, Direction, Event, Framer, Handshake, Request};
 
+use crate::qemu_intake::QemuIntake;
 use crate::serial::{Link, PtyPort, SerialLink};
 use crate::verify::QemuLines;
 
 /// Longest wait for sensor bytes per round.
 const TICK: Duration = Duration::from_millis(1);
-
-/// The rate QEMU's sensor USART is assumed to take bytes at (B/s): half of
-/// the ≈ 10 KB/s it takes on an idle machine, for a loaded one.
-const QEMU_BYTES_PER_S: f64 = 5_000.0;
-/// The most of the sensor's stream let wait for QEMU (bytes; 0.2 s at
-/// [`QEMU_BYTES_PER_S`]): a stream telegram that finds more is dropped.
-pub(crate) const QEMU_QUEUE_BYTES: f64 = 1_000.0;
-
-/// What QEMU's sensor USART has not taken yet of the bytes written into
-/// its socket: an estimate, at [`QEMU_BYTES_PER_S`]. Used by
-/// [`SensorFeed`] here and by `verify`, whose sensor streams into QEMU
-/// while the firmware reboots.
-#[derive(Debug)]
-pub(crate) struct QemuIntake {
-    /// Bytes written that QEMU has not taken yet (estimate) as of `at`.
-    queued: f64,
-    at: Instant,
-}
-
-impl QemuIntake {
-    /// Nothing queued.
-    pub(crate) fn new() -> Self {
-        QemuIntake {
-            queued: 0.0,
-            at: Instant::now(),
-        }
-    }
-
-    /// Bytes still queued ahead of QEMU now (estimate).
-    pub(crate) fn queued(&mut self) -> f64 {
-        let now = Instant::now();
-        let taken = now.duration_since(self.at).as_secs_f64() * QEMU_BYTES_PER_S;
-        self.queued = (self.queued - taken).max(0.0);
-        self.at = now;
-        self.queued
-    }
-
-    /// More than [`QEMU_QUEUE_BYTES`] queued: a sensor should wait (or
-    /// drop a stream telegram) rather than add to it.
-    pub(crate) fn full(&mut self) -> bool {
-        self.queued() > QEMU_QUEUE_BYTES
-    }
-
-    /// `bytes` were written into QEMU's socket.
-    pub(crate) fn add(&mut self, bytes: usize) {
-        self.queued();
-        self.queued += bytes as f64;
-    }
-}
 
 /// The sensor's bytes on their way to QEMU (see the module docs).
 pub(super) struct SensorFeed {

@@ -8,7 +8,9 @@ use std::sync::OnceLock;
 use anyhow::{anyhow, Result};
 use plotters::style::FontStyle;
 
-use super::style::FONT;
+/// The family name the text is drawn in: the font [`ensure_font`] loads is
+/// registered under it.
+pub(super) const FONT: &str = "sans-serif";
 
 /// Where a TTF font for text layout is looked for, after `$HOST_BRIDGE_FONT`.
 pub const FONT_CANDIDATES: [&str; 8] = [

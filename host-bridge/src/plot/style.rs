@@ -10,6 +10,8 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters_backend::{BackendCoord, DrawingErrorKind};
 
+use super::font::{ensure_font, FONT};
+
 /// Raw scan points.
 pub const RAW: RGBColor = RGBColor(0x9A, 0x9A, 0x9A);
 /// Smoothed points.
@@ -54,7 +56,6 @@ pub const SCAN_SIZE: (u32, u32) = (1600, 940);
 pub const MAHALANOBIS_SIZE: (u32, u32) = (1600, 720);
 pub(super) const TITLE_HEIGHT: u32 = 76;
 pub(super) const LEGEND_WIDTH: u32 = 360;
-pub(super) const FONT: &str = "sans-serif";
 
 /// A six-armed star marker (three `draw_line`s), the paper's edge points.
 pub(super) struct Star<C> {
@@ -227,7 +228,7 @@ pub(super) fn layout<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>) -> Resul
 where
     DB::ErrorType: 'static,
 {
-    super::font::ensure_font()?;
+    ensure_font()?;
     root.fill(&WHITE).map_err(draw_err)?;
     let (w, _) = root.dim_in_pixel();
     let (title_area, body) = root.split_vertically(TITLE_HEIGHT);

@@ -4,7 +4,7 @@ use lms_core::device::emulator::{Emulator, Event, Handled, ScanSource};
 use lms_core::Variant;
 
 use super::line::PtyLine;
-use super::source::variant_name;
+use crate::scan::variant_name;
 
 /// What a request was, for the log.
 fn describe(h: Handled) -> String {

@@ -8,11 +8,13 @@ use anyhow::{bail, Context, Result};
 use lms_core::device::emulator::ScanSource;
 use lms_core::{Frame, Unit, Variant};
 
-use super::source::variant_name;
 use crate::carmen;
 use crate::input::{self, Kind, ScanFile};
 use crate::options::UnitArg;
 use crate::resample::{self, field};
+use crate::scan::variant_name;
+use crate::warning::warn;
+
 /// The scans of a CARMEN log or a capture as a scan source (see the
 /// module docs), streamed: one scan in memory, the file read again from
 /// the start at its end.
@@ -94,7 +96,7 @@ impl ReplaySource {
     fn rewind(&mut self) {
         match input::open(&self.path, UnitArg::Auto) {
             Ok(f) => *self.file = f,
-            Err(e) => input::warn(&format!("replay: {e:#}; the last scan is sent again")),
+            Err(e) => warn(&format!("replay: {e:#}; the last scan is sent again")),
         }
     }
 

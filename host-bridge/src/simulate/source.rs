@@ -6,15 +6,6 @@ use lms_core::{Unit, Variant};
 
 use super::{ReplaySource, SceneSource, SimulateArgs};
 
-/// `fov°/res°` for messages.
-pub(super) fn variant_name(v: Variant) -> String {
-    format!(
-        "{}°/{}°",
-        v.fov_deg(),
-        f64::from(v.resolution_centideg()) / 100.0
-    )
-}
-
 /// Where `simulate` takes its scans from.
 #[derive(Debug)]
 pub enum Source {

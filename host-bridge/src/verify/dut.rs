@@ -1,5 +1,6 @@
-//! The co-processor under test ([`Dut`]) and verify's ends of its lines,
-//! connected as the mode asks (`--host`, `--qemu`, `--ports`).
+//! The co-processor under test ([`Dut`]) and verify's ends of its lines
+//! ([`Lines`]); `super::connect` connects them as the mode asks (`--host`,
+//! `--qemu`, `--ports`).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -8,12 +9,9 @@ use std::time::Duration;
 
 use anyhow::{anyhow, bail, Result};
 use lms_core::telegram::features::Counters;
-use lms_core::telegram::Baud;
-use lms_core::Params;
 
-use super::qemu::Qemu;
-use super::VerifyArgs;
-use crate::serial::{Link, SerialLink};
+use super::qemu::{Connected, Qemu};
+use crate::serial::Link;
 
 /// The lines to the co-processor and what it is.
 pub(super) struct Lines {
@@ -29,33 +27,15 @@ pub(super) struct Lines {
     pub how: String,
 }
 
-/// Connect to the co-processor the options ask for.
-pub(super) fn connect(
-    args: &VerifyArgs,
-    params: Params,
-    timeout: Duration,
-    stop: &Arc<AtomicBool>,
-) -> Result<Lines> {
-    if let Some(elf) = &args.qemu {
-        super::qemu::connect(elf.as_deref(), timeout, stop)
-    } else if let Some(ports) = &args.ports {
-        let [host, sensor] = ports.as_slice() else {
-            bail!("--ports takes two paths: HOST SENSOR");
-        };
-        let how = format!(
-            "co-processor on serial ports {} (host line) and {} (sensor line)",
-            host.display(),
-            sensor.display()
-        );
-        Ok(Lines {
-            sensor: Box::new(SerialLink::open(sensor, Baud::B9600)?),
-            host: Box::new(SerialLink::open(host, Baud::B9600)?),
-            console: None,
-            dut: Dut::Ports,
-            how,
-        })
-    } else {
-        super::host::connect(params)
+impl From<Connected> for Lines {
+    fn from(c: Connected) -> Self {
+        Lines {
+            sensor: c.sensor,
+            host: c.host,
+            console: c.console,
+            dut: Dut::Qemu(c.qemu),
+            how: c.how,
+        }
     }
 }
 

@@ -10,7 +10,7 @@
 //!                    [--scans N] [--timeout S] [--host-baud BAUD]
 //!                    [--max-in-flight N] [-v]
 //!                    [--iterations N] [--q Q] [--sigma S] [--tau T]
-//!                    [--min-points N] [--max-chi2 X] [--no-merge]
+//!                    [--max-range M] [--preset NAME] [--set NAME=VALUE]...
 //! ```
 //!
 //! # What it plays
@@ -139,11 +139,15 @@ mod report;
 mod session;
 mod source;
 
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{ensure, Context, Result};
+use anyhow::{bail, ensure, Context, Result};
 use lms_core::telegram::Baud;
 use lms_core::Params;
+
+use crate::serial::SerialLink;
 
 pub use args::{VerifyArgs, DEFAULT_ELF};
 
@@ -166,9 +170,9 @@ pub struct QemuLines {
 pub fn qemu_lines(
     elf: Option<&std::path::Path>,
     bound: Duration,
-    stop: &std::sync::Arc<std::sync::atomic::AtomicBool>,
+    stop: &Arc<AtomicBool>,
 ) -> Result<QemuLines> {
-    let lines = qemu::connect(elf, bound, stop)?;
+    let lines = dut::Lines::from(qemu::connect(elf, bound, stop)?);
     Ok(QemuLines {
         host: lines.host,
         sensor: lines.sensor,
@@ -257,6 +261,36 @@ fn ensure_firmware_runs(params: &Params) -> Result<()> {
     )
 }
 
+/// Connect to the co-processor the options ask for.
+fn connect(
+    args: &VerifyArgs,
+    params: Params,
+    timeout: Duration,
+    stop: &Arc<AtomicBool>,
+) -> Result<dut::Lines> {
+    if let Some(elf) = &args.qemu {
+        qemu::connect(elf.as_deref(), timeout, stop).map(dut::Lines::from)
+    } else if let Some(ports) = &args.ports {
+        let [host, sensor] = ports.as_slice() else {
+            bail!("--ports takes two paths: HOST SENSOR");
+        };
+        let how = format!(
+            "co-processor on serial ports {} (host line) and {} (sensor line)",
+            host.display(),
+            sensor.display()
+        );
+        Ok(dut::Lines {
+            sensor: Box::new(SerialLink::open(sensor, Baud::B9600)?),
+            host: Box::new(SerialLink::open(host, Baud::B9600)?),
+            console: None,
+            dut: dut::Dut::Ports,
+            how,
+        })
+    } else {
+        host::connect(params)
+    }
+}
+
 /// Run `host-bridge verify`.
 pub fn run(args: &VerifyArgs) -> Result<()> {
     let started = Instant::now();
@@ -265,7 +299,7 @@ pub fn run(args: &VerifyArgs) -> Result<()> {
     let timeout = Duration::from_secs_f64(args.timeout);
     let deadline = started + timeout;
     let stop = crate::stop::stop_flag()?;
-    let lines = dut::connect(args, params, timeout, &stop)?;
+    let lines = connect(args, params, timeout, &stop)?;
     eprintln!("host-bridge verify: {}", lines.how);
     eprintln!("host-bridge verify: sensor side plays {about}");
     let mut session = session::Session::new(lines, source, args, params, stop, started);

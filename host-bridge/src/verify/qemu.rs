@@ -13,7 +13,6 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, ensure, Context, Result};
 use lms_core::telegram::Baud;
 
-use super::dut::{Dut, Lines};
 use super::DEFAULT_ELF;
 use crate::serial::{is_quiet, Link, WRITE_TIMEOUT};
 
@@ -431,13 +430,27 @@ impl Drop for Qemu {
     }
 }
 
+/// The firmware under QEMU and verify's ends of its three UARTs.
+pub(super) struct Connected {
+    /// USART2, the sensor line.
+    pub sensor: Box<dyn Link>,
+    /// USART1, the host line.
+    pub host: Box<dyn Link>,
+    /// USART3, the console.
+    pub console: Option<Box<dyn Link>>,
+    /// QEMU itself.
+    pub qemu: Qemu,
+    /// How it is connected, for the log.
+    pub how: String,
+}
+
 /// Start QEMU (bounded by `timeout` + 30 s) and connect to its three
 /// UARTs: USART1 = host line, USART2 = sensor line, USART3 = console.
 pub(super) fn connect(
     elf: Option<&Path>,
     timeout: Duration,
     stop: &Arc<AtomicBool>,
-) -> Result<Lines> {
+) -> Result<Connected> {
     let elf = firmware_elf(elf)?;
     let ports = free_ports().context("no free TCP ports")?;
     let mut qemu = Qemu::start(&elf, ports, timeout + Duration::from_secs(30))?;
@@ -465,11 +478,11 @@ pub(super) fn connect(
         ports[1],
         ports[2]
     );
-    Ok(Lines {
+    Ok(Connected {
         sensor: Box::new(sensor),
         host: Box::new(host),
         console,
-        dut: Dut::Qemu(qemu),
+        qemu,
         how,
     })
 }

@@ -21,7 +21,7 @@ use super::dut::{Dut, Lines};
 use super::line_rate::{LineRate, Toward};
 use super::source::{PlaySource, Tag};
 use super::VerifyArgs;
-use crate::coprocessor::QemuIntake;
+use crate::qemu_intake::QemuIntake;
 use crate::serial::Link;
 
 /// A reply seen on the host line (not a scan, not a feature telegram).

@@ -17,9 +17,15 @@ pub fn shared_log(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// The CSAIL log (cm, 361 beams).
+/// The CSAIL log (cm, 361 beams); fails naming it if it is missing.
 pub fn csail() -> PathBuf {
-    shared_log("csail-corrected.log.gz")
+    let log = shared_log("csail-corrected.log.gz");
+    assert!(
+        log.is_file(),
+        "no CSAIL log at {} (../shared must sit beside the repository)",
+        log.display()
+    );
+    log
 }
 
 /// Run `host-bridge ARGS` and collect its output.
@@ -69,6 +75,27 @@ pub fn scratch(suite: &str, name: &str) -> PathBuf {
 pub fn on_path(name: &str) -> bool {
     std::env::var_os("PATH")
         .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(name).is_file()))
+}
+
+/// `qemu-system-arm`, or a failure that says it is missing.
+pub fn require_qemu() {
+    assert!(
+        on_path("qemu-system-arm"),
+        "qemu-system-arm is not on PATH (apt-get install qemu-system-arm)"
+    );
+}
+
+/// QEMU and the firmware ELF for a test that runs the firmware, or a
+/// failure that names what is missing and how to build it.
+pub fn qemu_firmware() -> PathBuf {
+    require_qemu();
+    let elf = elf();
+    assert!(
+        elf.is_file(),
+        "no firmware ELF at {} (cd firmware && cargo build --release)",
+        elf.display()
+    );
+    elf
 }
 
 /// The firmware ELF the QEMU tests run: `LMS_FIRMWARE_ELF`, or the release

@@ -79,8 +79,8 @@ pub fn write_log_bits(path: &Path, iterations: u16, out: &mut impl Write) -> io:
     write_log_bits_with(path, &params, out)
 }
 
-/// The parameters `host-bridge extract LOG` uses with no flags (issue 14,
-/// item 4): the whole log surveyed ([`DataSurvey`]), σ and `max_range`
+/// The parameters `host-bridge extract LOG` uses with no flags: the whole
+/// log surveyed ([`DataSurvey`]), σ and `max_range`
 /// from its [`lms_core::DataProfile`], everything else the defaults.
 pub fn per_data_params(path: &Path) -> io::Result<Params> {
     let mut survey = DataSurvey::new(log_unit(path)?);

@@ -1,41 +1,23 @@
 //! The results on every shared log, pinned: the feature bits of every frame
-//! of the seven recorded logs of `../shared/data/carmen` at the
-//! ALGORITHM.md defaults (30 passes) must hash to the digests below. A
-//! change of any bit of any smoothed range, `D`, edge, segment, line,
-//! corner or counter of any frame fails this test.
+//! of the seven recorded logs of `../shared/data/carmen` (30 passes) must
+//! hash to the digests below. A change of any bit of any smoothed range,
+//! `D`, edge, segment, line, corner or counter of any frame fails this test.
 //!
-//! Re-pinned when the core's sines, cosines and `atan2` moved from libm's
-//! `cosf`/`sinf`/`atan2f` (f64 inside, or 600 B) to `maths::cos_sin` and
-//! `maths::atan2` (f32 only, 7.2 KB less flash on the M4F): smoothed
-//! ranges, `D`, edges, segments and counters kept every bit; about half of
-//! the lines moved, on CSAIL by at most 5.8e-6 rad in α and 2.1e-5 m in r
-//! (Örebro 1.6e-6 rad, 3.3e-6 m); well-conditioned corners by at most
-//! 1.3 µm; ill-conditioned ones (flag cleared) by up to 0.16 m, at 179 m
-//! with σ of kilometres (`atan2` alone: α by one ulp, 2.4e-7 rad).
+//! Pinned at the defaults, and at the defaults less some of their measured
+//! additions, so that each set stays reachable bit for bit:
+//! [`ARC_PAIRS_KEPT`] (pairs of lines on a curve kept), [`NO_ANCHOR_GATE`]
+//! (and no anchor gate on the merges, no turn offsets in the fits' χ²),
+//! [`CONSECUTIVE_WINDOWS`] (and the windows of §2–6 in every mode, no work
+//! bound on split before reject), [`ARCS_KEPT`] (and no lines of arcs
+//! dropped) and `Params::V2` (and no footprint weights, no merge across
+//! rejected segments: ALGORITHM.md v2). With arcs kept the `rejected_arc`
+//! counter is always 0, and the last two are pinned with its text taken out
+//! of each frame's `stats` line ([`WithoutArcCounter`]).
 //!
-//! Re-pinned when the defaults took the footprint-weighted fits and the
-//! merge across rejected segments (ALGORITHM.md §10 (e), (f); stop 21):
-//! the digests before are those of `Params::V2`, checked below, so the old
-//! behaviour stays reachable bit for bit.
-//!
-//! Stop 22: the defaults drop the lines of arcs (`Params::arc_chain`), and
-//! `Stats` gained the counter `rejected_arc`, so every frame's `stats`
-//! line gained `, rejected_arc: 0` where nothing is dropped. The digests
-//! pinned before are checked as they were, at `Params::STOP21` and
-//! `Params::V2`, with that text taken out ([`WithoutArcCounter`]): every
-//! other bit of every frame is as pinned. The new defaults have their own
-//! digests.
-//!
-//! Stop 23: the defaults take same-turn windows (`Params::same_turn_windows`,
-//! ALGORITHM.md §10 (a)) in the interleaved 0.5° modes. Stop 22's digests
-//! are checked as they were, at `Params::STOP22`; the new defaults have
-//! their own.
-//!
-//! Stop 24: the defaults gate the merges on the larger line's own
-//! parameters (`Params::merge_anchor_gate`) and take the turns' offsets out
-//! of the fits' χ² in the 0.5° modes (`Params::turn_offsets`). Stop 23's
-//! digests are checked as they were, at `Params::STOP23`; the new defaults
-//! have their own.
+//! The core's sines, cosines and `atan2` are its own f32-only forms
+//! (`maths::cos_sin`, `maths::atan2`); with libm's `cosf`/`sinf`/`atan2f`
+//! (feature `libm-trig`, ALGORITHM.md §9 as written) `Params::V2` has
+//! digests of its own, also pinned.
 //!
 //! To re-pin after an intended change of results (say why in the commit):
 //! `cargo run --release -p feature-bits -- LOG` and FNV-1a-64 its output
@@ -47,9 +29,43 @@ use std::path::{Path, PathBuf};
 #[cfg(not(feature = "libm-trig"))]
 use feature_bits::{per_data_params, write_log_bits};
 use feature_bits::{write_log_bits_with, Fnv64};
+use lms_core::Params;
+
+/// The defaults with pairs of lines kept whatever a circle says of them.
+#[cfg(not(feature = "libm-trig"))]
+const ARC_PAIRS_KEPT: Params = Params {
+    arc_pairs: false,
+    ..Params::DEFAULT
+};
+
+/// [`ARC_PAIRS_KEPT`] with no anchor gate on the merges and no turn offsets
+/// in the fits' χ².
+#[cfg(not(feature = "libm-trig"))]
+const NO_ANCHOR_GATE: Params = Params {
+    merge_anchor_gate: f32::INFINITY,
+    turn_offsets: false,
+    ..ARC_PAIRS_KEPT
+};
+
+/// [`NO_ANCHOR_GATE`] with the windows of §2–6 (consecutive beams) in every
+/// mode and no work bound on split before reject.
+#[cfg(not(feature = "libm-trig"))]
+const CONSECUTIVE_WINDOWS: Params = Params {
+    same_turn_windows: false,
+    split_budget: 0,
+    ..NO_ANCHOR_GATE
+};
+
+/// [`CONSECUTIVE_WINDOWS`] with no lines of arcs dropped; with no footprint
+/// weights and no merge across rejected segments too it is `Params::V2`.
+#[cfg(not(feature = "libm-trig"))]
+const ARCS_KEPT: Params = Params {
+    arc_chain: 0,
+    ..CONSECUTIVE_WINDOWS
+};
 
 /// (log stem, FNV-1a-64 of the feature bits, frames) at `Params::V2`, 30
-/// passes (the defaults up to stop 20).
+/// passes, without the `rejected_arc` counter.
 #[cfg(not(feature = "libm-trig"))]
 const PINNED_V2: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x6ebae6f9863f5531, 861),
@@ -62,8 +78,7 @@ const PINNED_V2: [(&str, u64, usize); 7] = [
 ];
 
 /// With libm's `cosf`/`sinf`/`atan2f` (feature `libm-trig`, ALGORITHM.md §9
-/// as written) at `Params::V2`: the digests pinned before the core had its
-/// own forms, so that behaviour stays reachable bit for bit
+/// as written) at `Params::V2`, so that behaviour stays reachable bit for bit
 /// (`cargo test -p feature-bits --features libm-trig --test digests`).
 #[cfg(feature = "libm-trig")]
 const PINNED_V2: [(&str, u64, usize); 7] = [
@@ -95,10 +110,9 @@ const PINNED: [(&str, u64, usize); 7] = [
     ("orebro-corrected", 0xe720b6fb012a9a3f, 237),
 ];
 
-/// The same at `Params::STOP24` (the defaults of stop 24: pairs of lines
-/// on a curve kept).
+/// The same at [`ARC_PAIRS_KEPT`].
 #[cfg(not(feature = "libm-trig"))]
-const PINNED_STOP24: [(&str, u64, usize); 7] = [
+const PINNED_ARC_PAIRS_KEPT: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x3fd2675e26bb39dc, 861),
     ("belgioioso-corrected", 0x68758aa19d2330ee, 395),
     ("csail-corrected", 0x9c838733fe481d31, 406),
@@ -108,10 +122,9 @@ const PINNED_STOP24: [(&str, u64, usize); 7] = [
     ("orebro-corrected", 0xe720b6fb012a9a3f, 237),
 ];
 
-/// The same at `Params::STOP23` (the defaults of stop 23: no anchor gate on
-/// the merges).
+/// The same at [`NO_ANCHOR_GATE`].
 #[cfg(not(feature = "libm-trig"))]
-const PINNED_STOP23: [(&str, u64, usize); 7] = [
+const PINNED_NO_ANCHOR_GATE: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x24ed53cce9a29316, 861),
     ("belgioioso-corrected", 0xa0cb8ce620b6ffe5, 395),
     ("csail-corrected", 0x79584256c0057d1f, 406),
@@ -121,10 +134,9 @@ const PINNED_STOP23: [(&str, u64, usize); 7] = [
     ("orebro-corrected", 0xee57028d62c2f364, 237),
 ];
 
-/// The same at `Params::STOP22` (the defaults of stop 22: the windows of
-/// §2–6 in every mode).
+/// The same at [`CONSECUTIVE_WINDOWS`].
 #[cfg(not(feature = "libm-trig"))]
-const PINNED_STOP22: [(&str, u64, usize); 7] = [
+const PINNED_CONSECUTIVE_WINDOWS: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x24ed53cce9a29316, 861),
     ("belgioioso-corrected", 0x2743f09b450eb760, 395),
     ("csail-corrected", 0x58173c8a6729017c, 406),
@@ -134,10 +146,10 @@ const PINNED_STOP22: [(&str, u64, usize); 7] = [
     ("orebro-corrected", 0xee57028d62c2f364, 237),
 ];
 
-/// The same at `Params::STOP21` (the defaults of stop 21: no arcs dropped),
-/// without the `rejected_arc` counter ([`WithoutArcCounter`]).
+/// The same at [`ARCS_KEPT`], without the `rejected_arc` counter
+/// ([`WithoutArcCounter`]).
 #[cfg(not(feature = "libm-trig"))]
-const PINNED_STOP21: [(&str, u64, usize); 7] = [
+const PINNED_ARCS_KEPT: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x8f0f7db9f9d29277, 861),
     ("belgioioso-corrected", 0xe3bbcf6cdcd894f7, 395),
     ("csail-corrected", 0x86c3cced0b747d9c, 406),
@@ -148,7 +160,7 @@ const PINNED_STOP21: [(&str, u64, usize); 7] = [
 ];
 
 /// A writer that takes `, rejected_arc: 0` out of each line before passing
-/// it on: the feature bits as written before `Stats` had that counter.
+/// it on: the feature bits without that counter.
 struct WithoutArcCounter<W: Write> {
     inner: W,
     line: Vec<u8>,
@@ -193,8 +205,8 @@ impl<W: Write> Write for WithoutArcCounter<W> {
     }
 }
 
-/// FNV-1a-64 of the feature bits as written, and of the same bits as
-/// written before `Stats` had `rejected_arc`, from one run.
+/// FNV-1a-64 of the feature bits as written, and of the same bits without
+/// the `rejected_arc` counter, from one run.
 struct Digests {
     full: Fnv64,
     without_arc_counter: WithoutArcCounter<Fnv64>,
@@ -214,7 +226,7 @@ impl Write for Digests {
 
 /// The feature bits of the log at `path` with `params`, hashed: (digest,
 /// digest without the `rejected_arc` counter, frames).
-fn digests(path: &Path, params: &lms_core::Params) -> (u64, u64, usize) {
+fn digests(path: &Path, params: &Params) -> (u64, u64, usize) {
     let mut d = Digests {
         full: Fnv64::default(),
         without_arc_counter: WithoutArcCounter::new(Fnv64::default()),
@@ -233,11 +245,11 @@ fn digests(path: &Path, params: &lms_core::Params) -> (u64, u64, usize) {
 /// `rejected_arc` counter: the digests that differ.
 fn check_pins(
     pinned: &[(&str, u64, usize)],
-    params: &lms_core::Params,
+    params: &Params,
     without_arc_counter: bool,
 ) -> Vec<String> {
     let mut wrong = Vec::new();
-    let params = lms_core::Params {
+    let params = Params {
         iterations: 30,
         ..*params
     };
@@ -257,57 +269,57 @@ fn check_pins(
 #[cfg(not(feature = "libm-trig"))]
 #[test]
 fn feature_bits_of_every_shared_log_are_pinned() {
-    let wrong = check_pins(&PINNED, &lms_core::Params::default(), false);
+    let wrong = check_pins(&PINNED, &Params::default(), false);
     assert!(wrong.is_empty(), "results changed:\n{}", wrong.join("\n"));
 }
 
 #[cfg(not(feature = "libm-trig"))]
 #[test]
-fn feature_bits_of_every_shared_log_at_stop_24_are_pinned() {
-    let wrong = check_pins(&PINNED_STOP24, &lms_core::Params::STOP24, false);
+fn feature_bits_of_every_shared_log_with_arc_pairs_kept_are_pinned() {
+    let wrong = check_pins(&PINNED_ARC_PAIRS_KEPT, &ARC_PAIRS_KEPT, false);
     assert!(
         wrong.is_empty(),
-        "stop-24 results changed:\n{}",
+        "arc-pairs-kept results changed:\n{}",
         wrong.join("\n")
     );
 }
 
 #[cfg(not(feature = "libm-trig"))]
 #[test]
-fn feature_bits_of_every_shared_log_at_stop_23_are_pinned() {
-    let wrong = check_pins(&PINNED_STOP23, &lms_core::Params::STOP23, false);
+fn feature_bits_of_every_shared_log_without_the_anchor_gate_are_pinned() {
+    let wrong = check_pins(&PINNED_NO_ANCHOR_GATE, &NO_ANCHOR_GATE, false);
     assert!(
         wrong.is_empty(),
-        "stop-23 results changed:\n{}",
+        "no-anchor-gate results changed:\n{}",
         wrong.join("\n")
     );
 }
 
 #[cfg(not(feature = "libm-trig"))]
 #[test]
-fn feature_bits_of_every_shared_log_at_stop_22_are_pinned() {
-    let wrong = check_pins(&PINNED_STOP22, &lms_core::Params::STOP22, false);
+fn feature_bits_of_every_shared_log_with_consecutive_windows_are_pinned() {
+    let wrong = check_pins(&PINNED_CONSECUTIVE_WINDOWS, &CONSECUTIVE_WINDOWS, false);
     assert!(
         wrong.is_empty(),
-        "stop-22 results changed:\n{}",
+        "consecutive-windows results changed:\n{}",
         wrong.join("\n")
     );
 }
 
 #[cfg(not(feature = "libm-trig"))]
 #[test]
-fn feature_bits_of_every_shared_log_at_stop_21_are_pinned() {
-    let wrong = check_pins(&PINNED_STOP21, &lms_core::Params::STOP21, true);
+fn feature_bits_of_every_shared_log_with_arcs_kept_are_pinned() {
+    let wrong = check_pins(&PINNED_ARCS_KEPT, &ARCS_KEPT, true);
     assert!(
         wrong.is_empty(),
-        "stop-21 results changed:\n{}",
+        "arcs-kept results changed:\n{}",
         wrong.join("\n")
     );
 }
 
 #[test]
 fn feature_bits_of_every_shared_log_at_v2_are_pinned() {
-    let wrong = check_pins(&PINNED_V2, &lms_core::Params::V2, true);
+    let wrong = check_pins(&PINNED_V2, &Params::V2, true);
     assert!(
         wrong.is_empty(),
         "v2 results changed:\n{}",
@@ -327,13 +339,14 @@ fn a_changed_bit_changes_the_digest() {
     assert_eq!(a.0, PINNED[6].1);
 }
 
-/// (log stem, σ (m), `max_range` (m), digests: defaults, stop 24, stop 23,
-/// stop 22, stop 21, v2).
+/// (log stem, σ (m), `max_range` (m), digests: defaults,
+/// [`ARC_PAIRS_KEPT`], [`NO_ANCHOR_GATE`], [`CONSECUTIVE_WINDOWS`],
+/// [`ARCS_KEPT`], v2).
 #[cfg(not(feature = "libm-trig"))]
 type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64, u64);
 
 /// With the parameters `host-bridge extract LOG` uses when no flag is given
-/// (issue 14, item 4: σ and `max_range` from the survey of the log,
+/// (σ and `max_range` from the survey of the log,
 /// [`per_data_params`]), 30 passes: (log stem, σ (m), `max_range` (m),
 /// FNV-1a-64 of the feature bits). σ is 1 cm on the cm logs, 30 mm on
 /// Acapulco's 5 cm steps and 5 mm on Örebro (mm); `max_range` is the unit's
@@ -342,10 +355,9 @@ type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64, u64);
 /// `Params::default`.) `host-bridge`'s
 /// `extract_cli::per_data_defaults_match_the_pinned_feature_bits` checks
 /// that its `defaults::for_log` gives these same parameters. The last five
-/// columns are the digests with `Params::STOP24`, `Params::STOP23`,
-/// `Params::STOP22`, `Params::STOP21` and `Params::V2` otherwise (pinned at
-/// stops 24, 23, 22 and 21 and up to stop 20), the last two without the
-/// `rejected_arc` counter ([`WithoutArcCounter`]).
+/// columns are the digests with [`ARC_PAIRS_KEPT`], [`NO_ANCHOR_GATE`],
+/// [`CONSECUTIVE_WINDOWS`], [`ARCS_KEPT`] and `Params::V2` otherwise, the
+/// last two without the `rejected_arc` counter ([`WithoutArcCounter`]).
 #[cfg(not(feature = "libm-trig"))]
 const PINNED_PER_DATA: [PerDataPin; 7] = [
     (
@@ -431,78 +443,82 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
 #[test]
 fn feature_bits_at_the_per_data_defaults_are_pinned() {
     let mut wrong = Vec::new();
-    for (stem, sigma, max_range, pin, pin_stop24, pin_stop23, pin_stop22, pin_stop21, pin_v2) in
+    for (stem, sigma, max_range, pin, pin_pairs, pin_gate, pin_windows, pin_arcs, pin_v2) in
         PINNED_PER_DATA
     {
         let path = log(stem);
         let params = per_data_params(&path).unwrap();
-        let stop24 = lms_core::Params {
-            arc_pairs: false,
-            ..params
+        let on_data = |base: Params| Params {
+            sigma: params.sigma,
+            max_range: params.max_range,
+            ..base
         };
-        let stop23 = lms_core::Params {
-            merge_anchor_gate: f32::INFINITY,
-            turn_offsets: false,
-            ..stop24
-        };
-        let stop22 = lms_core::Params {
-            same_turn_windows: false,
-            split_budget: 0,
-            ..stop23
-        };
-        let stop21 = lms_core::Params {
-            arc_chain: 0,
-            ..stop22
-        };
-        let v2 = lms_core::Params {
+        let (pairs, gate, windows, arcs) = (
+            on_data(ARC_PAIRS_KEPT),
+            on_data(NO_ANCHOR_GATE),
+            on_data(CONSECUTIVE_WINDOWS),
+            on_data(ARCS_KEPT),
+        );
+        let v2 = Params {
             bridge_merge: false,
             footprint: 0.0,
-            ..stop21
+            ..arcs
         };
         assert_eq!(
             v2,
-            lms_core::Params {
+            Params {
                 sigma,
                 max_range,
-                ..lms_core::Params::V2
+                ..Params::V2
             }
         );
         let (d, _, _) = digests(&path, &params);
-        let (d24, _, _) = digests(&path, &stop24);
-        let (d23, _, _) = digests(&path, &stop23);
-        let (d22, d22_without, _) = digests(&path, &stop22);
-        let (_, d21, _) = digests(&path, &stop21);
-        // No line of these logs is taken for an arc at stop 22: but for the
-        // counter, stop 22 gives the features of stop 21, bit for bit.
+        let (d_pairs, _, _) = digests(&path, &pairs);
+        let (d_gate, _, _) = digests(&path, &gate);
+        let (d_windows, d_windows_without, _) = digests(&path, &windows);
+        let (_, d_arcs, _) = digests(&path, &arcs);
+        // No line of these logs is taken for an arc with consecutive
+        // windows: but for the counter, dropping arcs there changes no bit.
         assert_eq!(
-            d22_without, pin_stop21,
+            d_windows_without, pin_arcs,
             "{stem}: a line of a real log dropped as an arc"
         );
         let (_, d2, _) = digests(&path, &v2);
         println!(
-            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d24:016x}, 0x{d23:016x}, 0x{d22:016x}, \
-             0x{d21:016x}, 0x{d2:016x}),",
+            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d_pairs:016x}, 0x{d_gate:016x}, \
+             0x{d_windows:016x}, 0x{d_arcs:016x}, 0x{d2:016x}),",
             params.sigma, params.max_range
         );
-        if (params.sigma, params.max_range, d, d24, d23, d22, d21, d2)
-            != (
-                sigma, max_range, pin, pin_stop24, pin_stop23, pin_stop22, pin_stop21, pin_v2,
-            )
-        {
+        if (
+            params.sigma,
+            params.max_range,
+            d,
+            d_pairs,
+            d_gate,
+            d_windows,
+            d_arcs,
+            d2,
+        ) != (
+            sigma,
+            max_range,
+            pin,
+            pin_pairs,
+            pin_gate,
+            pin_windows,
+            pin_arcs,
+            pin_v2,
+        ) {
             wrong.push(format!(
-                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, stop 24 0x{d24:016x}, stop 23 \
-                 0x{d23:016x}, stop 22 0x{d22:016x}, stop 21 0x{d21:016x}, v2 0x{d2:016x}; \
-                 pinned {sigma}, {max_range}, 0x{pin:016x}, 0x{pin_stop24:016x}, \
-                 0x{pin_stop23:016x}, 0x{pin_stop22:016x}, 0x{pin_stop21:016x}, 0x{pin_v2:016x}",
+                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, arc pairs kept 0x{d_pairs:016x}, \
+                 no anchor gate 0x{d_gate:016x}, consecutive windows 0x{d_windows:016x}, \
+                 arcs kept 0x{d_arcs:016x}, v2 0x{d2:016x}; pinned {sigma}, {max_range}, \
+                 0x{pin:016x}, 0x{pin_pairs:016x}, 0x{pin_gate:016x}, 0x{pin_windows:016x}, \
+                 0x{pin_arcs:016x}, 0x{pin_v2:016x}",
                 params.sigma, params.max_range
             ));
         }
         // Only σ and the range limit come from the data.
-        let defaults = lms_core::Params {
-            sigma: params.sigma,
-            max_range: params.max_range,
-            ..lms_core::Params::default()
-        };
+        let defaults = on_data(Params::DEFAULT);
         assert_eq!(params, defaults, "{stem}");
     }
     assert!(

@@ -83,14 +83,25 @@ fn each_option_is_refused_by_name_or_changes_the_result() {
 
 #[test]
 fn same_turn_windows_are_in_every_build_and_can_be_switched_off() {
-    // The default since stop 23 (ALGORITHM.md §10 (a)): built with and
-    // without the other §10 options, and `Params::STOP22` (windows of
-    // consecutive beams) validates in both and changes the result.
+    // On by default (ALGORITHM.md §10 (a)): built with and without the
+    // other §10 options, and windows of consecutive beams (with no work
+    // bound, no anchor gate, no turn offsets and pairs kept, as
+    // `Params::V2` has them) validate in both and change the result.
     const { assert!(Params::DEFAULT.same_turn_windows) };
+    let consecutive_windows = Params {
+        same_turn_windows: false,
+        split_budget: 0,
+        merge_anchor_gate: f32::INFINITY,
+        turn_offsets: false,
+        arc_pairs: false,
+        ..Params::DEFAULT
+    };
     let (frame, default, default_d) = defaults_on_the_grazing_wall();
     let (mut ex, mut trace) = (Extractor::new(), Trace::new());
-    let stop22 = Params::STOP22.validate().expect("STOP22 in every build");
-    let got = ex.run_traced(&frame, &stop22, &mut trace);
+    let windows = consecutive_windows
+        .validate()
+        .expect("consecutive windows in every build");
+    let got = ex.run_traced(&frame, &windows, &mut trace);
     assert!(
         got.segments() != default.segments() && trace.mahalanobis() != &default_d[..],
         "same-turn windows change nothing on the grazing wall"

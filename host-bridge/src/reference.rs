@@ -1,0 +1,258 @@
+//! `host-bridge params`: every parameter with its value, unit and meaning
+//! ([`lms_core::params::FIELDS`]), the presets ([`lms_core::params::PRESETS`])
+//! and the counters of a frame's `stats` ([`lms_core::Stats::MEANINGS`]), as
+//! aligned text or as markdown. `docs/reference/parameters.md` and
+//! `docs/reference/stats.md` are its markdown output, and a test
+//! (`tests/docs_current.rs`) fails when they differ from it.
+
+use std::fmt::Write as _;
+use std::io::{self, Write};
+
+use anyhow::{anyhow, Result};
+use clap::Args;
+use lms_core::params::{Preset, FIELDS, PRESETS};
+use lms_core::{Params, Stats};
+
+/// The command that writes `docs/reference/parameters.md`.
+pub const PARAMETERS_COMMAND: &str =
+    "cargo run -p host-bridge -- params --markdown > docs/reference/parameters.md";
+
+/// The command that writes `docs/reference/stats.md`.
+pub const STATS_COMMAND: &str =
+    "cargo run -p host-bridge -- params --stats --markdown > docs/reference/stats.md";
+
+/// Options of `host-bridge params`.
+#[derive(Args, Clone, Debug)]
+pub struct ParamsArgs {
+    /// Show this preset's values
+    #[arg(long, value_name = "NAME", default_value = "default",
+          value_parser = crate::options::preset_parser())]
+    pub preset: String,
+    /// Markdown tables (the parameters and the presets) instead of aligned text
+    #[arg(long)]
+    pub markdown: bool,
+    /// The counters of a frame's `stats` record instead of the parameters
+    #[arg(long)]
+    pub stats: bool,
+}
+
+/// Run `host-bridge params`.
+pub fn run(args: &ParamsArgs) -> Result<()> {
+    let preset = crate::options::preset(&args.preset).map_err(|e| anyhow!("--preset: {e}"))?;
+    let text = match (args.stats, args.markdown) {
+        (true, true) => stats_markdown(),
+        (true, false) => stats_text(),
+        (false, true) => parameters_markdown(preset),
+        (false, false) => parameters_text(preset),
+    };
+    // A closed standard output (`| head`) ends the listing, not an error.
+    match io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
+}
+
+/// `[`x`]` rustdoc links as plain code, `crate::` as `lms_core::`.
+fn plain(doc: &str) -> String {
+    doc.replace("[`", "`")
+        .replace("`]", "`")
+        .replace("`crate::", "`lms_core::")
+}
+
+/// Rows of text in columns as wide as their widest cell, the last column
+/// unpadded.
+fn aligned(rows: &[Vec<String>]) -> String {
+    let columns = rows.first().map_or(0, Vec::len);
+    let widths: Vec<usize> = (0..columns)
+        .map(|c| rows.iter().map(|r| r[c].chars().count()).max().unwrap_or(0))
+        .collect();
+    let mut out = String::new();
+    for row in rows {
+        let mut line = String::new();
+        for (c, cell) in row.iter().enumerate() {
+            if c + 1 == columns {
+                line.push_str(cell);
+            } else {
+                let pad = widths[c] - cell.chars().count();
+                let _ = write!(line, "{cell}{}  ", " ".repeat(pad));
+            }
+        }
+        out.push_str(line.trim_end());
+        out.push('\n');
+    }
+    out
+}
+
+/// Every parameter of `preset` as aligned text: name, value, unit, meaning.
+pub fn parameters_text(preset: &Preset) -> String {
+    let mut rows = vec![vec![
+        "NAME".to_string(),
+        "VALUE".to_string(),
+        "UNIT".to_string(),
+        "MEANING".to_string(),
+    ]];
+    rows.extend(FIELDS.iter().map(|f| {
+        vec![
+            f.name.to_string(),
+            (f.get)(&preset.params).to_string(),
+            f.unit.to_string(),
+            f.meaning.to_string(),
+        ]
+    }));
+    let names: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
+    format!(
+        "Preset {}: {}.\n\n{}\n\
+         Set one with --set NAME=VALUE or in a --params FILE; sigma, iterations, q, tau and\n\
+         max_range have flags of their own. With a log, sigma and max_range come from its\n\
+         data unless set. Presets: {} (--preset NAME).\n",
+        preset.name,
+        preset.summary,
+        aligned(&rows),
+        names.join(", ")
+    )
+}
+
+/// The fields of `p` that differ from [`Params::DEFAULT`], as
+/// `` `name = value` `` items.
+fn changes(p: &Params) -> Vec<String> {
+    FIELDS
+        .iter()
+        .filter(|f| (f.get)(p) != (f.get)(&Params::DEFAULT))
+        .map(|f| format!("`{} = {}`", f.name, (f.get)(p)))
+        .collect()
+}
+
+/// The parameter reference in markdown: every parameter with its value in
+/// `preset`, unit and meaning, then the presets with what each changes.
+pub fn parameters_markdown(preset: &Preset) -> String {
+    let mut out = String::new();
+    let _ = write!(
+        out,
+        "# Parameters\n\n\
+         <!-- Generated from the code: `{PARAMETERS_COMMAND}`. \
+         host-bridge/tests/docs_current.rs fails when this file differs. -->\n\n\
+         Every parameter of the pipeline is a field of `lms_core::Params`. On the command line\n\
+         of `extract`, `plot`, `verify` and `coprocessor` one is set by its name with\n\
+         `--set NAME=VALUE` (repeatable) or in a TOML file given to `--params FILE`\n\
+         (`NAME = VALUE` lines, and an optional `preset = \"NAME\"`); `sigma`, `iterations`,\n\
+         `q`, `tau` and `max_range` also have flags of their own (`--sigma`, `--iterations`,\n\
+         `--q`, `--tau`, `--max-range`). Later wins: the preset (`--preset NAME`, else\n\
+         `default`), then the file, then `--set`, then those flags. With a log, `sigma` and\n\
+         `max_range` come from its data (quantisation step, range mode) unless set.\n\
+         `Params::validate` checks the result and names a parameter out of range.\n\
+         Values are numbers (`inf` for infinity), whole numbers or `true`/`false`. E.g.\n\n\
+         ```sh\n\
+         host-bridge extract LOG --preset v2 --set split_depth=0 --set min_length=0.2\n\
+         host-bridge extract LOG --params my-params.toml --sigma 0.01\n\
+         ```\n\n\
+         with `my-params.toml`:\n\n\
+         ```toml\n\
+         preset = \"v2\"\n\
+         split_depth = 0\n\
+         max_alpha_sd_deg = inf\n\
+         ```\n\n\
+         `host-bridge params` prints this table; `host-bridge params --preset NAME` with a\n\
+         preset's values.\n\n\
+         | name | {} | unit | meaning |\n| --- | --- | --- | --- |\n",
+        preset.name
+    );
+    for f in FIELDS {
+        let _ = writeln!(
+            out,
+            "| `{}` | {} | {} | {} |",
+            f.name,
+            (f.get)(&preset.params),
+            f.unit,
+            f.meaning
+        );
+    }
+    out.push_str(&presets_markdown());
+    out
+}
+
+/// The presets in markdown: name, what it is, what it changes.
+pub fn presets_markdown() -> String {
+    let mut out = String::from(
+        "\n## Presets\n\n\
+         `--preset NAME` starts from one of these (`lms_core::params::PRESETS`).\n\n\
+         | preset | what it is | differs from `default` in |\n| --- | --- | --- |\n",
+    );
+    for p in &PRESETS {
+        let changed = changes(&p.params);
+        let changed = if changed.is_empty() {
+            "-".to_string()
+        } else {
+            changed.join(", ")
+        };
+        let _ = writeln!(out, "| `{}` | {} | {} |", p.name, p.summary, changed);
+    }
+    out
+}
+
+/// The counters of `stats` as aligned text: name, meaning.
+pub fn stats_text() -> String {
+    let mut rows = vec![vec!["COUNTER".to_string(), "MEANING".to_string()]];
+    rows.extend(
+        Stats::MEANINGS
+            .iter()
+            .map(|(name, meaning)| vec![name.to_string(), plain(meaning).replace('\n', " ")]),
+    );
+    aligned(&rows)
+}
+
+/// The counters of `stats` in markdown.
+pub fn stats_markdown() -> String {
+    let mut out = format!(
+        "# Stats counters\n\n\
+         <!-- Generated from the code: `{STATS_COMMAND}`. \
+         host-bridge/tests/docs_current.rs fails when this file differs. -->\n\n\
+         Each frame's record of `host-bridge extract` has a `stats` object with these {}\n\
+         counters (`lms_core::Stats::FIELDS`, in this order): what the frame's run dropped,\n\
+         rejected or could not store. The first {} are the words of the co-processor's `D0`\n\
+         telegram.\n\n\
+         | counter | meaning |\n| --- | --- |\n",
+        Stats::FIELDS.len(),
+        Stats::D0_FIELDS
+    );
+    for (name, meaning) in Stats::MEANINGS {
+        let _ = writeln!(out, "| `{name}` | {} |", plain(meaning));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_parameter_and_counter_is_listed() {
+        let text = parameters_text(&PRESETS[0]);
+        let markdown = parameters_markdown(&PRESETS[0]);
+        for f in FIELDS {
+            assert!(text.contains(f.name) && markdown.contains(&format!("| `{}` |", f.name)));
+        }
+        for p in &PRESETS {
+            assert!(markdown.contains(&format!("| `{}` |", p.name)));
+        }
+        assert!(markdown.contains("| `sigma` | 0.005 | m |"), "{markdown}");
+        let stats = stats_markdown();
+        for (name, _) in Stats::FIELDS {
+            assert!(stats.contains(&format!("| `{name}` |")));
+        }
+        assert!(!stats.contains("[`"), "{stats}");
+    }
+
+    #[test]
+    fn a_preset_lists_what_it_changes() {
+        assert!(changes(&Params::DEFAULT).is_empty());
+        let paper = changes(&Params::PAPER);
+        assert!(
+            paper.contains(&"`split_depth = 0`".to_string()),
+            "{paper:?}"
+        );
+        assert!(
+            paper.contains(&"`max_range = inf`".to_string()),
+            "{paper:?}"
+        );
+    }
+}

@@ -1,0 +1,66 @@
+//! Parameter sets the evaluation compares the defaults with: the defaults
+//! with groups of their decisions turned off, each set on top of the one
+//! before, down to ALGORITHM.md v2 ([`Params::V2`]). Each row of such a
+//! table shows what the group it turns off adds (docs/DESIGN.md).
+
+use lms_core::Params;
+
+/// The defaults with pairs of lines on a curve kept (`arc_pairs = false`).
+pub const ARC_PAIRS_KEPT: Params = Params {
+    arc_pairs: false,
+    ..Params::DEFAULT
+};
+
+/// [`ARC_PAIRS_KEPT`] with no anchor gate on the merges and no per-turn
+/// offsets in the fits' χ² (`merge_anchor_gate = inf`,
+/// `turn_offsets = false`).
+pub const NO_ANCHOR_NO_OFFSETS: Params = Params {
+    merge_anchor_gate: f32::INFINITY,
+    turn_offsets: false,
+    ..ARC_PAIRS_KEPT
+};
+
+/// [`NO_ANCHOR_NO_OFFSETS`] with windows of consecutive beams in every
+/// mode and no work bound on split before reject
+/// (`same_turn_windows = false`, `split_budget = 0`).
+pub const CONSECUTIVE_WINDOWS: Params = Params {
+    same_turn_windows: false,
+    split_budget: 0,
+    ..NO_ANCHOR_NO_OFFSETS
+};
+
+/// [`CONSECUTIVE_WINDOWS`] with every line of an arc kept
+/// (`arc_chain = 0`). With the footprint weights and the bridge merge off
+/// too, this is [`Params::V2`].
+pub const ARC_CHAINS_KEPT: Params = Params {
+    arc_chain: 0,
+    ..CONSECUTIVE_WINDOWS
+};
+
+/// Name of [`ARC_PAIRS_KEPT`] in the tables.
+pub const ARC_PAIRS_KEPT_NAME: &str = "defaults, arc_pairs=false";
+/// Name of [`NO_ANCHOR_NO_OFFSETS`] in the tables.
+pub const NO_ANCHOR_NO_OFFSETS_NAME: &str =
+    "defaults, arc_pairs=false, merge_anchor_gate=inf, turn_offsets=false";
+/// Name of [`CONSECUTIVE_WINDOWS`] in the tables.
+pub const CONSECUTIVE_WINDOWS_NAME: &str = "defaults, arc_pairs=false, merge_anchor_gate=inf, \
+     turn_offsets=false, same_turn_windows=false, split_budget=0";
+/// Name of [`ARC_CHAINS_KEPT`] in the tables.
+pub const ARC_CHAINS_KEPT_NAME: &str = "defaults, arc_pairs=false, merge_anchor_gate=inf, \
+     turn_offsets=false, same_turn_windows=false, split_budget=0, arc_chain=0";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The chain ends at ALGORITHM.md v2 as the core defines it.
+    #[test]
+    fn chain_ends_at_v2() {
+        let v2 = Params {
+            footprint: 0.0,
+            bridge_merge: false,
+            ..ARC_CHAINS_KEPT
+        };
+        assert_eq!(v2, Params::V2);
+    }
+}
