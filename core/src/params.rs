@@ -33,7 +33,7 @@ pub struct Params {
     /// shared with the neighbouring segment (§7.5). Default `false`
     /// (ALGORITHM.md v2): the shared point is left out of both fits: it lies
     /// on neither line exactly, and including it makes the corner covariance
-    /// over-confident (measured corner NEES 2.73 with it, 1.92 without, on
+    /// over-confident (measured corner NEES 2.73 with it, 1.90 without, on
     /// 400 draws of a 90° corner at σ = 5 mm; ideal 2). `true` is v1.
     pub fit_shared_points: bool,
     /// Merge consecutive agreeing lines (§7.6). Default on.
@@ -73,7 +73,7 @@ pub struct Params {
     /// beyond ALGORITHM.md). `+inf` keeps every line (v1).
     pub max_alpha_sd_deg: f32,
     /// Grazing-incidence observation noise `ρ` (dimensionless, ALGORITHM.md
-    /// §10 proposal, `docs/ALGORITHM-v3-section10.md`): each window's
+    /// §10 proposal, docs/ALGORITHM.md Appendix A): each window's
     /// `R = sigma_w²·I` with `sigma_w² = sigma² + ρ²·min(h², (t·γ·b)²)`,
     /// `h = (c − a)/2` the range step per beam of the window (`= b·γ·tan β`
     /// at incidence `β`), `t = tan` [`GRAZING_MAX_INCIDENCE_DEG`]. `0` is
@@ -84,7 +84,7 @@ pub struct Params {
     /// ([`ParamError::NotInBuild`]).
     pub grazing_noise: f32,
     /// Same-turn windows (ALGORITHM.md §10 (a),
-    /// `docs/ALGORITHM-v3-section10.md` §10.9): in the modes that
+    /// docs/DESIGN.md, windows and split before reject): in the modes that
     /// interleave mirror turns (0.5°: two, 0.25°: four), window `i` is the
     /// beams `i, i+k, i+2k` of one turn (`k` turns, the filter's angle
     /// `k·γ`), so the offset between turns (platform motion in 13.3 ms) is
@@ -104,7 +104,7 @@ pub struct Params {
     /// ([`ParamError::NotInBuild`]).
     pub fit_sigma: f32,
     /// Per-turn extraction (ALGORITHM.md §10 proposal (d),
-    /// `docs/ALGORITHM-v3-section10.md`): in the modes that interleave
+    /// docs/ALGORITHM.md Appendix A): in the modes that interleave
     /// mirror turns (0.5°: two, 0.25°: four), each turn's beams run through
     /// §2–8 as a scan of their own (bearing step `k·γ`), and the turns'
     /// lines of one wall are fused into one (information-weighted; pairs
@@ -116,7 +116,7 @@ pub struct Params {
     /// otherwise `true` fails validation ([`ParamError::NotInBuild`]).
     pub per_turn: bool,
     /// Merge across rejected segments (ALGORITHM.md §10 (e),
-    /// `docs/ALGORITHM-v3-section10.md` §10.7): two consecutive accepted
+    /// docs/ALGORITHM.md §7.6): two consecutive accepted
     /// lines merge whatever lies between them when the refit of their union
     /// (the beams between included) passes `max_chi2` and each line's own
     /// beams fit the union line within `max_chi2` too (from each line's own
@@ -125,7 +125,7 @@ pub struct Params {
     /// Default on; `false` is §7.6 as written (v1, v2).
     pub bridge_merge: bool,
     /// Beam-footprint term κ of the range noise (rad; ALGORITHM.md §10 (f),
-    /// `docs/ALGORITHM-v3-section10.md` §10.7): a beam at range `d` meeting
+    /// docs/ALGORITHM.md §7.2): a beam at range `d` meeting
     /// a surface at incidence `θ` has `σ_j² = σ² + (κ·d·tan θ)²` (the sensor
     /// model fitted to the shared logs: κ = 0.7–4.7 mrad). The fits of §7
     /// (and the straightness test of split before reject, and §7.6) weight
@@ -157,11 +157,11 @@ pub struct Params {
     /// over the piece). A piece that would take the sum past it is not
     /// tested: it goes to §7 whole, which fits it once and applies the χ²
     /// gate, as v1 does. Bounds the MCU's instructions per scan whatever
-    /// the data (docs/ALGORITHM-v3-section10.md §10.9). Default 542 (one
+    /// the data (docs/DESIGN.md, windows and split before reject). Default 542 (one
     /// and a half 361-beam scans); 0 is no bound.
     pub split_budget: u16,
     /// Anchor gate of the merges (χ²₂; beyond ALGORITHM.md,
-    /// docs/ALGORITHM-v3-section10.md §10.10): §7.6 and §10 (e) merge two
+    /// docs/ALGORITHM.md §7.6): §7.6 and §10 (e) merge two
     /// lines only if the union line stays within this Mahalanobis distance
     /// of the larger line's own parameters, under that line's covariance
     /// scaled by its own χ² per point where that is above 1
@@ -172,7 +172,7 @@ pub struct Params {
     /// `+inf` is no test.
     pub merge_anchor_gate: f32,
     /// The fits' χ² allows an offset between the interleaved mirror turns
-    /// (ALGORITHM.md §10.4, docs/ALGORITHM-v3-section10.md §10.11): in the
+    /// (ALGORITHM.md §10.4, docs/ALGORITHM.md §7.3): in the
     /// 0.5° (0.25°) modes the platform moves between the turns 13.3 ms
     /// apart, and a wall's beams lie on two (four) parallel point sets a few
     /// mm to cm apart. Each turn's weighted mean residual is taken out of
@@ -183,7 +183,7 @@ pub struct Params {
     /// same either way. Default on; `false` is §7 as written.
     pub turn_offsets: bool,
     /// Nested-model test of the merges (an F threshold; beyond ALGORITHM.md,
-    /// docs/ALGORITHM-v3-section10.md §10.12): two lines are
+    /// docs/ALGORITHM.md Appendix A): two lines are
     /// merged only if one line explains their beams not significantly worse
     /// than the two, `F = ((S₁ − S₂)/2) / (S₂/(m − 4)) ≤ merge_f_test`, with
     /// `S₁` the union's weighted residual sum, `S₂` the two lines' own, `m`
@@ -192,7 +192,7 @@ pub struct Params {
     /// default).
     pub merge_f_test: f32,
     /// Two lines alone can be a curve too (beyond ALGORITHM.md,
-    /// docs/ALGORITHM-v3-section10.md §10.12): a pair of
+    /// docs/ALGORITHM.md §7.8): a pair of
     /// consecutive lines linked as in an arc chain (`arc_chain`, whose
     /// `0` turns this off too) is dropped with its lines counted in
     /// `Stats::rejected_arc` when a circle through their beams explains

@@ -20,6 +20,22 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 use crate::carmen::{decide_unit, ReadError, Reader};
+use crate::Params;
+
+/// The defaults with the windows of ALGORITHM.md v2 §2–6 (consecutive beams
+/// over both mirror turns) in every mode, and the additions measured on top
+/// of same-turn windows left out: no work bound on split before reject, no
+/// anchor gate on the merges, no turn offsets in the fits' χ², and pairs of
+/// lines kept whatever a circle says of them. The tests that check the
+/// windows of §2–6 on interleaved scans run with it.
+pub const CONSECUTIVE_WINDOWS: Params = Params {
+    same_turn_windows: false,
+    split_budget: 0,
+    merge_anchor_gate: f32::INFINITY,
+    turn_offsets: false,
+    arc_pairs: false,
+    ..Params::DEFAULT
+};
 
 /// One direction of a serial line in memory: the device reads `rx` and
 /// writes `tx`. Reads and writes allocate only when a buffer outgrows its

@@ -1,5 +1,5 @@
 //! Pairs of lines on a curve (`Params::arc_pairs`, on by default,
-//! docs/ALGORITHM-v3-section10.md §10.12). A concave wall of 1.5 m
+//! docs/ALGORITHM.md §7.6, §7.8). A concave wall of 1.5 m
 //! radius cut by a no-echo beam gives two short lines, each straight within
 //! the noise, touching and turning ~15° at the gap: with pairs kept
 //! ([`ARC_PAIRS_KEPT`]) both are reported (and they are no wall); the defaults drop them where a circle through

@@ -1,6 +1,6 @@
 //! The footprint-weighted fits (`Params::footprint`, ALGORITHM.md §10 (f))
 //! and the merge across rejected segments (`Params::bridge_merge`, §10 (e)),
-//! both on by default (`docs/ALGORITHM-v3-section10.md` §10.7).
+//! both on by default (docs/ALGORITHM.md §7.2, §7.6).
 
 use lms_core::pipeline::line_fit::{fit_line, fit_piece, Bearings, RawScan};
 use lms_core::test_support::Rng;

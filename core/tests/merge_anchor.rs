@@ -1,5 +1,5 @@
 //! The merges' anchor gate (`Params::merge_anchor_gate`, on by default,
-//! docs/ALGORITHM-v3-section10.md §10.10): a long wall with a
+//! docs/ALGORITHM.md §7.6): a long wall with a
 //! short piece at a bend touching its end. §7.4's χ² per point of the union
 //! is an average, so without the gate the collinear merge (normals < 30°
 //! apart, ends within `corner_gap`) takes the piece in and the long wall's α

@@ -1,10 +1,11 @@
 //! `Params::per_turn` (ALGORITHM.md §10 proposal (d),
-//! docs/ALGORITHM-v3-section10.md): in the interleaved modes each mirror
+//! docs/ALGORITHM.md Appendix A): in the interleaved modes each mirror
 //! turn runs through §2–8 as a scan of its own and the turns' lines of one
 //! wall are fused; 1° modes are unchanged bit for bit.
 
 use lms_core::maths::Sym2;
 use lms_core::pipeline::turns::{fuse, interleaved_turns, turn_frame};
+use lms_core::test_support::CONSECUTIVE_WINDOWS;
 use lms_core::{Extractor, Frame, Geometry, Invalid, Line, Params, Trace, Variant};
 use proptest::prelude::*;
 
@@ -17,19 +18,6 @@ fn per_turn(p: Params) -> Params {
         ..p
     }
 }
-
-/// The defaults with the windows of §2–6 (consecutive beams over both
-/// turns) in every mode, no work bound on split before reject, no anchor
-/// gate on the merges, no turn offsets in the fits' χ², and pairs of lines
-/// kept whatever a circle says of them.
-const CONSECUTIVE_WINDOWS: Params = Params {
-    same_turn_windows: false,
-    split_budget: 0,
-    merge_anchor_gate: f32::INFINITY,
-    turn_offsets: false,
-    arc_pairs: false,
-    ..Params::DEFAULT
-};
 
 #[test]
 fn interleaved_modes_have_their_turns() {

@@ -1,26 +1,14 @@
 //! `Params::same_turn_windows` (ALGORITHM.md §10 (a), on by default,
-//! docs/ALGORITHM-v3-section10.md §10.9): in a 0.5° mode the two
+//! docs/DESIGN.md, windows and split before reject): in a 0.5° mode the two
 //! mirror turns are offset (platform motion in 13.3 ms); windows of one
 //! turn do not break on the offset, windows of §2 do. In 1° modes nothing
 //! changes.
 
+use lms_core::test_support::CONSECUTIVE_WINDOWS;
 use lms_core::{Extractor, Params, Trace};
 
 mod common;
 use common::{interleaved_wall, one_degree_room};
-
-/// The defaults with the windows of §2–6 (consecutive beams over both
-/// turns) in every mode, no work bound on split before reject, no anchor
-/// gate on the merges, no turn offsets in the fits' χ², and pairs of lines
-/// kept whatever a circle says of them.
-const CONSECUTIVE_WINDOWS: Params = Params {
-    same_turn_windows: false,
-    split_budget: 0,
-    merge_anchor_gate: f32::INFINITY,
-    turn_offsets: false,
-    arc_pairs: false,
-    ..Params::DEFAULT
-};
 
 fn breaking_windows(trace: &Trace, tau: f32) -> usize {
     trace

@@ -104,10 +104,10 @@ fn summary(v: &[f64]) -> (f64, f64) {
 ///    beam spacing (~1.4 cm here) from the corner, i.e. up to ~1 cm off the
 ///    other wall's line — too little for `D` to break the window, enough to
 ///    pull the end of that line. Measured: mean NEES 2.73, 95.5 % inside the
-///    99 % ellipse (vs. 1.92 and 99.0 % without the shared beam). Asserted as
+///    99 % ellipse (vs. 1.90 and 99.0 % without the shared beam). Asserted as
 ///    measured with a margin (mean ≤ 3.3, ≥ 90 % inside) so a regression
-///    shows; this is a property of the spec (ALGORITHM.md §6/§7), reported
-///    to the lead, not of the core's arithmetic.
+///    shows; this is a property of the spec (ALGORITHM.md §6/§7), not of
+///    the core's arithmetic.
 #[test]
 fn a_right_angle_corner_is_found_with_an_honest_covariance() {
     const DRAWS: usize = 400;

@@ -300,7 +300,7 @@ fn an_arc_is_not_accepted_as_a_line() {
 /// segment of its own; longest 0.38 m); on another 200 draws 15, against 2 with
 /// windows of consecutive beams (`same_turn_windows: false`). On the realistic synthetic
 /// scenes the false lines on arcs still fell with same-turn windows
-/// (docs/ALGORITHM-v3-section10.md §10.9). Asserted: at most 30 of 200
+/// (docs/DESIGN.md, windows and split before reject). Asserted: at most 30 of 200
 /// frames, every such line under 0.5 m.
 #[test]
 fn arcs_leave_lines_at_their_tangent_ends_rarely() {

@@ -11,24 +11,12 @@
 //!
 //! These are the edge points of §2–6 as written, windows of consecutive
 //! beams ([`CONSECUTIVE_WINDOWS`]); the defaults' same-turn windows
-//! (docs/ALGORITHM-v3-section10.md §10.9) span five beams and mark the beams
+//! (docs/DESIGN.md, windows and split before reject) span five beams and mark the beams
 //! of one turn around a corner instead (`core/tests/same_turn.rs`).
 
+use lms_core::test_support::CONSECUTIVE_WINDOWS;
 use lms_core::{Extractor, Frame, Params, Variant};
 use lms_scene::{seeded_rng, to_f32_metres, Bearings, NoiseModel, Point, Pose, Scene, TrueScan};
-
-/// The defaults with the windows of §2–6 (consecutive beams over both
-/// turns) in every mode, no work bound on split before reject, no anchor
-/// gate on the merges, no turn offsets in the fits' χ², and pairs of lines
-/// kept whatever a circle says of them.
-const CONSECUTIVE_WINDOWS: Params = Params {
-    same_turn_windows: false,
-    split_budget: 0,
-    merge_anchor_gate: f32::INFINITY,
-    turn_offsets: false,
-    arc_pairs: false,
-    ..Params::DEFAULT
-};
 
 const SIGMA: f64 = 0.005;
 

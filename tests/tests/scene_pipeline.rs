@@ -46,22 +46,10 @@
 //! measured 0.45 per scan at 0.5° (of ~340 windows on walls) and 0.15 at 1°,
 //! accepted ≤ 1 per scan on average.
 
+use lms_core::test_support::CONSECUTIVE_WINDOWS;
 use lms_core::{Extractor, Frame, Params, Variant};
 use lms_scene::{seeded_rng, Bearings, NoiseModel, Pose, Scene, TrueScan, WindowTruth};
 use workspace_tests::reference;
-
-/// The defaults with the windows of §2–6 (consecutive beams over both
-/// turns) in every mode, no work bound on split before reject, no anchor
-/// gate on the merges, no turn offsets in the fits' χ², and pairs of lines
-/// kept whatever a circle says of them.
-const CONSECUTIVE_WINDOWS: Params = Params {
-    same_turn_windows: false,
-    split_budget: 0,
-    merge_anchor_gate: f32::INFINITY,
-    turn_offsets: false,
-    arc_pairs: false,
-    ..Params::DEFAULT
-};
 
 const SIGMA: f64 = 0.005;
 
