@@ -38,7 +38,7 @@ use core::ffi::c_char;
 /// The crate version, NUL-terminated.
 const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "\0");
 
-/// The library's version (the crate version, e.g. `"0.14.0"`): a static,
+/// The library's version (the crate version, e.g. `"0.15.0"`): a static,
 /// NUL-terminated string.
 #[no_mangle]
 pub extern "C" fn lms_version() -> *const c_char {
