@@ -347,7 +347,7 @@ typedef struct LmsSurvey {
 extern "C" {
 #endif // __cplusplus
 
-// The library's version (the crate version, e.g. `"0.14.0"`): a static,
+// The library's version (the crate version, e.g. `"0.15.0"`): a static,
 // NUL-terminated string.
 const char *lms_version(void);
 
