@@ -315,6 +315,12 @@ impl Params {
     };
 }
 
+/// The parameters only a build with feature `section10` runs (the host
+/// crates; the firmware leaves them out): any other value than the default
+/// fails validation elsewhere ([`ParamError::NotInBuild`]), and the
+/// co-processor paths of the host refuse them.
+pub const HOST_ONLY: [&str; 4] = ["grazing_noise", "fit_sigma", "per_turn", "merge_f_test"];
+
 /// Whether this build of the core has the ALGORITHM.md §10 options
 /// (feature `section10`; [`ParamError::NotInBuild`] without it).
 pub const SECTION10_BUILT: bool = cfg!(feature = "section10");
@@ -596,7 +602,7 @@ impl Params {
 
     /// The ALGORITHM.md §10 option set to a non-default value that this
     /// build leaves out (feature `section10` off), if any: never a silent
-    /// difference.
+    /// difference. It checks exactly the parameters of [`HOST_ONLY`].
     const fn option_not_in_build(&self) -> Option<&'static str> {
         if cfg!(feature = "section10") {
             None

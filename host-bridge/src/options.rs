@@ -183,17 +183,14 @@ pub struct ParamArgs {
     pub params_file: Option<PathBuf>,
 }
 
-/// The parameters the co-processor runs only in a host build (the firmware
-/// leaves them out, and its `D0` echo could not tell a client of them).
-pub const HOST_ONLY: [&str; 4] = ["per_turn", "merge_f_test", "grazing_noise", "fit_sigma"];
-
 impl ParamArgs {
     /// Refuse what the co-processor cannot run (for `verify` and
-    /// `coprocessor`): a value other than the default of a [`HOST_ONLY`]
-    /// parameter, however it was set.
+    /// `coprocessor`): a value other than the default of a
+    /// [`lms_core::params::HOST_ONLY`] parameter, however it was set (the
+    /// firmware leaves them out, and its `D0` echo could not tell a client).
     pub fn ensure_coprocessor_runs_them(&self) -> Result<()> {
         let p = self.resolve(None)?;
-        for name in HOST_ONLY {
+        for name in core_params::HOST_ONLY {
             if p.get(name) != Params::DEFAULT.get(name) {
                 bail!(
                     "{name}: the co-processor does not run it (an ALGORITHM.md §10 option the \

@@ -107,3 +107,28 @@ fn same_turn_windows_are_in_every_build_and_can_be_switched_off() {
         "same-turn windows change nothing on the grazing wall"
     );
 }
+
+/// `params::HOST_ONLY`, which the host's co-processor paths refuse, names
+/// exactly what validation refuses in a build without the options: each of
+/// them set by name to another value is refused naming it here, and runs
+/// where the options are built in.
+#[test]
+fn the_host_only_list_is_what_validation_refuses() {
+    use lms_core::params::{field, Value, HOST_ONLY};
+    for name in HOST_ONLY {
+        let other = match (field(name).expect("a parameter").get)(&Params::DEFAULT) {
+            Value::Real(x) => format!("{}", x + 1.0),
+            Value::Flag(b) => format!("{}", !b),
+            Value::Count(n) => format!("{}", n + 1),
+        };
+        let mut p = Params::DEFAULT;
+        p.set(name, &other).unwrap();
+        match (p.validate(), SECTION10_BUILT) {
+            (Err(e), false) => assert_eq!(e, ParamError::NotInBuild { option: name }),
+            (Ok(_), true) => {}
+            (result, built) => {
+                panic!("{name}={other}: {result:?} with section10 built in: {built}")
+            }
+        }
+    }
+}
