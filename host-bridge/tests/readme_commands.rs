@@ -429,47 +429,143 @@ fn the_readme_is_a_front_door() {
     }
 }
 
-/// The documentation speaks to users in the present tense: no development
-/// milestones by number (the changelog names versions and subjects).
+/// Where the product speaks to its users: the documents, the sources of
+/// every product crate and the bindings, and the lab (folders are read
+/// whole, but for build output).
+const USER_FACING: [&str; 21] = [
+    "README.md",
+    "CHANGELOG.md",
+    "ARCHITECTURE.md",
+    "docs",
+    "host-bridge/README.md",
+    "firmware/README.md",
+    "fuzz/README.md",
+    "lab/README.md",
+    "python/README.md",
+    "core/src",
+    "host-bridge/src",
+    "firmware/src",
+    "scene/src",
+    "lab/src",
+    "lab/examples",
+    "capi/src",
+    "capi/include",
+    "examples/c",
+    "python/src",
+    "python/pysrc",
+    "python/tests",
+];
+
+/// Does `line` name a development milestone by number: `stop 21`,
+/// `issues 14`, `STOP22`, `stop-23` (any case)?
+fn names_a_milestone(line: &str) -> bool {
+    let lower = line.to_lowercase();
+    let digit_at = |t: &str| t.starts_with(|c: char| c.is_ascii_digit());
+    let spaced = ["stop", "issue"].iter().any(|word| {
+        lower.match_indices(word).any(|(i, _)| {
+            let rest = &lower[i + word.len()..];
+            let rest = rest.strip_prefix('s').unwrap_or(rest);
+            rest.strip_prefix(' ').is_some_and(digit_at)
+        })
+    });
+    let glued = lower
+        .match_indices("stop")
+        .any(|(i, _)| digit_at(&lower[i + 4..]));
+    let words: Vec<&str> = lower.split(|c: char| !c.is_alphanumeric()).collect();
+    let numbered = words
+        .windows(2)
+        .any(|w| matches!(w[0], "stop" | "stops" | "issue" | "issues") && digit_at(w[1]));
+    spaced || glued || numbered
+}
+
+/// The text files under `path` (a file or a folder, without `target/` and
+/// `build/`), as (path, text).
+fn text_files(path: &Path, out: &mut Vec<(PathBuf, String)>) {
+    if path.is_dir() {
+        let mut entries: Vec<PathBuf> = std::fs::read_dir(path)
+            .unwrap_or_else(|e| panic!("cannot list {}: {e}", path.display()))
+            .map(|e| e.unwrap().path())
+            .collect();
+        entries.sort();
+        for entry in entries {
+            let name = entry.file_name().unwrap_or_default();
+            if name != "target" && name != "build" && name != "__pycache__" {
+                text_files(&entry, out);
+            }
+        }
+    } else if let Ok(text) = std::fs::read_to_string(path) {
+        out.push((path.to_path_buf(), text));
+    }
+}
+
+/// The product speaks to users in the present tense: no development
+/// milestone by number in its documents, its sources or any subcommand's
+/// `--help` (history lives in git and in CHANGELOG.md's versions).
 #[test]
-fn the_docs_name_no_development_history() {
-    let docs = [
-        "README.md",
-        "CHANGELOG.md",
-        "ARCHITECTURE.md",
-        "docs/GUIDE.md",
-        "docs/FAQ.md",
-        "docs/PROTOCOL.md",
-        "host-bridge/README.md",
-        "firmware/README.md",
-        "fuzz/README.md",
-    ];
+fn the_product_names_no_development_history() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut files = Vec::new();
+    for place in USER_FACING {
+        let path = root.join(place);
+        assert!(path.exists(), "{place} is missing");
+        text_files(&path, &mut files);
+    }
+    for command in [
+        "extract",
+        "plot",
+        "params",
+        "scan",
+        "simulate",
+        "verify",
+        "coprocessor",
+    ] {
+        let out = Command::new(BIN)
+            .args([command, "--help"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "host-bridge {command} --help failed");
+        let help = String::from_utf8_lossy(&out.stdout).into_owned();
+        files.push((PathBuf::from(format!("host-bridge {command} --help")), help));
+    }
     let mut found = Vec::new();
-    for doc in docs {
-        for (n, line) in workspace_file(doc).lines().enumerate() {
-            let lower = line.to_lowercase();
-            let words: Vec<&str> = lower.split(|c: char| !c.is_alphanumeric()).collect();
-            let numbered = words.windows(2).any(|w| {
-                matches!(w[0], "stop" | "stops" | "issue" | "issues")
-                    && w[1].starts_with(|c: char| c.is_ascii_digit())
-            });
-            let glued = lower
-                .match_indices("stop")
-                .any(|(i, _)| lower[i + 4..].starts_with(|c: char| c.is_ascii_digit()));
-            if numbered || glued {
-                found.push(format!("{doc}:{}: {line}", n + 1));
+    for (path, text) in &files {
+        for (n, line) in text.lines().enumerate() {
+            if names_a_milestone(line) {
+                found.push(format!("{}:{}: {line}", path.display(), n + 1));
             }
         }
     }
+    assert!(files.len() > 200, "only {} files read", files.len());
     assert!(
         found.is_empty(),
-        "development history in the docs:\n{}",
+        "development history in the product:\n{}",
         found.join("\n")
     );
 }
 
+#[test]
+fn the_history_check_finds_milestones() {
+    for line in [
+        "since stop 21",
+        "Issues 14",
+        "Params::STOP22",
+        "stop-23's",
+        "stops 3",
+    ] {
+        assert!(names_a_milestone(line), "{line}");
+    }
+    for line in [
+        "a non-stop run",
+        "issue a request",
+        "stop bits 1",
+        "stopwatch",
+    ] {
+        assert!(!names_a_milestone(line), "{line}");
+    }
+}
+
 /// The version `host-bridge --version` prints is the newest in CHANGELOG.md,
-/// and the firmware and fuzz workspaces carry the same.
+/// and the firmware, fuzz and Python workspaces carry the same.
 #[test]
 fn the_version_is_the_changelogs_newest() {
     let version = env!("CARGO_PKG_VERSION");
@@ -482,7 +578,11 @@ fn the_version_is_the_changelogs_newest() {
         newest.starts_with(&format!("## [{version}] - ")),
         "CHANGELOG.md's newest version is `{newest}`, the workspace's {version}"
     );
-    for manifest in ["firmware/Cargo.toml", "fuzz/Cargo.toml"] {
+    for manifest in [
+        "firmware/Cargo.toml",
+        "fuzz/Cargo.toml",
+        "python/Cargo.toml",
+    ] {
         let text = workspace_file(manifest);
         assert!(
             text.contains(&format!("\nversion = \"{version}\"\n")),
