@@ -4,16 +4,14 @@
 //! repository shows names a real parameter or preset, with a value that
 //! reads as the parameter's type.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
+
+mod common;
+use common::{files_under, workspace as root};
 
 use host_bridge::reference::{self, PARAMETERS_COMMAND, STATS_COMMAND};
 use lms_core::params::{self, PRESETS};
 use lms_core::Params;
-
-/// The repository's root.
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 /// `docs/reference/NAME` must be `expected`; the message gives the command
 /// that writes it.
@@ -50,28 +48,15 @@ fn the_stats_reference_is_current() {
 }
 
 /// Every `*.md` of the repository's root, of `docs/` and of the packages'
-/// folders (not `target/` or hidden folders).
+/// folders (not hidden folders or build output).
 fn markdown_files() -> Vec<PathBuf> {
-    fn walk(dir: &Path, deep: bool, out: &mut Vec<PathBuf>) {
-        let Ok(entries) = std::fs::read_dir(dir) else {
-            return;
-        };
-        let mut entries: Vec<PathBuf> = entries.filter_map(|e| Some(e.ok()?.path())).collect();
-        entries.sort();
-        for path in entries {
-            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-            if path.is_dir() {
-                if deep && !name.starts_with('.') && name != "target" {
-                    walk(&path, true, out);
-                }
-            } else if name.ends_with(".md") {
-                out.push(path);
-            }
-        }
-    }
     let root = root();
-    let mut files = Vec::new();
-    walk(&root, false, &mut files);
+    let is_markdown = |p: &PathBuf| p.extension().is_some_and(|e| e == "md");
+    let top = std::fs::read_dir(&root)
+        .unwrap()
+        .filter_map(|e| Some(e.ok()?.path()));
+    let mut files: Vec<PathBuf> = top.filter(|p| p.is_file() && is_markdown(p)).collect();
+    files.sort();
     for dir in [
         "docs",
         "core",
@@ -82,8 +67,11 @@ fn markdown_files() -> Vec<PathBuf> {
         "scene",
         "tests",
         "tools",
+        "capi",
+        "examples",
+        "python",
     ] {
-        walk(&root.join(dir), true, &mut files);
+        files.extend(files_under(&root.join(dir)).into_iter().filter(is_markdown));
     }
     files
 }

@@ -34,8 +34,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
-/// The binary the commands run.
-const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
+mod common;
+use common::{files_under, workspace, BIN};
 
 /// Trailing comments that mark a command this test does not run.
 const MARKERS: [&str; 4] = [
@@ -326,7 +326,7 @@ static ONE_DOC_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 /// returns the number run.
 fn run_doc(doc: &str) -> usize {
     let _one = ONE_DOC_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(doc);
+    let path = workspace().join(doc);
     let text = std::fs::read_to_string(&path)
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
     let blocks = steps(&text).unwrap_or_else(|e| panic!("{doc}: {e}"));
@@ -356,8 +356,7 @@ fn run_doc(doc: &str) -> usize {
 
 #[test]
 fn every_readme_command_runs() {
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
-        .unwrap();
+    let text = workspace_file("README.md");
     let all: Vec<Step> = steps(&text)
         .unwrap()
         .into_iter()
@@ -402,7 +401,7 @@ fn the_convention_is_enforced() {
 
 /// A file of the workspace as text.
 fn workspace_file(path: &str) -> String {
-    let full = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(path);
+    let full = workspace().join(path);
     std::fs::read_to_string(&full).unwrap_or_else(|e| panic!("cannot read {}: {e}", full.display()))
 }
 
@@ -478,37 +477,20 @@ fn names_a_milestone(line: &str) -> bool {
     spaced || glued || numbered
 }
 
-/// The text files under `path` (a file or a folder, without `target/` and
-/// `build/`), as (path, text).
-fn text_files(path: &Path, out: &mut Vec<(PathBuf, String)>) {
-    if path.is_dir() {
-        let mut entries: Vec<PathBuf> = std::fs::read_dir(path)
-            .unwrap_or_else(|e| panic!("cannot list {}: {e}", path.display()))
-            .map(|e| e.unwrap().path())
-            .collect();
-        entries.sort();
-        for entry in entries {
-            let name = entry.file_name().unwrap_or_default();
-            if name != "target" && name != "build" && name != "__pycache__" {
-                text_files(&entry, out);
-            }
-        }
-    } else if let Ok(text) = std::fs::read_to_string(path) {
-        out.push((path.to_path_buf(), text));
-    }
-}
-
 /// The product speaks to users in the present tense: no development
 /// milestone by number in its documents, its sources or any subcommand's
 /// `--help` (history lives in git and in CHANGELOG.md's versions).
 #[test]
 fn the_product_names_no_development_history() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut files = Vec::new();
     for place in USER_FACING {
-        let path = root.join(place);
+        let path = workspace().join(place);
         assert!(path.exists(), "{place} is missing");
-        text_files(&path, &mut files);
+        for file in files_under(&path) {
+            if let Ok(text) = std::fs::read_to_string(&file) {
+                files.push((file, text));
+            }
+        }
     }
     for command in [
         "extract",

@@ -10,6 +10,38 @@ use std::time::Instant;
 /// The `host-bridge` binary under test.
 pub const BIN: &str = env!("CARGO_BIN_EXE_host-bridge");
 
+/// The repository's root.
+pub fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Every file under `path` (itself, if it is a file), sorted; hidden
+/// folders and build output (`target/`, `build/`, `__pycache__/`) left out.
+pub fn files_under(path: &Path) -> Vec<PathBuf> {
+    fn walk(path: &Path, out: &mut Vec<PathBuf>) {
+        if !path.is_dir() {
+            out.push(path.to_path_buf());
+            return;
+        }
+        let Ok(entries) = std::fs::read_dir(path) else {
+            return;
+        };
+        let mut entries: Vec<PathBuf> = entries.filter_map(|e| Some(e.ok()?.path())).collect();
+        entries.sort();
+        for entry in entries {
+            let name = entry.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            let skipped = entry.is_dir()
+                && (name.starts_with('.') || ["target", "build", "__pycache__"].contains(&name));
+            if !skipped {
+                walk(&entry, out);
+            }
+        }
+    }
+    let mut files = Vec::new();
+    walk(path, &mut files);
+    files
+}
+
 /// A recorded log of `../shared/data/carmen` by file name.
 pub fn shared_log(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
