@@ -12,8 +12,18 @@
  * instruction increments one counter (inline, exact); the instruction at
  * `begin` records the counter, the one at `end` takes the difference. At
  * exit it prints one line per measured interval and a summary (with
- * profile=1 also instructions per translation block inside the intervals):
+ * profile=1 also instructions per translation block inside the intervals,
+ * with profile=2 outside them, from the first `begin` on):
  *   icount: scans=N min=.. max=.. mean=.. (after skipping the first `skip`)
+ *
+ * With model=m4 it also estimates Cortex-M4F cycles at 168 MHz from the flash
+ * (cycles.h: the model, its sources and its assumptions) and prints, after
+ * the instruction lines,
+ *   icount: cycles scans=N min=.. max=.. mean=..      (inside the intervals)
+ *   icount: window cycles=.. insns=.. intervals=.. in_intervals=..
+ * where the window runs from the first `begin` to the last `end`: all the
+ * work of the run between them (interrupts, telegrams, the pipeline), the
+ * time asleep in WFI excluded, as QEMU executes nothing then.
  */
 #include <inttypes.h>
 #include <stdint.h>
@@ -41,8 +51,18 @@ void qemu_plugin_register_vcpu_insn_exec_inline(struct qemu_plugin_insn *insn, e
                                                 void *ptr, uint64_t imm);
 void qemu_plugin_register_atexit_cb(qemu_plugin_id_t id, qemu_plugin_udata_cb_t cb, void *userdata);
 void qemu_plugin_outs(const char *string);
+char *qemu_plugin_insn_disas(const struct qemu_plugin_insn *insn);
+size_t qemu_plugin_insn_size(const struct qemu_plugin_insn *insn);
+typedef uint32_t qemu_plugin_meminfo_t;
+enum qemu_plugin_mem_rw { QEMU_PLUGIN_MEM_R = 1, QEMU_PLUGIN_MEM_W, QEMU_PLUGIN_MEM_RW };
+typedef void (*qemu_plugin_vcpu_mem_cb_t)(unsigned int vcpu_index, qemu_plugin_meminfo_t info, uint64_t vaddr,
+                                          void *userdata);
+void qemu_plugin_register_vcpu_mem_cb(struct qemu_plugin_insn *insn, qemu_plugin_vcpu_mem_cb_t cb,
+                                      enum qemu_plugin_cb_flags flags, enum qemu_plugin_mem_rw rw, void *userdata);
 #define QEMU_PLUGIN_EXPORT __attribute__((visibility("default")))
 /* -------------------------------------------------------------------------- */
+
+#include "cycles.h"
 
 QEMU_PLUGIN_EXPORT int qemu_plugin_version = 1;
 
@@ -58,6 +78,11 @@ static int open_interval;
 static uint64_t intervals[MAX_INTERVALS];
 static size_t n_intervals, skip;
 
+/* model=m4: estimated cycles, per interval and over the window. */
+static int model;
+static uint64_t cycles, cycles_started_at, cycle_intervals[MAX_INTERVALS];
+static uint64_t window_first_cycles, window_first_insns, window_cycles, window_insns, window_open;
+
 /* profile=1: instructions executed inside measured intervals, per
  * translation block start address (a flat profile to map with addr2line). */
 #define MAX_BLOCKS 65536
@@ -72,7 +97,12 @@ static void on_block(unsigned int vcpu, void *udata)
 {
     (void)vcpu;
     size_t slot = (size_t)(uintptr_t)udata;
-    if (open_interval) {
+    if (profile == 2) {
+        /* Outside the intervals, after the first one began. */
+        if (window_open && !open_interval) {
+            block_hits[slot]++;
+        }
+    } else if (open_interval) {
         if (pending_hits[slot]++ == 0 && n_touched < MAX_BLOCKS) {
             touched[n_touched++] = slot;
         }
@@ -97,6 +127,12 @@ static void on_begin(unsigned int vcpu, void *udata)
     (void)vcpu; (void)udata;
     settle_profile(0);
     started_at = executed;
+    cycles_started_at = cycles;
+    if (!window_open) {
+        window_open = 1;
+        window_first_cycles = cycles;
+        window_first_insns = executed;
+    }
     open_interval = 1;
 }
 
@@ -104,7 +140,10 @@ static void on_end(unsigned int vcpu, void *udata)
 {
     (void)vcpu; (void)udata;
     if (open_interval && n_intervals < MAX_INTERVALS) {
+        cycle_intervals[n_intervals] = cycles - cycles_started_at;
         intervals[n_intervals++] = executed - started_at;
+        window_cycles = cycles - window_first_cycles;
+        window_insns = executed - window_first_insns;
     }
     settle_profile(open_interval && n_intervals > skip);
     open_interval = 0;
@@ -135,6 +174,9 @@ static void on_translate(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
         }
         qemu_plugin_register_vcpu_insn_exec_inline(insn, QEMU_PLUGIN_INLINE_ADD_U64, &executed, 1);
     }
+    if (model) {
+        m4_translate(tb, &cycles);
+    }
 }
 
 static void at_exit(qemu_plugin_id_t id, void *udata)
@@ -159,6 +201,26 @@ static void at_exit(qemu_plugin_id_t id, void *udata)
              "icount: scans=%zu min=%" PRIu64 " max=%" PRIu64 " mean=%" PRIu64 " total=%" PRIu64 "\n",
              used, min, max, used ? sum / used : 0, executed);
     qemu_plugin_outs(line);
+    if (model) {
+        uint64_t cmin = UINT64_MAX, cmax = 0, csum = 0, in_intervals = 0;
+        for (size_t i = skip; i < n_intervals; i++) {
+            uint64_t v = cycle_intervals[i];
+            cmin = v < cmin ? v : cmin;
+            cmax = v > cmax ? v : cmax;
+            csum += v;
+        }
+        for (size_t i = 0; i < n_intervals; i++) {
+            in_intervals += cycle_intervals[i];
+        }
+        snprintf(line, sizeof line, "icount: cycles scans=%zu min=%" PRIu64 " max=%" PRIu64 " mean=%" PRIu64 "\n",
+                 used, used ? cmin : 0, cmax, used ? csum / used : 0);
+        qemu_plugin_outs(line);
+        snprintf(line, sizeof line,
+                 "icount: window cycles=%" PRIu64 " insns=%" PRIu64 " intervals=%zu in_intervals=%" PRIu64 "\n",
+                 window_cycles, window_insns, n_intervals, in_intervals);
+        qemu_plugin_outs(line);
+        m4_report();
+    }
     if (profile) {
         for (size_t i = 0; i < n_blocks; i++) {
             if (block_hits[i] > 0) {
@@ -184,10 +246,16 @@ QEMU_PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_
             end_addrs[n_ends++] = strtoull(argv[i] + 4, NULL, 0);
         } else if (strncmp(argv[i], "profile=", 8) == 0) {
             profile = atoi(argv[i] + 8);
+        } else if (strncmp(argv[i], "model=", 6) == 0) {
+            if (strcmp(argv[i] + 6, "m4") != 0) {
+                fprintf(stderr, "icount: unknown model %s (m4)\n", argv[i] + 6);
+                return -1;
+            }
+            model = 1;
         } else if (strncmp(argv[i], "skip=", 5) == 0) {
             skip = (size_t)strtoull(argv[i] + 5, NULL, 0);
         } else {
-            fprintf(stderr, "icount: unknown argument %s (begin=, end=, skip=)\n", argv[i]);
+            fprintf(stderr, "icount: unknown argument %s (begin=, end=, skip=, profile=, model=)\n", argv[i]);
             return -1;
         }
     }

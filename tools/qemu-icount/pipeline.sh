@@ -16,6 +16,8 @@
 #   tools/qemu-icount/pipeline.sh [verify arguments]
 # e.g. the noisy-scan budget of README:
 #   tools/qemu-icount/pipeline.sh --scene random --seed 7 --count 50 --noise-sigma 0.01 --scans 50
+# ICOUNT_MODEL=m4 adds the Cortex-M4F cycle estimate (cycles.h); see
+# tools/qemu-icount/cycles.sh for it per LMS mode.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 cd "$root"
@@ -34,8 +36,10 @@ sites=$(grep "bl[[:space:]]*${begin}" "$dis" | awk '{ sub(":", "", $1); print $1
 [ -n "$sites" ] || { echo "no call of Extractor::run in $elf" >&2; exit 1; }
 ends=""
 for site in $sites; do ends="$ends,end=$(printf '0x%x' $((0x$site + 4)))"; done
-QEMU_EXTRA="-plugin $root/$so,begin=$begin$ends${ICOUNT_PROFILE:+,profile=1} -d plugin -D $log" \
+QEMU_EXTRA="-plugin $root/$so,begin=$begin$ends${ICOUNT_PROFILE:+,profile=${ICOUNT_PROFILE_KIND:-1}}${ICOUNT_MODEL:+,model=$ICOUNT_MODEL} -d plugin -D $log" \
   target/release/host-bridge verify --qemu "$elf" "$@" >&2
 [ -z "${ICOUNT_INTERVALS:-}" ] || grep "icount: interval" "$log" > "$ICOUNT_INTERVALS"
-grep 'scans=' "$log" | sed 's/icount: //'
+grep '^icount: scans=' "$log" | sed 's/icount: //'
+# ICOUNT_MODEL=m4: the cycle estimate (tools/qemu-icount/cycles.h).
+[ -z "${ICOUNT_MODEL:-}" ] || grep -E '^icount: (cycles|window|model) ' "$log" | sed 's/icount: //'
 [ -z "${ICOUNT_PROFILE:-}" ] || grep "icount: block" "$log" > "$ICOUNT_PROFILE"
