@@ -401,9 +401,11 @@ pub fn cos_sin(x: f32) -> (f32, f32) {
 /// `(n / d, n % d)` for 64-bit integers without the compiler's 64-bit
 /// division routine (`__aeabi_uldivmod`, 0.9 KB of flash on the
 /// Cortex-M4, which divides only 32-bit numbers in hardware): one hardware
-/// division when `n` fits 32 bits, else binary long division (≤ 64 steps).
-/// Exact: the same results as `/` and `%` on every target. `d = 0` gives
-/// `(0, n)` (callers guard against it; no panic).
+/// division when `n` fits 32 bits; three when `d` fits 16 bits (schoolbook
+/// division in 16-bit digits, each partial dividend below 2³²); else binary
+/// long division over the quotient's bits only (≤ 64 − 16 steps). Exact:
+/// the same results as `/` and `%` on every target. `d = 0` gives `(0, n)`
+/// (callers guard against it; no panic).
 ///
 /// The device layer's timekeeping (µs since boot, line times) and the
 /// firmware's decimal output use it; the pipeline has no integer division.
@@ -412,30 +414,57 @@ pub const fn div_rem_u64(n: u64, d: u64) -> (u64, u64) {
         return (0, n);
     }
     if n <= u32::MAX as u64 {
-        // d ≤ n: both fit 32 bits (`checked_`: no panic path for the
-        // firmware's link-time check, though `d ≠ 0` here).
-        let (n, d) = (n as u32, d as u32);
-        return match (n.checked_div(d), n.checked_rem(d)) {
-            (Some(q), Some(r)) => (q as u64, r as u64),
-            _ => (0, n as u64),
-        };
+        // d ≤ n: both fit 32 bits.
+        let (q, r) = div_rem_u32(n as u32, d as u32);
+        return (q as u64, r as u64);
+    }
+    if d <= u16::MAX as u64 {
+        // n = hi·2³² + mid·2¹⁶ + lo; each remainder is below d < 2¹⁶, so
+        // every partial dividend (r << 16 | digit) fits 32 bits.
+        let d = d as u32;
+        let (q_hi, r) = div_rem_u32((n >> 32) as u32, d);
+        let (q_mid, r) = div_rem_u32((r << 16) | ((n >> 16) as u32 & 0xFFFF), d);
+        let (q_lo, r) = div_rem_u32((r << 16) | (n as u32 & 0xFFFF), d);
+        return (
+            ((q_hi as u64) << 32) | ((q_mid as u64) << 16) | q_lo as u64,
+            r as u64,
+        );
     }
     if d > u64::MAX >> 1 {
         // n ≥ d > 2⁶³: the quotient is 1.
         return (1, n - d);
     }
-    let (mut q, mut r) = (0u64, 0u64);
-    let mut bit = 64 - n.leading_zeros();
+    // The quotient has at most `shift + 1` bits: start with the dividend's
+    // top bits that are as long as d.
+    let shift = d.leading_zeros() - n.leading_zeros();
+    let mut r = n >> shift;
+    let mut q = 0u64;
+    if r >= d {
+        r -= d;
+        q = 1;
+    }
+    let mut bit = shift;
     while bit > 0 {
         bit -= 1;
         // r < d ≤ 2⁶³, so the shift cannot overflow.
         r = (r << 1) | ((n >> bit) & 1);
+        q <<= 1;
         if r >= d {
             r -= d;
-            q |= 1 << bit;
+            q |= 1;
         }
     }
     (q, r)
+}
+
+/// `(n / d, n % d)` in 32 bits (one hardware division on the Cortex-M4);
+/// `d = 0` gives `(0, n)` (`checked_`: no panic path for the firmware's
+/// link-time check).
+const fn div_rem_u32(n: u32, d: u32) -> (u32, u32) {
+    match (n.checked_div(d), n.checked_rem(d)) {
+        (Some(q), Some(r)) => (q, r),
+        _ => (0, n),
+    }
 }
 
 /// `n / d` rounded down, as [`div_rem_u64`]; `d = 0` gives 0.
