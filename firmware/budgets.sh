@@ -36,7 +36,7 @@ text=$(section .text); rodata=$(section .rodata); vt=$(section .vector_table)
 data=$(section .data); bss=$(section .bss); uninit=$(section .uninit)
 kib() { awk -v b="$1" 'BEGIN { printf "%.1f", b / 1024 }'; }
 flash=$((vt + text + rodata + data)); ram=$((data + bss + ${uninit:-0}))
-echo "flash (.vector_table + .text + .rodata + .data image): $flash B ($(kib $flash) KiB; goal <= 48 KiB)"
+echo "flash (.vector_table + .text + .rodata + .data image): $flash B ($(kib $flash) KiB; goal <= 96 KiB)"
 echo "static RAM (.data + .bss + .uninit): $ram B ($(kib $ram) KiB; goal <= 16 KiB): .data $data, .bss $bss, .uninit ${uninit:-0}"
 LMS_ITERATIONS=30 measure "30 passes" 
 LMS_ITERATIONS=1 measure "1 pass"

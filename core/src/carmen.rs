@@ -17,7 +17,8 @@
 //!   in a given [`Unit`].
 //! * With the `std` feature: `Reader`, a streaming iterator over any
 //!   `std::io::BufRead` (one line in memory at a time, frame by frame),
-//!   and `decide_unit`, the per-file unit decision (a first pass).
+//!   and `decide_unit`, the per-file unit decision (a pass over the text
+//!   given: `host-bridge` gives a log's head, kept in memory).
 //!   Opening files and gzip are the caller's (`host-bridge`'s `carmen`
 //!   module; `test_support::open_log` for tests).
 //!
@@ -152,11 +153,38 @@ pub enum LineError<'a> {
     },
 }
 
+/// Characters of a bad token quoted in an error; a longer token is quoted
+/// by its start and its length ([`Excerpt`]).
+pub const EXCERPT_CHARS: usize = 16;
+
+/// A token of a line as an error quotes it: whole (as a quoted string) up
+/// to [`EXCERPT_CHARS`] characters, else its first [`EXCERPT_CHARS`]
+/// characters, `…` and its length, e.g. `"1234567890123456…" (5000
+/// characters)`, so that no input makes an error message long.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Excerpt<'a>(pub &'a str);
+
+impl fmt::Display for Excerpt<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0.char_indices().nth(EXCERPT_CHARS) {
+            None => write!(f, "{:?}", self.0),
+            Some((end, _)) => write!(
+                f,
+                "\"{}…\" ({} characters)",
+                self.0[..end].escape_debug(),
+                self.0.chars().count()
+            ),
+        }
+    }
+}
+
 impl fmt::Display for LineError<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             LineError::NotFlaser => f.write_str("not a FLASER line"),
-            LineError::MalformedBeamCount(t) => write!(f, "malformed beam count {t:?} after FLASER"),
+            LineError::MalformedBeamCount(t) => {
+                write!(f, "malformed beam count {} after FLASER", Excerpt(t))
+            }
             LineError::UnsupportedBeamCount(n) => {
                 write!(f, "unsupported beam count n = {n} (supported: {SUPPORTED_BEAMS:?})")
             }
@@ -166,13 +194,14 @@ impl fmt::Display for LineError<'_> {
                 n + TRAILING_FIELDS
             ),
             LineError::MalformedRange { beam, text } => {
-                write!(f, "malformed number {text:?} for range {beam}")
+                write!(f, "malformed number {} for range {beam}", Excerpt(text))
             }
-            LineError::NegativeRange { beam, text } => {
-                write!(f, "negative range {text} for beam {beam}")
-            }
+            LineError::NegativeRange { beam, text } => match text.char_indices().nth(EXCERPT_CHARS) {
+                None => write!(f, "negative range {text} for beam {beam}"),
+                Some(_) => write!(f, "negative range {} for beam {beam}", Excerpt(text)),
+            },
             LineError::MalformedField(t) => {
-                write!(f, "malformed number {t:?} in the pose/time fields")
+                write!(f, "malformed number {} in the pose/time fields", Excerpt(t))
             }
             LineError::AboveAllOnes { beam, metres, unit } => write!(
                 f,
@@ -469,7 +498,10 @@ fn decimals(text: &str) -> usize {
 #[cfg(any(test, feature = "std"))]
 mod reader;
 #[cfg(any(test, feature = "std"))]
-pub use reader::{decide, decide_unit, Cut, ReadError, Reader, Scan, MAX_LINE_LEN};
+pub use reader::{
+    decide, decide_unit, near_flaser, Cut, Note, ReadError, Reader, Scan, MAX_LINE_LEN,
+    MAX_PENDING_NOTES,
+};
 
 #[cfg(test)]
 mod tests;

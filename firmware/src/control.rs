@@ -10,7 +10,7 @@
 //! The report line, all values decimal:
 //!
 //! ```text
-//! now_us=… scans=… stack_peak=… stack_size=… emulator_us=… host_rx=… host_dropped=… host_overrun=… host_line_errors=… host_peak=… sensor_rx=… sensor_dropped=… sensor_overrun=… sensor_line_errors=… sensor_peak=… scans_in=… feature_scans_out=… feature_telegrams_out=… sensor_crc_errors=… sensor_resyncs=… sensor_bytes_skipped=… host_crc_errors=… scans_dropped=… scans_rejected=… host_scans_dropped=… scans_other_setting=… scans_out=… sysclk_hz=… reset_flags=… fault_cause=… fault_pc=… fault_lr=… fault_detail=…
+//! now_us=… scans=… stack_peak=… stack_size=… emulator_us=… host_rx=… host_dropped=… host_overrun=… host_line_errors=… host_peak=… sensor_rx=… sensor_dropped=… sensor_overrun=… sensor_line_errors=… sensor_peak=… scans_in=… feature_scans_out=… feature_telegrams_out=… sensor_crc_errors=… sensor_resyncs=… sensor_bytes_skipped=… host_crc_errors=… scans_dropped=… scans_rejected=… host_scans_dropped=… scans_other_setting=… scans_out=… host_requests_dropped=… relays_refused=… relays_failed=… partial_scans_unassembled=… sysclk_hz=… reset_flags=… fault_cause=… fault_pc=… fault_lr=… fault_detail=…
 //! ```
 //!
 //! Then twelve of the co-processor's [`Counters`] (also readable by the host
@@ -119,6 +119,10 @@ impl Report {
             ("host_scans_dropped", c.host_scans_dropped),
             ("scans_other_setting", c.scans_other_setting),
             ("scans_out", c.scans_out),
+            ("host_requests_dropped", c.host_requests_dropped),
+            ("relays_refused", c.relays_refused),
+            ("relays_failed", c.relays_failed),
+            ("partial_scans_unassembled", c.partial_scans_unassembled),
         ] {
             w.field(name, v.into());
         }

@@ -548,6 +548,13 @@ pub struct CapturedScan {
 /// before the cut is read and [`CaptureScans::cut`] says where and why.
 /// Any other damage is an error naming the file and the record; the
 /// iterator ends after it.
+///
+/// Records that break the format's promises without being unreadable are
+/// read, and noted for a warning ([`CaptureScans::next_note`], naming the
+/// record and its byte offset): a `time_us` earlier than the previous
+/// record's (the time runs backwards) and a record identical to the
+/// previous one (time and telegram: a duplicate). At most
+/// [`MAX_PENDING_NOTES`] wait to be taken; the rest are counted.
 #[derive(Debug)]
 pub struct CaptureScans<R: Read> {
     reader: CaptureReader<R>,
@@ -555,7 +562,13 @@ pub struct CaptureScans<R: Read> {
     index: usize,
     cut: Option<CaptureError>,
     done: bool,
+    previous: Option<Record>,
+    notes: std::collections::VecDeque<String>,
+    notes_dropped: usize,
 }
+
+/// Notes kept until taken ([`CaptureScans::next_note`]).
+pub const MAX_PENDING_NOTES: usize = 64;
 
 impl<R: Read> CaptureScans<R> {
     /// The scans of the capture on `input` (its magic already checked);
@@ -567,6 +580,52 @@ impl<R: Read> CaptureScans<R> {
             index: 0,
             cut: None,
             done: false,
+            previous: None,
+            notes: std::collections::VecDeque::new(),
+            notes_dropped: 0,
+        }
+    }
+
+    /// The oldest note not yet taken: a record whose time runs backwards
+    /// or that duplicates the previous one (see [`CaptureScans`]).
+    pub fn next_note(&mut self) -> Option<String> {
+        self.notes.pop_front()
+    }
+
+    /// Notes that did not fit the [`MAX_PENDING_NOTES`] waiting.
+    pub fn notes_dropped(&self) -> usize {
+        self.notes_dropped
+    }
+
+    /// Compare record `record` (at byte `offset`) with the previous one.
+    fn look_at(&mut self, record: u64, offset: u64, rec: &Record) {
+        let note = match &self.previous {
+            Some(p) if p == rec => Some(format!(
+                "record {record} at byte {offset} duplicates the previous record \
+                 (same time_us {} and telegram)",
+                rec.time_us
+            )),
+            Some(p) if rec.time_us < p.time_us => Some(format!(
+                "record {record} at byte {offset}: time_us {} is earlier than the previous \
+                 record's {}: the capture's time runs backwards",
+                rec.time_us, p.time_us
+            )),
+            _ => None,
+        };
+        if let Some(note) = note {
+            if self.notes.len() < MAX_PENDING_NOTES {
+                self.notes.push_back(note);
+            } else {
+                self.notes_dropped += 1;
+            }
+        }
+        match &mut self.previous {
+            Some(p) => {
+                p.time_us = rec.time_us;
+                p.telegram.clear();
+                p.telegram.extend_from_slice(&rec.telegram);
+            }
+            None => self.previous = Some(rec.clone()),
         }
     }
 
@@ -599,6 +658,7 @@ impl<R: Read> CaptureScans<R> {
 
     fn next_scan(&mut self) -> Option<anyhow::Result<CapturedScan>> {
         loop {
+            let (record, offset) = (self.reader.record, self.reader.offset);
             let rec = match self.reader.next_record() {
                 Ok(Some(r)) => r,
                 Ok(None) => return None,
@@ -612,6 +672,7 @@ impl<R: Read> CaptureScans<R> {
                     ))
                 }
             };
+            self.look_at(record, offset, &rec);
             let view = rec.view();
             if view.command() != lms_core::telegram::measured::MEASURED_COMMAND {
                 continue;

@@ -3,7 +3,8 @@
 //!
 //! ```text
 //! host-bridge coprocessor --sensor PORT --link PATH [--variant FOV/RES] [--units mm|cm]
-//!                         [--status-every SECONDS] [--quit-after SECONDS] [pipeline options]
+//!                         [--status-every SECONDS] [--quit-after SECONDS] [--foxglove [ADDR]]
+//!                         [pipeline options]
 //! ```
 //!
 //! The same code as the firmware: it brings the LMS on `PORT` up (9600 Bd
@@ -13,12 +14,27 @@
 //! what an LMS sends; the features after `56 01`). The client picks its own
 //! speed on the pseudo-terminal with `20 4x`, as with a real LMS; the
 //! co-processor's host-line budget follows that speed (a pty itself carries
-//! bytes at memory speed).
+//! bytes at memory speed). The budget judges each scan by when it reached
+//! the sensor port, not by when the loop got to it: on a loaded computer
+//! the loop may be held off for a third of a second, and the scans that
+//! queued meanwhile reach the co-processor with their arrival times
+//! ([`crate::serial::Arrivals`]).
 //!
 //! A status line goes to stderr every `--status-every` seconds (scans in
 //! and out, host-line drops, sensor CRC errors, the sensor's bring-up state,
 //! the client's rate, mode and feature output). SIGINT/SIGTERM (Ctrl-C)
 //! stops the sensor's stream (`20 25`), removes the link and exits with 0.
+//!
+//! `-o FILE.mcap` records the sensor's scans with those features into an
+//! MCAP file of ROS 2 messages (as `extract -o x.mcap` writes them,
+//! stamped with the computer's clock; a chunk closed every second; the
+//! file finished on Ctrl-C or SIGTERM, see
+//! [`crate::ros2::mcap_out::Recording`]).
+//!
+//! `--foxglove [ADDR]` shows the sensor's scans live in Foxglove with their
+//! features, computed off the co-processor's loop by the std pipeline with
+//! the same parameters, which gives the co-processor's features bit for bit
+//! ([`crate::live_view::StreamView`]; not with `--qemu`).
 
 use std::fmt::Write as _;
 use std::io;
@@ -29,13 +45,15 @@ use std::time::{Duration, Instant};
 use anyhow::{ensure, Context, Result};
 use clap::Args;
 use lms_core::device::coprocessor::{CoProcessor, PollError, SensorSetup};
-use lms_core::telegram::{Baud, Request};
+use lms_core::telegram::{Baud, RangeBits, Request};
 use lms_core::Unit;
 
+use crate::live_view::{ScanTap, StreamView};
 use crate::options::{ParamArgs, UnitArg};
 use crate::pty::Pty;
+use crate::ros2::mcap_out::Recording;
 use crate::scan::{variant_name, VariantChoice};
-use crate::serial::{Link, PtyPort, SerialLink};
+use crate::serial::{Arrivals, Link, PtyPort, SerialLink};
 use crate::simulate::symlink::Symlink;
 
 mod qemu_bridge;
@@ -73,6 +91,14 @@ pub struct CoprocessorArgs {
     /// Pipeline parameters (the ALGORITHM.md defaults unless set).
     #[command(flatten)]
     pub params: ParamArgs,
+    /// `--foxglove`: the sensor's scans, with their features, live in Foxglove.
+    #[command(flatten)]
+    pub live: crate::live_view::FoxgloveArgs,
+    /// Record the sensor's scans with their features into this MCAP file
+    /// (ROS 2 messages, as `extract -o x.mcap` writes them; finished on
+    /// Ctrl-C or SIGTERM)
+    #[arg(long, short, value_name = "FILE.mcap")]
+    pub output: Option<PathBuf>,
 }
 
 /// A [`Link`] as an `embedded-io` port: `read_ready` takes what has
@@ -80,9 +106,76 @@ pub struct CoprocessorArgs {
 struct LinkPort {
     link: SerialLink,
     buf: Vec<u8>,
+    /// `--foxglove`: the bytes read go to it too, framed with `bits`; it
+    /// shows the scans with the features of the co-processor's parameters
+    /// (the std pipeline computes them bit for bit as the co-processor).
+    live: Option<StreamView>,
+    bits: RangeBits,
+    /// `-o FILE.mcap`: the bytes read go to it too, framed with `bits`.
+    record: Option<Recorder>,
+}
+
+/// `-o FILE.mcap`: the sensor's scans, picked out of its byte stream
+/// ([`ScanTap`]), recorded with the features the std pipeline computes
+/// with the co-processor's parameters (its features, bit for bit).
+struct Recorder {
+    tap: ScanTap,
+    recording: Recording,
+}
+
+impl Recorder {
+    /// The recorder of `-o`, if given.
+    fn from_args(args: &CoprocessorArgs, params: lms_core::ValidParams) -> Result<Option<Self>> {
+        let Some(path) = &args.output else {
+            return Ok(None);
+        };
+        Ok(Some(Recorder {
+            tap: ScanTap::default(),
+            recording: Recording::create(path, params)?,
+        }))
+    }
+
+    /// Record the complete scans in `bytes`.
+    fn bytes(&mut self, bytes: &[u8], bits: RangeBits) -> Result<()> {
+        let mut result = Ok(());
+        let recording = &mut self.recording;
+        self.tap.feed(bytes, bits, |frame| {
+            if result.is_ok() {
+                result = recording.record(&frame);
+            }
+        });
+        result
+    }
+
+    /// Finish the file; the line that says what it holds.
+    fn finish(mut self) -> Result<String> {
+        self.recording.skipped += self.tap.skipped;
+        self.recording.finish()
+    }
+}
+
+/// After the loop: the live view's summary, the recording finished.
+fn close_outputs(sensor: &mut LinkPort) -> Result<()> {
+    if let Some(live) = sensor.live.take() {
+        eprintln!("host-bridge coprocessor: {}", live.summary());
+    }
+    if let Some(record) = sensor.record.take() {
+        eprintln!("host-bridge coprocessor: {}", record.finish()?);
+    }
+    Ok(())
 }
 
 impl LinkPort {
+    /// Take the range bits of the sensor's measuring mode, as the
+    /// co-processor knows it, for the scans the outputs frame.
+    fn follow(&mut self, cop: &CoProcessor) {
+        if self.live.is_some() || self.record.is_some() {
+            self.bits = cop.link().config().map_or(RangeBits::Bits13, |c| {
+                RangeBits::from_measuring_mode(c.measuring_mode())
+            });
+        }
+    }
+
     /// Wait up to `timeout` for bytes (into the buffer).
     fn fill(&mut self, timeout: Duration) -> io::Result<()> {
         if !self.buf.is_empty() {
@@ -91,6 +184,14 @@ impl LinkPort {
         let mut chunk = [0u8; 4096];
         let n = self.link.receive(&mut chunk, timeout)?;
         self.buf.extend_from_slice(&chunk[..n]);
+        if let Some(live) = self.live.as_mut() {
+            live.sensor_bytes(&chunk[..n], self.bits);
+        }
+        if let Some(record) = self.record.as_mut() {
+            record
+                .bytes(&chunk[..n], self.bits)
+                .map_err(io::Error::other)?;
+        }
         Ok(())
     }
 }
@@ -137,6 +238,17 @@ fn check_args(args: &CoprocessorArgs) -> Result<()> {
             "--quit-after must be >= 0 (seconds)"
         );
     }
+    ensure!(
+        args.qemu.is_none() || args.live.foxglove.is_none(),
+        "--foxglove is not available with --qemu (the firmware's lines are bridged as bytes)"
+    );
+    ensure!(
+        args.qemu.is_none() || args.output.is_none(),
+        "-o is not available with --qemu (the firmware's lines are bridged as bytes)"
+    );
+    if let Some(path) = &args.output {
+        crate::scan::check_output(path)?;
+    }
     Ok(())
 }
 
@@ -159,10 +271,14 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
     if let Some(elf) = &args.qemu {
         return run_qemu(args, link, elf.as_deref());
     }
-    let mut sensor = LinkPort {
+    // The sensor's bytes reach the co-processor at their arrival times.
+    let mut sensor = Arrivals::new(LinkPort {
         link,
         buf: Vec::new(),
-    };
+        live: StreamView::from_args(&args.live, "host-bridge coprocessor", params)?,
+        bits: RangeBits::Bits13,
+        record: Recorder::from_args(args, params)?,
+    });
     let pty = Pty::open(Baud::B9600.bits_per_second())?;
     let symlink = Symlink::create(&args.link, pty.slave_path())?;
     let mut host = PtyPort::new(pty);
@@ -189,29 +305,32 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
         if quit_after.is_some_and(|q| clock.elapsed() >= q) {
             break "--quit-after";
         }
-        let outcome = cop
-            .poll(&mut sensor, &mut host, now_us())
+        let outcome = sensor
+            .poll(&mut cop, &mut host, now_us)
             .map_err(|e| match e {
                 PollError::Sensor(e) => anyhow::anyhow!("sensor port: {e}"),
                 PollError::Host(e) => anyhow::anyhow!("client line: {e}"),
             })?;
         if let Some(b) = outcome.sensor_baud {
             sensor
+                .port_mut()
                 .link
                 .set_baud(b)
                 .context("sensor port: cannot switch the rate")?;
         }
+        sensor.port_mut().follow(&cop);
         if args.status_every > 0.0 && Instant::now() >= next_status {
             eprintln!("{}", status(&cop, clock));
             next_status += status_every;
         }
-        sensor.fill(TICK)?;
+        sensor.port_mut().fill(TICK)?;
     };
-    stop_sensor(&mut sensor);
+    stop_sensor(sensor.port_mut());
     eprintln!(
         "host-bridge coprocessor: stopped ({reason}); {}",
         status(&cop, clock)
     );
+    close_outputs(sensor.port_mut())?;
     drop(symlink);
     Ok(())
 }
@@ -280,6 +399,16 @@ fn status(cop: &CoProcessor, clock: Instant) -> String {
         variant_name(face.variant()),
         face.units(),
         if cop.features_on() { "on" } else { "off" },
+    );
+    let _ = write!(
+        line,
+        "; client CRC errors {} (each NAKed), requests dropped {} (queue full), relayed \
+         refused {} failed {}, partial scans not joined {}",
+        c.host_crc_errors,
+        c.host_requests_dropped,
+        c.relays_refused,
+        c.relays_failed,
+        c.partial_scans_unassembled,
     );
     line
 }

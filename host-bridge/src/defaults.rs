@@ -14,37 +14,44 @@ use std::path::Path;
 use anyhow::Result;
 use lms_core::{DataProfile, DataSurvey, Params};
 
-use crate::input::{self, Kind};
+use crate::input;
 use crate::options::{ParamArgs, UnitArg};
 
 /// The parameters for the log at `path`, and a warning line if the log's
 /// fill values are caught by the range limit. `None` for a capture (its
 /// telegrams carry their units; the flags alone decide).
 ///
-/// The log is streamed once more for the survey, up to its first damaged
-/// scan (memory independent of its
-/// length): the valid ranges are kept as a histogram of their exact `f32`
-/// values (at most one entry per distinct value the unit can express, about
-/// 82 000), so the ranges the limit catches are counted exactly whatever
-/// `--max-range` says.
+/// The log at `path` is opened for it ([`for_file`]).
 pub fn for_log(
     path: &Path,
     unit: UnitArg,
     args: &ParamArgs,
 ) -> Result<Option<(Params, Option<String>)>> {
-    let mut file = input::open(path, unit)?;
-    let Kind::Log { unit, .. } = *file.kind() else {
+    for_file(&input::open(path, unit)?, args)
+}
+
+/// [`for_log`] for a log already open: the survey reads the scans of its
+/// head ([`input::ScanFile::head_scans`], the whole log unless it is longer
+/// than [`crate::carmen::HEAD_TEXT`]) from memory, up to the first damaged
+/// scan, so the input itself is read once. The valid ranges are kept as a
+/// histogram of their exact `f32` values (at most one entry per distinct
+/// value the unit can express, about 82 000), so the ranges the limit
+/// catches are counted exactly whatever `--max-range` says.
+pub fn for_file(
+    file: &input::ScanFile,
+    args: &ParamArgs,
+) -> Result<Option<(Params, Option<String>)>> {
+    let Some((unit, frames)) = file.survey_frames() else {
         return Ok(None);
     };
+    let path = file.path();
     let mut survey = DataSurvey::new(unit);
     // Keyed by `f32::to_bits`, which orders non-negative floats by value.
     let mut valid: BTreeMap<u32, u64> = BTreeMap::new();
     // The survey stops at the first damaged scan: whether that damage
     // matters (it may lie after the selected frames) is for the reading
     // pass to say, with its own message.
-    for scan in file.by_ref() {
-        let Ok(scan) = scan else { break };
-        let frame = scan.frame;
+    for frame in frames {
         survey.add(&frame);
         for (b, &d) in frame.beams().iter().zip(frame.ranges()) {
             if b.is_valid() {

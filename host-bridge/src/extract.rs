@@ -17,6 +17,9 @@ use lms_core::Stats;
 use lms_core::{Extractor, Frame, Params, Trace};
 use serde::{Deserialize, Serialize};
 
+use crate::ros2::messages::Stamp;
+use crate::ros2::rosbag2_out::RosOut;
+
 /// One frame's input, ranges and features.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrameRecord {
@@ -249,6 +252,25 @@ where
     I: IntoIterator<Item = Result<InputFrame>>,
     W: Write,
 {
+    extract_observed(frames, params, out, name, false, &mut |_, _| {})
+}
+
+/// [`extract_named`], calling `each` with every frame and its features
+/// once its record is written (the live view of `extract --realtime`);
+/// `flush_each` flushes the output after every record (a paced replay's
+/// reader gets each frame when it is due).
+pub fn extract_observed<I, W>(
+    frames: I,
+    params: &Params,
+    out: W,
+    name: &str,
+    flush_each: bool,
+    each: &mut dyn FnMut(&InputFrame, &lms_core::Features),
+) -> Result<Summary>
+where
+    I: IntoIterator<Item = Result<InputFrame>>,
+    W: Write,
+{
     let cannot = || format!("cannot write {name}");
     let params = params
         .validate()
@@ -272,18 +294,55 @@ where
         line.clear();
         serde_json::to_writer(&mut line, &record).context("cannot serialize a frame record")?;
         line.push(b'\n');
-        match out.write_all(&line) {
+        let written = match flush_each {
+            true => out.write_all(&line).and_then(|()| out.flush()),
+            false => out.write_all(&line),
+        };
+        match written {
             Err(e) if e.kind() == io::ErrorKind::BrokenPipe => {
                 summary.output_closed = true;
                 return Ok(summary);
             }
             other => other.with_context(cannot)?,
         }
+        each(&input, ex.features());
     }
     match out.flush() {
         Err(e) if e.kind() == io::ErrorKind::BrokenPipe => summary.output_closed = true,
         other => other.with_context(cannot)?,
     }
+    Ok(summary)
+}
+
+/// Run the pipeline on every frame and write its scan, markers and
+/// features as ROS 2 messages, with the frame's stamp, to `out` (an MCAP
+/// file or a rosbag2 folder: `extract -o x.mcap`, `--format rosbag2`);
+/// `out` is finished (summary, indexes, `metadata.yaml`) at the end.
+pub fn extract_to_ros<I>(frames: I, params: &Params, mut out: RosOut) -> Result<Summary>
+where
+    I: IntoIterator<Item = Result<(InputFrame, Stamp)>>,
+{
+    let params = params
+        .validate()
+        .map_err(|e| anyhow::anyhow!("invalid parameters: {e}"))?;
+    let mut ex = Extractor::new();
+    let mut summary = Summary::default();
+    for input in frames {
+        let (input, stamp) = input?;
+        let start = Instant::now();
+        let features = ex.run(&input.frame, &params);
+        summary.pipeline += start.elapsed();
+        summary.frames += 1;
+        summary.lines += features.lines().len();
+        summary.corners += features.corners().len();
+        summary.well_conditioned += features
+            .corners()
+            .iter()
+            .filter(|c| c.well_conditioned)
+            .count();
+        out.write_frame(&stamp, &input.frame, features)?;
+    }
+    out.finish()?;
     Ok(summary)
 }
 

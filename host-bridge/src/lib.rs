@@ -23,6 +23,8 @@
 //!    what a command worked around.
 //! 6. [`verify`] — a co-processor (in a thread, under QEMU, or on serial
 //!    ports) checked bit for bit against the std build.
+//! 7. [`live_view`] — `--foxglove`: the scans and features live in
+//!    Foxglove, over its WebSocket protocol.
 //!
 //! The binary `host-bridge` (src/main.rs) wires these into subcommands.
 //! The accuracy evaluation is research tooling in its own package,
@@ -38,12 +40,14 @@ pub mod defaults;
 pub mod emulated_link;
 pub mod extract;
 pub mod input;
+pub mod live_view;
 pub mod options;
 pub mod plot;
 pub mod pty;
 mod qemu_intake;
 pub mod reference;
 pub mod resample;
+pub mod ros2;
 pub mod scan;
 pub mod serial;
 pub mod simulate;

@@ -54,6 +54,22 @@ impl UnitArg {
     }
 }
 
+/// `--topic NAME`: the topic of a ROS 2 bag input (`extract`, `plot`,
+/// `verify --replay`, `simulate --replay`).
+#[derive(Args, Clone, Debug, Default, PartialEq, Eq)]
+pub struct TopicArg {
+    /// Topic of a ROS 2 bag input (an MCAP file or a rosbag2 folder) whose sensor_msgs/msg/LaserScan messages are read [default: the bag's only LaserScan topic]
+    #[arg(long, value_name = "NAME", requires = "log")]
+    pub topic: Option<String>,
+}
+
+impl TopicArg {
+    /// The topic, if given.
+    pub fn name(&self) -> Option<&str> {
+        self.topic.as_deref()
+    }
+}
+
 /// One `--set NAME=VALUE`: a parameter (a field of [`Params`]) and its
 /// value as text, read as the field's type when given.
 #[derive(Clone, Debug, PartialEq)]

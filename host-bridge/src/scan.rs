@@ -26,6 +26,20 @@
 //! stream is stopped, the sensor put back at 9600 Bd (unless
 //! `--keep-baud`), the scans so far are left in `NAME.partial`, and the
 //! exit status is non-zero; a second signal exits at once.
+//!
+//! `-o NAME.mcap` records an MCAP file instead of a capture
+//! ([`crate::ros2::mcap_out::Recording`]): each scan as it is complete,
+//! with the features the std pipeline computes for it (default
+//! parameters), as `sensor_msgs/msg/LaserScan`, markers and
+//! `lms_features_msgs/msg/Features`, stamped with the computer's clock.
+//! A chunk is closed every second, so a killed recorder leaves every
+//! chunk but the last readable; a signal or an error ends the session
+//! with the file finished (summary and indexes).
+//!
+//! `--foxglove [ADDR]` shows the scans received live in Foxglove, with the
+//! features the std pipeline computes for them on this computer (default
+//! parameters, as `extract` uses for the capture), off the reading thread
+//! ([`crate::live_view::LiveFeed`]).
 
 use std::fmt;
 use std::io::IsTerminal;
@@ -43,6 +57,8 @@ use lms_core::Variant;
 use crate::capture::CaptureFile;
 use crate::client::{Client, ClientStats, Scan, Timeouts};
 use crate::options::UnitArg;
+use crate::ros2::mcap_out::Recording;
+use crate::ros2::rosbag2_out::Format;
 use crate::serial::{Link, SerialLink};
 
 /// `--baud`: the rate to stream at, or `auto` to keep the one found.
@@ -151,6 +167,8 @@ pub struct ScanArgs {
     #[arg(long, default_value_t = 100, value_name = "N")]
     pub scans: usize,
     /// Capture file to record the scans into (see the README's capture section);
+    /// a name ending in .mcap records an MCAP file of ROS 2 messages instead
+    /// (the scans with their features, as `extract -o x.mcap` writes them);
     /// required unless --no-save
     #[arg(
         long,
@@ -171,6 +189,9 @@ pub struct ScanArgs {
     /// Leave the sensor at the streaming rate (default: back to 9600 Bd, its power-on rate)
     #[arg(long)]
     pub keep_baud: bool,
+    /// `--foxglove`: the scans received, with their features, live in Foxglove.
+    #[command(flatten)]
+    pub live: crate::live_view::FoxgloveArgs,
 }
 
 /// What a session does.
@@ -419,15 +440,26 @@ pub fn run(args: &ScanArgs) -> Result<()> {
     let handled = link.handled();
     let mut client = Client::new(link, Baud::B9600, Timeouts::default());
     client.retries = args.retries;
-    let mut capture = match &args.output {
-        Some(path) => Some(CaptureFile::create(path)?),
-        None => None,
-    };
+    let (mut capture, mut recording) = open_output(args)?;
+    // The features computed here, as `extract` does for the capture.
+    let mut live = crate::live_view::LiveFeed::from_args(
+        &args.live,
+        "host-bridge scan",
+        lms_core::ValidParams::DEFAULT,
+    )?;
     let progress = progress_bar(plan.scans);
     let result = run_session(&mut client, &plan, |i, since_start, scan| {
         if let Some(c) = capture.as_mut() {
             let us = u64::try_from(since_start.as_micros()).unwrap_or(u64::MAX);
             c.write(us, &scan.telegram)?;
+        }
+        if let Some(r) = recording.as_mut() {
+            record_scan(r, scan)?;
+        }
+        if let Some(live) = live.as_mut().filter(|l| l.watched()) {
+            if let Ok(frame) = scan.values.to_frame(lms_core::telegram::RangeBits::Bits13) {
+                live.send(crate::live_view::stamp_now(None), frame);
+            }
         }
         progress.inc(1);
         if interrupted.load(Ordering::Relaxed) {
@@ -442,21 +474,20 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         Ok(())
     });
     progress.finish_and_clear();
+    if let Some(live) = live.take() {
+        eprintln!("host-bridge scan: {}", live.summary());
+    }
+    let recorded = recording.map(Recording::finish);
     let summary = match result {
         Ok(s) => s,
-        Err(e) => return Err(incomplete_capture(e, capture, args)),
-    };
-    let capture_line = match capture {
-        Some(c) => {
-            let (records, bytes) = (c.records(), c.bytes());
-            let path = c.commit()?;
-            format!(
-                "\n  capture: {} ({records} scans, {bytes} bytes)",
-                path.display()
-            )
+        Err(e) => {
+            return Err(with_recording(
+                incomplete_capture(e, capture, args),
+                recorded,
+            ))
         }
-        None => "\n  not saved (--no-save)".to_string(),
     };
+    let capture_line = saved_line(capture, recorded)?;
     print_summary(args, &plan, &summary, &capture_line);
     if let Some(e) = &summary.restore_error {
         crate::warning::warn(&format!(
@@ -464,6 +495,59 @@ pub fn run(args: &ScanArgs) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// `-o`: a capture file, or with a name ending in `.mcap` an MCAP recording
+/// of ROS 2 messages (the scans with the features the std pipeline
+/// computes for them with the default parameters, as `extract` does for a
+/// capture; see [`Recording`]).
+fn open_output(args: &ScanArgs) -> Result<(Option<CaptureFile>, Option<Recording>)> {
+    match &args.output {
+        Some(path) if Format::choose(None, Some(path)) == Format::Mcap => Ok((
+            None,
+            Some(Recording::create(path, lms_core::ValidParams::DEFAULT)?),
+        )),
+        Some(path) => Ok((Some(CaptureFile::create(path)?), None)),
+        None => Ok((None, None)),
+    }
+}
+
+/// Record one scan received; a scan that makes no frame is counted.
+fn record_scan(r: &mut Recording, scan: &Scan) -> Result<()> {
+    match scan.values.to_frame(lms_core::telegram::RangeBits::Bits13) {
+        Ok(frame) => r.record(&frame),
+        Err(_) => {
+            r.skipped += 1;
+            Ok(())
+        }
+    }
+}
+
+/// The session's error, saying what the MCAP recording holds (it is
+/// finished, summary and indexes written, whatever ended the session).
+fn with_recording(e: anyhow::Error, recorded: Option<Result<String>>) -> anyhow::Error {
+    match recorded {
+        Some(Ok(line)) => e.context(format!("the scans so far are kept: {line}")),
+        Some(Err(f)) => e.context(format!("the MCAP recording could not be finished: {f:#}")),
+        None => e,
+    }
+}
+
+/// The summary's line on what was saved: the capture (renamed from its
+/// `.partial`), the MCAP recording, or nothing.
+fn saved_line(capture: Option<CaptureFile>, recorded: Option<Result<String>>) -> Result<String> {
+    if let Some(c) = capture {
+        let (records, bytes) = (c.records(), c.bytes());
+        let path = c.commit()?;
+        return Ok(format!(
+            "\n  capture: {} ({records} scans, {bytes} bytes)",
+            path.display()
+        ));
+    }
+    match recorded {
+        Some(line) => Ok(format!("\n  {}", line?)),
+        None => Ok("\n  not saved (--no-save)".to_string()),
+    }
 }
 
 /// A [`Link`] that reports a signal: once `flag` is set, its next

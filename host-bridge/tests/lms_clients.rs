@@ -12,6 +12,7 @@
 //! | `stream-b0` | tolerant replies; while streaming, every telegram must be `B0` | a non-`B0` in the stream |
 //! | `ack-60ms` | waits 60 ms for the `ACK`, then sends the request again (≤ 10 times) | no `ACK` after 10 tries |
 //! | `features` | opts in (`56 01` → `D6 01`); after every `B0`, its `D4 D3 D1… D2… D0` group | a group missing, cut, or not bit-identical to the std build's features of that `B0` |
+//! | `driver` | the habits of a widely used LMS 2xx driver: a power-on baud search from 9600 Bd, lock-step requests, 1 s for every message (3 s for a mode switch `20 xx`, 15 s for `3B`/`77`), a reply it does not wait for (`92` too) skipped until the time-out, each request tried 3 times, then an error; telegrams it does not wait for in the stream skipped | a message later than its time-out; a request not answered in 3 tries |
 //!
 //! Every client, at 9600, 38400 and 500000 Bd on its own chain (a
 //! `simulate` and a `coprocessor` process each, all chains at once, so that
@@ -102,6 +103,34 @@ const PROBE_US: u64 = lms_core::device::coprocessor::sensor_link::probe_wait_us(
     lms_core::telegram::Baud::B9600,
     lms_core::telegram::Baud::B500000,
 );
+
+/// The driver's time-out for a message: a reply, and every scan in the
+/// stream.
+const DRIVER_MESSAGE: Duration = Duration::from_secs(1);
+/// The driver's tries of a request.
+const DRIVER_TRIES: u32 = 3;
+/// Under QEMU the firmware gets whole scans less often than the sensor
+/// sends them: QEMU's USART takes about 10 KB/s (the bridge lets at most
+/// 1000 bytes wait, modelled at 5 KB/s), so a 401-value `B0` (812 bytes)
+/// reaches the firmware every 100–220 ms instead of every 53 ms, and after
+/// its host line frees the next whole scan may be that much later. A board
+/// (500 kBd sensor line, a scan every 53.3 ms) sends a 401-value scan at
+/// 9600 Bd at most 0.88 s after the last (`B0` 812 bytes = 845.8 ms; the
+/// next fits its 831-byte transmit queue 19.8 ms before the line frees, and
+/// arrives within a scan period of that): the driver's second holds there.
+const QEMU_STREAM_EXTRA: Duration = Duration::from_millis(400);
+
+/// The driver's time-out for the reply to `payload`: 3 s for a mode
+/// switch (`20 xx`), 15 s for a new variant or configuration (`3B`, `77`:
+/// the co-processor answers at once, a real LMS takes seconds), else
+/// [`DRIVER_MESSAGE`].
+fn driver_timeout(payload: &[u8]) -> Duration {
+    match payload[0] {
+        0x20 => Duration::from_secs(3),
+        0x3B | 0x77 => Duration::from_secs(15),
+        _ => DRIVER_MESSAGE,
+    }
+}
 
 /// `true` for the requests the co-processor relays to the sensor (`3A`,
 /// the value modes).
@@ -286,15 +315,17 @@ enum Behaviour {
     StreamB0,
     Ack60,
     Features,
+    Driver,
 }
 
 impl Behaviour {
-    const ALL: [Behaviour; 5] = [
+    const ALL: [Behaviour; 6] = [
         Behaviour::AnyReply,
         Behaviour::SyncCrc,
         Behaviour::StreamB0,
         Behaviour::Ack60,
         Behaviour::Features,
+        Behaviour::Driver,
     ];
 
     fn name(self) -> &'static str {
@@ -304,6 +335,7 @@ impl Behaviour {
             Behaviour::StreamB0 => "stream-b0",
             Behaviour::Ack60 => "ack-60ms",
             Behaviour::Features => "features",
+            Behaviour::Driver => "driver",
         }
     }
 }
@@ -404,6 +436,7 @@ impl Client {
                 }
                 Ok(reply)
             }
+            Behaviour::Driver => self.driver_request(payload, want),
             Behaviour::Ack60 => {
                 let mut tries = 0;
                 loop {
@@ -456,11 +489,19 @@ impl Client {
     /// `B6`/`B7`/`BF`: then not even the features client takes another),
     /// due within `period` plus what may be ahead of it on the line.
     fn streamed(&mut self, want: u8, period: Duration) -> Result<Vec<u8>, String> {
-        let deadline = self.deadline(period + self.line(AHEAD_BYTES));
+        let deadline = match self.behaviour {
+            // The driver's second per scan; the first after a new setting
+            // waits for the sensor's bring-up. (The value modes' telegrams:
+            // means of several scans, as the other clients.)
+            Behaviour::Driver if want == 0xB0 && period < DRIVER_MESSAGE => {
+                Instant::now() + DRIVER_MESSAGE + self.qemu_stream_extra()
+            }
+            _ => self.deadline(period + self.line(AHEAD_BYTES)),
+        };
         let strict = match self.behaviour {
             Behaviour::AnyReply | Behaviour::StreamB0 => true,
             Behaviour::Features => want != 0xB0,
-            Behaviour::SyncCrc | Behaviour::Ack60 => false,
+            Behaviour::SyncCrc | Behaviour::Ack60 | Behaviour::Driver => false,
         };
         loop {
             let frame = read_frame(&mut self.port, deadline)?;
@@ -473,6 +514,55 @@ impl Client {
                 (_, Some(_)) => self.tally.skipped_telegrams += 1,
                 (_, None) => {}
             }
+        }
+    }
+
+    /// The driver's request: sent, then every telegram but the one with
+    /// code `want` skipped (a `92` too) until its time-out
+    /// ([`driver_timeout`]); three tries, then an error.
+    fn driver_request(&mut self, payload: &[u8], want: u8) -> Result<Vec<u8>, String> {
+        let timeout = driver_timeout(payload) + self.qemu_reply_extra(payload);
+        let mut seen = Vec::new();
+        for attempt in 1..=DRIVER_TRIES {
+            if attempt > 1 {
+                self.tally.resends += 1;
+            }
+            self.port.send(&telegram(payload));
+            let deadline = Instant::now() + timeout;
+            loop {
+                match read_frame(&mut self.port, deadline) {
+                    Ok(Some(f)) if f[0] == want => return Ok(f),
+                    Ok(Some(f)) => {
+                        if !seen.contains(&f[0]) {
+                            seen.push(f[0]);
+                        }
+                    }
+                    Ok(None) => {}
+                    Err(_) => break,
+                }
+            }
+        }
+        Err(format!(
+            "no {want:02X} to {:02X?} in {DRIVER_TRIES} tries of {timeout:?} (got instead: {seen:02X?})",
+            &payload[..payload.len().min(3)]
+        ))
+    }
+
+    /// Under QEMU, what its slow USARTs add to a reply of the sensor's
+    /// (relayed) or of a bring-up: the sensor's stream queued ahead of it.
+    fn qemu_reply_extra(&self, payload: &[u8]) -> Duration {
+        match self.qemu && (relayed(payload) || matches!(payload[0], 0x3B | 0x77)) {
+            true => self.sensor_work(0),
+            false => Duration::ZERO,
+        }
+    }
+
+    /// Under QEMU, the most its sensor line adds between two scans:
+    /// [`QEMU_STREAM_EXTRA`]. Nothing on a computer's or a board's lines.
+    fn qemu_stream_extra(&self) -> Duration {
+        match self.qemu {
+            true => QEMU_STREAM_EXTRA,
+            false => Duration::ZERO,
         }
     }
 
@@ -580,6 +670,9 @@ const VARIANTS: [Variant; 5] = [
 /// booting: the firmware under a loaded QEMU takes seconds), at most 60 s;
 /// then let the line go quiet and drop what came.
 fn connect(c: &mut Client) -> Result<(), String> {
+    if c.behaviour == Behaviour::Driver {
+        return driver_connect(c);
+    }
     let until = Instant::now() + Duration::from_secs(60);
     loop {
         c.port.send(&telegram(&[0x20, 0x25]));
@@ -595,6 +688,37 @@ fn connect(c: &mut Client) -> Result<(), String> {
         if c.port.pull(Duration::from_millis(20)) {
             quiet_since = Instant::now();
         }
+    }
+    c.port.flush_input();
+    Ok(())
+}
+
+/// The driver's power-on baud search: `20 25` at 9600, 19200, 38400 and
+/// 500000 Bd in turn, one second each, until an `A0` comes (from the top
+/// again while a co-processor boots, at most 60 s); the line then at
+/// 9600 Bd, where [`initialise`] starts.
+fn driver_connect(c: &mut Client) -> Result<(), String> {
+    let until = Instant::now() + Duration::from_secs(60);
+    let found = 'search: loop {
+        for bps in [9600u32, 19200, 38400, 500_000] {
+            c.port.set_speed(bps);
+            c.port.flush_input();
+            c.port.send(&telegram(&[0x20, 0x25]));
+            let by = Instant::now() + DRIVER_MESSAGE;
+            while let Ok(f) = read_frame(&mut c.port, by) {
+                if f.is_some_and(|f| f[0] == 0xA0) {
+                    break 'search bps;
+                }
+            }
+        }
+        if Instant::now() >= until {
+            return Err("baud search: no answer to 20 25 at any rate in 60 s".into());
+        }
+    };
+    if found != 9600 {
+        let a0 = c.request(&[0x20, 0x42], 0xA0)?;
+        expect(a0[1] == 0, "20 42 answered A0 00", &a0)?;
+        c.port.set_speed(9600);
     }
     c.port.flush_input();
     Ok(())
@@ -1202,4 +1326,128 @@ fn qemu_runs(runs: &[(Behaviour, u32)], link: &Path, log: &Path) -> Vec<String> 
         }
     }
     failures
+}
+
+// ------------------------------------------ the driver's findings, each --
+//
+// What the driver of the `driver` client met through the co-processor, one
+// test each, so that a regression shows by name.
+
+/// A `driver` client on a fresh chain (`simulate` and `coprocessor`) in
+/// `dir`, connected at 9600 Bd and initialised at `baud`.
+fn driver_on_chain(dir: &Path, name: &str, baud: u32) -> (Proc, Proc, Client) {
+    let (sim, cop, link) = chain(dir, name);
+    let mut c = Client::new(Behaviour::Driver, baud, &link, false);
+    c.port.pull(Duration::from_millis(50));
+    c.port.flush_input();
+    connect(&mut c).unwrap();
+    initialise(&mut c).unwrap_or_else(|e| panic!("{e}\n  {}", diagnose(&mut c)));
+    (sim, cop, c)
+}
+
+/// The driver asks for partial scans (`20 2A`) at 100°/0.25°: the
+/// co-processor must relay it (an LMS answers `A0 00` and streams each
+/// quarter of the scan as a `B0` of its own, count word bit 13, offsets
+/// 0.25° apart); a `92` is not the driver's reply: it waits 3 s, three
+/// times, and fails.
+#[test]
+fn driver_gets_partial_scans_through_the_coprocessor() {
+    let dir = std::env::temp_dir().join(format!("host-bridge-driver-partial-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let (_sim, _cop, mut c) = driver_on_chain(&dir, "partial", 500_000);
+    set_up(&mut c, Variant::Fov100Res25, Unit::Millimetre).unwrap();
+    let a0 = c
+        .request(&[0x20, 0x2A], 0xA0)
+        .unwrap_or_else(|e| panic!("{e}\n  {}", diagnose(&mut c)));
+    assert_eq!(a0[1], 0, "20 2A answered A0 00");
+    let mut offsets = Vec::new();
+    let mut wait = Duration::from_micros(BRING_UP_US);
+    for _ in 0..8 {
+        let b0 = c
+            .scan(std::mem::replace(&mut wait, Duration::ZERO))
+            .unwrap_or_else(|e| panic!("partial scan: {e}\n  {}", diagnose(&mut c)));
+        let count = u16::from_le_bytes([b0[1], b0[2]]);
+        assert!(count & 0x2000 != 0, "count word {count:04X}: not a partial scan");
+        offsets.push((count >> 11) & 3);
+    }
+    // Every offset of the four comes round.
+    for k in 0..4 {
+        assert!(offsets.contains(&k), "offsets {offsets:?}");
+    }
+    c.stop_stream().unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A request the driver gave up on (`36 01`, relayed, answered `92` by
+/// the sensor: not its reply) must not wedge the relay: the driver's next
+/// relayed requests (`3A`) are each answered within its second.
+#[test]
+fn driver_relayed_requests_are_answered_after_one_given_up() {
+    let dir = std::env::temp_dir().join(format!("host-bridge-driver-relay-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let (_sim, _cop, mut c) = driver_on_chain(&dir, "relay", 38400);
+    let given_up = c.request(&[0x36, 0x01], 0xB6);
+    assert!(
+        given_up.as_ref().is_err_and(|e| e.contains("92")),
+        "{given_up:?}"
+    );
+    // Stream and stop in between, as a driver does.
+    let a0 = c.request(&[0x20, 0x24], 0xA0).unwrap();
+    assert_eq!(a0[1], 0);
+    let mut wait = Duration::from_micros(BRING_UP_US);
+    for _ in 0..3 {
+        c.scan(std::mem::replace(&mut wait, Duration::ZERO))
+            .unwrap_or_else(|e| panic!("{e}\n  {}", diagnose(&mut c)));
+    }
+    c.stop_stream().unwrap();
+    for _ in 0..5 {
+        let ba = c
+            .request(&[0x3A], 0xBA)
+            .unwrap_or_else(|e| panic!("{e}\n  {}", diagnose(&mut c)));
+        assert!(ba[1..].starts_with(b"LMS"), "{ba:02X?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A client that opted in to the features and went away without `56 00`
+/// (a program killed) leaves them on for nobody: the next client, the
+/// driver at 9600 Bd, must get only what an LMS sends, every scan within
+/// its second (features behind each `B0` take more than that at 9600 Bd).
+#[test]
+fn an_opt_in_ends_with_its_client() {
+    let dir = std::env::temp_dir().join(format!("host-bridge-opt-in-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let (_sim, _cop, link) = chain(&dir, "opt-in");
+    {
+        let mut first = Client::new(Behaviour::Features, 500_000, &link, false);
+        first.port.pull(Duration::from_millis(50));
+        first.port.flush_input();
+        connect(&mut first).unwrap();
+        initialise(&mut first).unwrap();
+        let a0 = first.request(&[0x20, 0x24], 0xA0).unwrap();
+        assert_eq!(a0[1], 0);
+        first.scan(Duration::from_micros(BRING_UP_US)).unwrap();
+        // Gone: no `56 00`, no `20 25`, the line left at 500 kBd.
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    let mut c = Client::new(Behaviour::Driver, 9600, &link, false);
+    c.port.pull(Duration::from_millis(50));
+    c.port.flush_input();
+    connect(&mut c).unwrap_or_else(|e| panic!("{e}"));
+    initialise(&mut c).unwrap_or_else(|e| panic!("{e}\n  {}", diagnose(&mut c)));
+    let a0 = c.request(&[0x20, 0x24], 0xA0).unwrap();
+    assert_eq!(a0[1], 0);
+    let mut wait = Duration::from_micros(BRING_UP_US);
+    for _ in 0..5 {
+        c.scan(std::mem::replace(&mut wait, Duration::ZERO))
+            .unwrap_or_else(|e| panic!("{e}\n  {}", diagnose(&mut c)));
+    }
+    assert_eq!(
+        c.tally.skipped_telegrams, 0,
+        "telegrams an LMS does not send reached the next client"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

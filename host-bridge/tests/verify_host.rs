@@ -122,3 +122,50 @@ fn verify_ports_mode_on_two_pseudo_terminals() {
     // The warm-up scan drawn as the sensor stream started, and the ten.
     assert_eq!(counters.scans_in, 11, "{counters:?}");
 }
+
+/// The value of `name=` in a line of `key=value` pairs.
+fn counter(line: &str, name: &str) -> u64 {
+    line.split([' ', ',', '('])
+        .find_map(|w| w.strip_prefix(&format!("{name}=")))
+        .and_then(|v| v.trim_end_matches(')').parse().ok())
+        .unwrap_or_else(|| panic!("no {name}= in {line}"))
+}
+
+#[test]
+fn verify_host_names_a_forced_loss_by_the_counter_that_counted_it() {
+    // A sensor that runs free at 500 kBd, a client at 38400 Bd: a 361-value
+    // B0 takes 190 ms on the host line, seven scan periods, so the
+    // co-processor's budget drops most scans and counts them.
+    let out = verify(&[
+        "--host",
+        "--count",
+        "20",
+        "--host-baud",
+        "38400",
+        "--sensor-runs-free",
+        "--timeout",
+        "30",
+    ]);
+    let text = stdout(&out);
+    let err = common::stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{text}{err}");
+    let counters = text
+        .lines()
+        .find(|l| l.contains("co-processor counters:"))
+        .unwrap_or_else(|| panic!("no counters line:\n{text}"));
+    let dropped = counter(counters, "host_scans_dropped");
+    assert!(dropped >= 10, "{counters}");
+    // The summary, the error and the counters line tell the same number.
+    let summary = text
+        .lines()
+        .find(|l| l.contains("scans bit-identical"))
+        .unwrap();
+    assert_eq!(counter(summary, "host_scans_dropped"), dropped, "{summary}");
+    let verdict = err
+        .lines()
+        .find(|l| l.contains("verify failed:"))
+        .unwrap_or_else(|| panic!("no verdict:\n{err}"));
+    assert_eq!(counter(verdict, "host_scans_dropped"), dropped, "{verdict}");
+    assert!(verdict.contains("scans lost"), "{verdict}");
+    assert!(!verdict.contains("do not add up"), "{verdict}");
+}

@@ -11,11 +11,102 @@
 //! stream: `UnexpectedEof`, `InvalidData`, `InvalidInput`), ends the scans
 //! without an error, and [`Reader::cut`] says where and why. A bad line
 //! *inside* the log is still an error.
+//!
+//! # Notes
+//!
+//! Lines read past that look damaged are not errors, but the reader keeps
+//! a [`Note`] of them for the caller to warn about ([`Reader::next_note`]):
+//! a first line starting with a UTF-8 byte order mark (read through: the
+//! line is read without it) and a record keyword one edit from `FLASER`
+//! (`FLASEQ`, `FLASR`, `FFLASER`: a damaged scan line, skipped, so every
+//! later scan's index is one lower than in the intact log). At most
+//! [`MAX_PENDING_NOTES`] wait to be taken; the rest are counted
+//! ([`Reader::notes_dropped`]).
 
+use std::collections::VecDeque;
 use std::fmt;
 use std::io::BufRead;
 
-use super::{is_flaser, Flaser, Meta, UnitVote};
+use super::{is_flaser, Excerpt, Flaser, Meta, UnitVote};
+
+/// Notes kept until the caller takes them ([`Reader::next_note`]).
+pub const MAX_PENDING_NOTES: usize = 64;
+
+/// The UTF-8 byte order mark.
+const BOM: [u8; 3] = [0xEF, 0xBB, 0xBF];
+
+/// Record keywords of CARMEN logs that are one edit from `FLASER` and
+/// are not damaged `FLASER`s (the rear laser).
+const KEYWORDS_NEAR_FLASER: [&[u8]; 1] = [b"RLASER"];
+
+/// A line read past that looks damaged (see the [module docs](self)).
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Note {
+    /// The first line starts with a UTF-8 byte order mark; it is read
+    /// without it.
+    ByteOrderMark,
+    /// A line's first word is one edit from `FLASER`; the line is skipped.
+    NearFlaser {
+        /// Line number (1-based).
+        line: usize,
+        /// The word as [`Excerpt`] quotes it.
+        word: String,
+    },
+}
+
+impl Note {
+    /// The line the note is about.
+    pub fn line(&self) -> usize {
+        match self {
+            Note::ByteOrderMark => 1,
+            Note::NearFlaser { line, .. } => *line,
+        }
+    }
+}
+
+impl fmt::Display for Note {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Note::ByteOrderMark => f.write_str(
+                "line 1 starts with a UTF-8 byte order mark (EF BB BF): read without it",
+            ),
+            Note::NearFlaser { line, word } => write!(
+                f,
+                "line {line}: the record keyword {word} is one edit from FLASER: a damaged \
+                 scan line? It is skipped, so every later scan's index is one lower than \
+                 in the intact log"
+            ),
+        }
+    }
+}
+
+/// `true` if `word` is one insertion, deletion or substitution from
+/// `FLASER` (and not another keyword of the format).
+pub fn near_flaser(word: &[u8]) -> bool {
+    const TARGET: &[u8] = b"FLASER";
+    if KEYWORDS_NEAR_FLASER.contains(&word) {
+        return false;
+    }
+    let (long, short) = if word.len() >= TARGET.len() {
+        (word, TARGET)
+    } else {
+        (TARGET, word)
+    };
+    if long.len() - short.len() > 1 {
+        return false;
+    }
+    // The first difference; what follows it must match after one edit.
+    let Some(i) = long.iter().zip(short).position(|(a, b)| a != b) else {
+        // Equal, or one longer by a last byte.
+        return long.len() != short.len();
+    };
+    if long.len() == short.len() {
+        long[i + 1..] == short[i + 1..]
+    } else {
+        long[i + 1..] == short[i..]
+    }
+}
 
 /// Longest line kept (bytes): a 401-beam `FLASER` line with 12-character
 /// values is about 5 KiB. Longer `FLASER` lines are errors, longer other
@@ -120,6 +211,9 @@ struct Lines<R> {
     terminated: bool,
     /// Set once the log turned out to be cut.
     cut: Option<Cut>,
+    /// Notes not yet taken, and how many did not fit.
+    notes: VecDeque<Note>,
+    notes_dropped: usize,
 }
 
 /// `true` for the read errors that mean "the data stop here" (a cut or
@@ -138,6 +232,41 @@ impl<R: BufRead> Lines<R> {
             overlong: false,
             terminated: false,
             cut: None,
+            notes: VecDeque::new(),
+            notes_dropped: 0,
+        }
+    }
+
+    fn note(&mut self, note: Note) {
+        if self.notes.len() < MAX_PENDING_NOTES {
+            self.notes.push_back(note);
+        } else {
+            self.notes_dropped += 1;
+        }
+    }
+
+    /// After reading line `self.number` into `buf`: drop a first line's
+    /// byte order mark, note a keyword one edit from `FLASER`.
+    fn look_at_line(&mut self) {
+        if self.number == 1 && self.buf.starts_with(&BOM) {
+            self.buf.drain(..BOM.len());
+            self.note(Note::ByteOrderMark);
+        }
+    }
+
+    /// Note the line in `buf` if its first word is one edit from `FLASER`.
+    fn note_near_flaser(&mut self) {
+        let Some(word) = self
+            .buf
+            .split(u8::is_ascii_whitespace)
+            .find(|w| !w.is_empty())
+        else {
+            return;
+        };
+        if near_flaser(word) {
+            let word = Excerpt(&String::from_utf8_lossy(word)).to_string();
+            let line = self.number;
+            self.note(Note::NearFlaser { line, word });
         }
     }
 
@@ -195,6 +324,7 @@ impl<R: BufRead> Lines<R> {
                 Err(e) => return Err(ReadError::Io(e)),
             }
             self.number += 1;
+            self.look_at_line();
             if is_flaser(&self.buf) {
                 break;
             }
@@ -207,6 +337,7 @@ impl<R: BufRead> Lines<R> {
                 });
                 return Ok(None);
             }
+            self.note_near_flaser();
         }
         let line = self.number;
         if self.overlong {
@@ -296,6 +427,16 @@ impl<R: BufRead> Reader<R> {
     /// Where and why the log is cut, once the scans have ended at a cut.
     pub fn cut(&self) -> Option<&Cut> {
         self.lines.cut.as_ref()
+    }
+
+    /// The oldest [`Note`] not yet taken (see the [module docs](self)).
+    pub fn next_note(&mut self) -> Option<Note> {
+        self.lines.notes.pop_front()
+    }
+
+    /// Notes that did not fit the [`MAX_PENDING_NOTES`] waiting.
+    pub fn notes_dropped(&self) -> usize {
+        self.lines.notes_dropped
     }
 
     /// The next scan into `frame` (no allocation): its index among the

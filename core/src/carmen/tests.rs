@@ -249,3 +249,81 @@ fn overlong_lines_are_bounded() {
         .unwrap_err();
     assert!(matches!(e, ReadError::LineTooLong { line: 1 }), "{e}");
 }
+
+#[test]
+fn long_tokens_are_quoted_by_their_start_and_length() {
+    assert_eq!(Excerpt("2.x").to_string(), "\"2.x\"");
+    let sixteen = "1234567890123456";
+    assert_eq!(Excerpt(sixteen).to_string(), format!("{sixteen:?}"));
+    let long = "7".repeat(5000);
+    assert_eq!(
+        Excerpt(&long).to_string(),
+        "\"7777777777777777…\" (5000 characters)"
+    );
+    // Cut at a character, not a byte.
+    let wide = "é".repeat(20);
+    assert_eq!(
+        Excerpt(&wide).to_string(),
+        format!("\"{}…\" (20 characters)", "é".repeat(16))
+    );
+    let mut r = vec!["1.00".to_string(); 181];
+    r[2] = long;
+    let err = read(&line(181, &r.join(" "))).unwrap_err().to_string();
+    assert!(err.contains("(5000 characters) for range 2"), "{err}");
+    assert!(err.len() < 120, "{err}");
+}
+
+#[test]
+fn keywords_one_edit_from_flaser() {
+    for near in [
+        "FLASEQ", "FLASR", "FFLASER", "LASER", "FLASERS", "XLASER", "FLAS3R",
+    ] {
+        assert!(near_flaser(near.as_bytes()), "{near}");
+    }
+    for far in [
+        "FLASER", "RLASER", "ODOM", "PARAM", "FLA", "FLASERXX", "flaser", "LASER3", "",
+    ] {
+        assert!(!near_flaser(far.as_bytes()), "{far}");
+    }
+}
+
+#[test]
+fn notes_name_the_bom_and_damaged_keywords() {
+    let r = vec!["2.50"; 181].join(" ");
+    let text = format!(
+        "\u{feff}{}ODOM 1 2 3\n{}{}",
+        line(181, &r),
+        line(181, &r).replace("FLASER", "FLASEQ"),
+        line(181, &r)
+    );
+    let mut reader = Reader::new(text.as_bytes(), Unit::Centimetre);
+    let scans: Vec<Scan> = reader.by_ref().collect::<Result<_, _>>().unwrap();
+    assert_eq!(
+        scans.iter().map(|s| (s.index, s.line)).collect::<Vec<_>>(),
+        [(0, 1), (1, 4)]
+    );
+    assert_eq!(reader.next_note(), Some(Note::ByteOrderMark));
+    let note = reader.next_note().unwrap();
+    assert_eq!(note.line(), 3);
+    assert!(
+        note.to_string().contains("\"FLASEQ\" is one edit"),
+        "{note}"
+    );
+    assert_eq!(reader.next_note(), None);
+    // A BOM on a later line is not read through (nor noted).
+    let later = format!("ODOM 1\n\u{feff}{}", line(181, &r));
+    let mut reader = Reader::new(later.as_bytes(), Unit::Centimetre);
+    assert_eq!(reader.by_ref().count(), 0);
+    assert_eq!(reader.next_note(), None);
+    // The notes waiting are bounded; the rest are counted.
+    let flood = line(181, &r)
+        .replace("FLASER", "FLASR")
+        .repeat(MAX_PENDING_NOTES + 5);
+    let mut reader = Reader::new(flood.as_bytes(), Unit::Centimetre);
+    assert_eq!(reader.by_ref().count(), 0);
+    assert_eq!(reader.notes_dropped(), 5);
+    assert_eq!(
+        core::iter::from_fn(|| reader.next_note()).count(),
+        MAX_PENDING_NOTES
+    );
+}

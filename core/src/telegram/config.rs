@@ -4,7 +4,7 @@
 //! | index | field |
 //! |---|---|
 //! | `[0..=1]` | blanking (u16 LE, raw sensor units) |
-//! | `[4]` | availability (bit 1 = real-time indices; keep it 0) |
+//! | `[4]` | availability (bit 1 = real-time indices, [`Config::real_time_indices`]) |
 //! | `[5]` | measuring mode (decides 13/14/15 range bits) |
 //! | `[6]` | units (0 cm, 1 mm) |
 //!
@@ -14,6 +14,8 @@
 use super::{le_u16, put_le_u16};
 use crate::units::Unit;
 
+/// Availability byte bit 1: real-time scan indices.
+pub const REAL_TIME_INDICES_BIT: u8 = 0x02;
 /// Bytes in a configuration block.
 pub const CONFIG_LEN: usize = 34;
 
@@ -64,6 +66,12 @@ impl Config {
     #[inline]
     pub const fn availability(&self) -> u8 {
         self.bytes[Self::AVAILABILITY]
+    }
+
+    /// Availability bit 1: the sensor sends a real-time scan index after
+    /// the values of every `B0` (and `B6`/`B7`/`BF`).
+    pub const fn real_time_indices(&self) -> bool {
+        self.availability() & REAL_TIME_INDICES_BIT != 0
     }
 
     /// Set the availability byte.

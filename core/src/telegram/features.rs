@@ -64,8 +64,12 @@ pub const LINE_RECORD_LEN: usize = 46;
 pub const CORNER_RECORD_LEN: usize = 27;
 /// Bytes of the summary's data.
 pub const SUMMARY_LEN: usize = 49;
-/// Bytes of the counters' data (12 × u32).
-pub const COUNTERS_LEN: usize = 64;
+/// Bytes of the counters' data (20 × u32).
+pub const COUNTERS_LEN: usize = 80;
+/// Bytes of the counters' data before the request and partial-scan
+/// counters were added (16 × u32), which [`Counters::decode`] still reads
+/// (those fields 0).
+pub const COUNTERS_LEN_V2: usize = 64;
 /// Bytes of the counters' data before the boot fields were added (12 ×
 /// u32), which [`Counters::decode`] still reads (boot fields 0).
 pub const COUNTERS_LEN_V1: usize = 48;
@@ -114,6 +118,22 @@ pub struct Counters {
     pub fault_pc: u32,
     /// Link register of that fault (0 if none).
     pub fault_lr: u32,
+    /// Requests from the host dropped unanswered (no `ACK`, no reply)
+    /// because the face's reply queue was full: a client that sends many
+    /// requests without waiting for their replies (each one it resends is
+    /// answered).
+    pub host_requests_dropped: u32,
+    /// Requests for the sensor (relayed) that came while another was in
+    /// flight: answered at once by the face (`92`, or its own `BA` for
+    /// `3A`).
+    pub relays_refused: u32,
+    /// Relayed requests the sensor did not answer in time (the client got
+    /// its `ACK` and no reply).
+    pub relays_failed: u32,
+    /// Partial scans (`20 2A`) that could not be joined into a whole scan
+    /// for the pipeline (one of its partial scans missing or out of order);
+    /// the client still got each one.
+    pub partial_scans_unassembled: u32,
 }
 
 impl Counters {
@@ -135,9 +155,13 @@ impl Counters {
         fault_cause: 0,
         fault_pc: 0,
         fault_lr: 0,
+        host_requests_dropped: 0,
+        relays_refused: 0,
+        relays_failed: 0,
+        partial_scans_unassembled: 0,
     };
 
-    fn fields(&self) -> [u32; 16] {
+    fn fields(&self) -> [u32; 20] {
         [
             self.scans_in,
             self.feature_scans_out,
@@ -155,10 +179,14 @@ impl Counters {
             self.fault_cause,
             self.fault_pc,
             self.fault_lr,
+            self.host_requests_dropped,
+            self.relays_refused,
+            self.relays_failed,
+            self.partial_scans_unassembled,
         ]
     }
 
-    /// Write the `D5` data (16 × u32 LE, in field order) into `out`.
+    /// Write the `D5` data (20 × u32 LE, in field order) into `out`.
     pub fn encode(&self, out: &mut [u8]) {
         let mut w = Writer::new(out);
         for v in self.fields() {
@@ -166,15 +194,18 @@ impl Counters {
         }
     }
 
-    /// Read the `D5` data; `None` if it is neither [`COUNTERS_LEN`] nor
-    /// [`COUNTERS_LEN_V1`] bytes (then the boot fields read 0).
+    /// Read the `D5` data; `None` if it is none of [`COUNTERS_LEN`],
+    /// [`COUNTERS_LEN_V2`] and [`COUNTERS_LEN_V1`] bytes (the fields a
+    /// shorter record lacks read 0).
     pub fn decode(data: &[u8]) -> Option<Counters> {
-        if data.len() != COUNTERS_LEN && data.len() != COUNTERS_LEN_V1 {
+        if ![COUNTERS_LEN, COUNTERS_LEN_V2, COUNTERS_LEN_V1].contains(&data.len()) {
             return None;
         }
         let mut r = Reader::new(data);
-        let boot = data.len() == COUNTERS_LEN;
+        let boot = data.len() >= COUNTERS_LEN_V2;
         let boot_field = |r: &mut Reader<'_>| if boot { r.u32() } else { Some(0) };
+        let full = data.len() == COUNTERS_LEN;
+        let new_field = |r: &mut Reader<'_>| if full { r.u32() } else { Some(0) };
         Some(Counters {
             scans_in: r.u32()?,
             feature_scans_out: r.u32()?,
@@ -192,6 +223,10 @@ impl Counters {
             fault_cause: boot_field(&mut r)?,
             fault_pc: boot_field(&mut r)?,
             fault_lr: boot_field(&mut r)?,
+            host_requests_dropped: new_field(&mut r)?,
+            relays_refused: new_field(&mut r)?,
+            relays_failed: new_field(&mut r)?,
+            partial_scans_unassembled: new_field(&mut r)?,
         })
     }
 
@@ -990,6 +1025,10 @@ mod tests {
             fault_cause: 14,
             fault_pc: 15,
             fault_lr: 16,
+            host_requests_dropped: 17,
+            relays_refused: 18,
+            relays_failed: 19,
+            partial_scans_unassembled: 20,
         };
         let mut buf = [0u8; 96];
         let n = c.emit(0, &mut buf).unwrap();

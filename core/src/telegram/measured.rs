@@ -2,8 +2,13 @@
 //! to a [`Frame`] in metres.
 //!
 //! ```text
-//! 02 80 | LEN | B0 | W (u16 LE) | n × value (u16 LE) | status | CRC
+//! 02 80 | LEN | B0 | W (u16 LE) | n × value (u16 LE) | [index] | status | CRC
 //! ```
+//!
+//! `index`: one byte, the real-time scan index (mirror scans modulo 256),
+//! present only when the sensor's configuration asks for it (availability,
+//! configuration byte `[4]` bit 1, [`crate::telegram::Config::real_time_indices`]);
+//! the data length tells: `2 + 2n` without it, `2 + 2n + 1` with it.
 //!
 //! Count word `W`: bits 0–9 number of values; bits 10–13 scan flags (11–12
 //! partial-scan offset in 0.25°, 13 partial scan), kept as they came; bits
@@ -36,6 +41,25 @@ pub const MAX_VALUES: usize = 401;
 const COUNT_MASK: u16 = 0x03FF;
 /// Count-word bits 10–13: scan flags (partial scan and its offset).
 const SCAN_FLAGS_MASK: u16 = 0x3C00;
+/// Count-word bit 13: a partial scan (mode `20 2A`).
+pub const PARTIAL_SCAN_BIT: u16 = 0x2000;
+/// Count-word bits 11–12: the partial scan's offset in 0.25° steps.
+const PARTIAL_OFFSET_SHIFT: u16 = 11;
+
+/// The count-word scan flags of a partial scan whose first value lies
+/// `offset` × 0.25° past the field's start (`offset` 0…3).
+pub const fn partial_scan_flags(offset: u8) -> u16 {
+    PARTIAL_SCAN_BIT | (((offset & 3) as u16) << PARTIAL_OFFSET_SHIFT)
+}
+
+/// The partial-scan offset (0…3, in 0.25°) of count-word scan flags that
+/// mark a partial scan; `None` for a whole scan.
+pub const fn partial_offset(scan_flags: u16) -> Option<u8> {
+    if scan_flags & PARTIAL_SCAN_BIT == 0 {
+        return None;
+    }
+    Some(((scan_flags >> PARTIAL_OFFSET_SHIFT) & 3) as u8)
+}
 /// Count-word bits 14–15: units.
 const UNITS_MASK: u16 = 0xC000;
 
@@ -145,7 +169,8 @@ pub enum MeasuredError {
         /// The number of values.
         count: usize,
     },
-    /// The data length does not match the count word (`2 + 2 × count`).
+    /// The data length does not match the count word (`2 + 2 × count`, or
+    /// one more with a real-time index).
     LengthMismatch {
         /// Values announced by the count word.
         count: usize,
@@ -201,7 +226,8 @@ fn check_data(data: &[u8]) -> Result<(u16, usize), MeasuredError> {
     if count > MAX_VALUES {
         return Err(MeasuredError::TooManyValues { count });
     }
-    if data.len() != 2 + 2 * count {
+    // One byte more: the real-time index.
+    if data.len() != 2 + 2 * count && data.len() != 3 + 2 * count {
         return Err(MeasuredError::LengthMismatch {
             count,
             data_len: data.len(),
@@ -240,6 +266,18 @@ fn words_into_frame(
         }
     }
     Ok(())
+}
+
+/// Fill `frame` in place from a whole scan's value words (one of the
+/// variants' counts) in `units` with `bits` range bits, e.g. a scan joined
+/// from its partial scans; on error it is left unchanged.
+pub fn frame_from_words(
+    words: &[u16],
+    units: Unit,
+    bits: RangeBits,
+    frame: &mut Frame,
+) -> Result<(), MeasuredError> {
+    words_into_frame(words.len(), words.iter().copied(), units, bits, frame)
 }
 
 /// The `B0` data (count word + values) read in place.
@@ -299,6 +337,20 @@ impl<'a> MeasuredView<'a> {
         self.count_word() & SCAN_FLAGS_MASK
     }
 
+    /// The real-time scan index after the values, if the telegram has one.
+    #[inline]
+    pub fn real_time_index(&self) -> Option<u8> {
+        let at = 2 + 2 * self.count();
+        self.data.get(at).copied()
+    }
+
+    /// The partial-scan offset (0…3, in 0.25°) if this is a partial scan
+    /// (mode `20 2A`), `None` for a whole scan.
+    #[inline]
+    pub fn partial_offset(&self) -> Option<u8> {
+        partial_offset(self.scan_flags())
+    }
+
     /// Value word `j` (range + flags), if `j < count`.
     #[inline]
     pub fn word(&self, j: usize) -> Option<u16> {
@@ -309,10 +361,12 @@ impl<'a> MeasuredView<'a> {
         Some(le_u16(self.data, at))
     }
 
-    /// All value words in order.
+    /// All value words in order. (Inlined: its chunk size stays a visible
+    /// constant, so a caller's `zip` has no division by zero to prove.)
+    #[inline(always)]
     pub fn words(&self) -> impl Iterator<Item = u16> + 'a {
         self.data
-            .get(2..)
+            .get(2..2 + 2 * self.count())
             .unwrap_or_default()
             .chunks_exact(2)
             .map(|c| le_u16(c, 0))
@@ -336,6 +390,7 @@ impl<'a> MeasuredView<'a> {
         }
         v.count = self.count().min(MAX_VALUES);
         v.scan_flags = self.scan_flags();
+        v.real_time_index = self.real_time_index();
         v
     }
 }
@@ -357,6 +412,7 @@ pub struct MeasuredValues {
     count: usize,
     units: Unit,
     scan_flags: u16,
+    real_time_index: Option<u8>,
     status: u8,
 }
 
@@ -368,6 +424,7 @@ impl MeasuredValues {
             count: 0,
             units,
             scan_flags: 0,
+            real_time_index: None,
             status,
         }
     }
@@ -485,6 +542,18 @@ impl MeasuredValues {
         self.scan_flags = flags & SCAN_FLAGS_MASK;
     }
 
+    /// The real-time scan index sent after the values, if any.
+    #[inline]
+    pub fn real_time_index(&self) -> Option<u8> {
+        self.real_time_index
+    }
+
+    /// Send (`Some`) or leave out (`None`) the real-time scan index.
+    #[inline]
+    pub fn set_real_time_index(&mut self, index: Option<u8>) {
+        self.real_time_index = index;
+    }
+
     /// The count word `W`: count | scan flags | units.
     pub fn count_word(&self) -> u16 {
         count_word(self.count, self.units) | (self.scan_flags & SCAN_FLAGS_MASK)
@@ -500,10 +569,11 @@ impl MeasuredValues {
         words_to_frame(self.count, self.values().iter().copied(), self.units, bits)
     }
 
-    /// Data bytes of the telegram: count word + 2 per value.
+    /// Data bytes of the telegram: count word + 2 per value (+ 1 for the
+    /// real-time index).
     #[inline]
     pub fn data_len(&self) -> usize {
-        2 + 2 * self.count
+        2 + 2 * self.count + usize::from(self.real_time_index.is_some())
     }
 
     /// Bytes of the complete telegram (732 for 361 values).
@@ -531,6 +601,10 @@ impl MeasuredValues {
         let slots = data.get_mut(2..).unwrap_or_default().chunks_exact_mut(2);
         for (slot, w) in slots.zip(self.values()) {
             put_le_u16(slot, 0, *w);
+        }
+        if let (Some(index), Some(slot)) = (self.real_time_index, data.get_mut(2 + 2 * self.count))
+        {
+            *slot = index;
         }
     }
 }
@@ -685,5 +759,56 @@ mod tests {
         f.set_metres(1, 8.1824);
         let v = MeasuredValues::from_frame(&f, Unit::Millimetre, RangeBits::Bits13, 0);
         assert_eq!(&v.values()[..3], &[8183, 8182, 8191]);
+    }
+
+    /// Bytes of a sensor telegram written out in hex.
+    fn hex(s: &str) -> std::vec::Vec<u8> {
+        s.split_whitespace()
+            .map(|b| u8::from_str_radix(b, 16).unwrap())
+            .collect()
+    }
+
+    #[test]
+    fn b0_with_a_real_time_index_is_byte_exact() {
+        // 3 values (100, 200, 300 cm), the index 0x2A, status 0x10.
+        let want = hex("02 80 0B 00 B0 03 00 64 00 C8 00 2C 01 2A 10 2B 73");
+        let mut v = MeasuredValues::from_raw(&[100, 200, 300], Unit::Centimetre, 0x10).unwrap();
+        v.set_real_time_index(Some(0x2A));
+        let mut buf = [0u8; 32];
+        let n = v.emit(0, &mut buf).unwrap();
+        assert_eq!(&buf[..n], &want[..]);
+        let t = Telegram::new_checked(&want[..], Direction::SensorToHost).unwrap();
+        let view = MeasuredView::parse(&t).unwrap();
+        assert_eq!(view.real_time_index(), Some(0x2A));
+        assert_eq!(view.words().collect::<std::vec::Vec<_>>(), [100, 200, 300]);
+        assert_eq!(view.partial_offset(), None);
+        assert_eq!(MeasuredValues::parse(&t), Ok(v));
+        // Without the index: one byte less, none read.
+        let plain = hex("02 80 0A 00 B0 03 00 64 00 C8 00 2C 01 10");
+        let mut plain = plain.clone();
+        let crc = crate::telegram::crc16(&plain);
+        plain.extend_from_slice(&crc.to_le_bytes());
+        let t = Telegram::new_checked(&plain[..], Direction::SensorToHost).unwrap();
+        assert_eq!(MeasuredView::parse(&t).unwrap().real_time_index(), None);
+    }
+
+    #[test]
+    fn a_partial_scan_with_an_index_is_byte_exact() {
+        // 2 values (1000, 2000 mm) of the partial scan at 2 × 0.25°:
+        // W = 0x7002 (bit 14 mm, bit 13 partial, bits 11–12 = 2, count 2).
+        let want = hex("02 80 09 00 B0 02 70 E8 03 D0 07 07 10 7C EE");
+        let mut v = MeasuredValues::from_raw(&[1000, 2000], Unit::Millimetre, 0x10).unwrap();
+        v.set_scan_flags(partial_scan_flags(2));
+        v.set_real_time_index(Some(7));
+        let mut buf = [0u8; 32];
+        let n = v.emit(0, &mut buf).unwrap();
+        assert_eq!(&buf[..n], &want[..]);
+        let t = Telegram::new_checked(&want[..], Direction::SensorToHost).unwrap();
+        let view = MeasuredView::parse(&t).unwrap();
+        assert_eq!(view.partial_offset(), Some(2));
+        assert_eq!(view.real_time_index(), Some(7));
+        assert_eq!(view.units(), Unit::Millimetre);
+        assert_eq!(partial_offset(partial_scan_flags(3)), Some(3));
+        assert_eq!(partial_offset(0x1800), None, "offset bits without bit 13");
     }
 }

@@ -114,7 +114,10 @@ pub mod status;
 pub use config::Config;
 pub use crc::{crc16, Crc};
 pub use framer::{Event, Feed, Framer, FramerStats, Handshake};
-pub use measured::{MeasuredError, MeasuredValues, MeasuredView, RangeBits, MAX_VALUES};
+pub use measured::{
+    partial_offset, partial_scan_flags, MeasuredError, MeasuredValues, MeasuredView, RangeBits,
+    MAX_VALUES, PARTIAL_SCAN_BIT,
+};
 pub use packet::{
     buffer_len, emit_telegram, emit_telegram_with, EmitError, Telegram, TelegramError,
 };

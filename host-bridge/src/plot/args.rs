@@ -83,6 +83,9 @@ pub struct PlotArgs {
     /// Range unit of the log's error codes: auto = mm if at least 1/4 of the values show 3 decimals, cm if none (warns when in between)
     #[arg(long, value_enum, default_value_t = UnitArg::Auto, requires = "log")]
     pub unit: UnitArg,
+    /// The topic of a ROS 2 bag.
+    #[command(flatten)]
+    pub topic: crate::options::TopicArg,
     /// Pipeline parameters, as for `extract`.
     #[command(flatten)]
     pub params: ParamArgs,

@@ -123,10 +123,19 @@ fn selected_passes(args: &PlotArgs, iterations: u16) -> Result<Vec<u16>> {
     Ok(passes)
 }
 
+/// Defaults per data of a log: parameters and a warning line.
+type LogDefaults = Option<(lms_core::Params, Option<String>)>;
+
 /// Frame `k` of the log or capture at `path` (streamed: reading stops at
-/// frame `k`), and a description for titles.
-fn log_frame(path: &Path, args: &PlotArgs, k: usize) -> Result<(String, InputFrame)> {
-    let mut file = crate::input::open(path, args.unit)?;
+/// frame `k`; the input is read once), a description for titles, and the
+/// log's defaults per data ([`defaults::for_file`]).
+fn log_frame(path: &Path, args: &PlotArgs, k: usize) -> Result<(String, InputFrame, LogDefaults)> {
+    let options = crate::input::ReadOptions {
+        unit: args.unit,
+        keep_damaged: false,
+    };
+    let mut file = crate::input::open_topic(path, options, args.topic.name())?;
+    let found = defaults::for_file(&file, &args.params)?;
     let name = path.file_name().map_or_else(
         || path.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
@@ -134,6 +143,7 @@ fn log_frame(path: &Path, args: &PlotArgs, k: usize) -> Result<(String, InputFra
     let source = match file.kind() {
         crate::input::Kind::Log { unit, .. } => format!("{name} ({unit} ranges)"),
         crate::input::Kind::Capture => format!("{name} (capture)"),
+        crate::input::Kind::Bag { unit } => format!("{name} (ROS 2 bag, {unit} ranges)"),
     };
     for scan in file.by_ref() {
         let scan = scan?;
@@ -143,7 +153,7 @@ fn log_frame(path: &Path, args: &PlotArgs, k: usize) -> Result<(String, InputFra
                 frame: scan.frame,
                 pose: scan.pose,
             };
-            return Ok((source, input));
+            return Ok((source, input, found));
         }
     }
     file.warn_if_cut();
@@ -151,6 +161,7 @@ fn log_frame(path: &Path, args: &PlotArgs, k: usize) -> Result<(String, InputFra
     let (what, frames) = match file.kind() {
         crate::input::Kind::Log { .. } => ("log has", "FLASER frames"),
         crate::input::Kind::Capture => ("capture has", "scans"),
+        crate::input::Kind::Bag { .. } => ("bag's topic has", "scans"),
     };
     bail!(
         "{}: --frame {k} is out of range: the {what} {total} {frames} (0..{total})",
@@ -193,13 +204,13 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     }
     let outs = outputs(&args.output, args.format, args.figure, args.frame)?;
     let k = args.frame;
-    let (source, input) = match &args.log {
+    let (source, input, found) = match &args.log {
         Some(path) => log_frame(path, args, k)?,
-        None => scene_frame(args, k)?,
+        None => scene_frame(args, k).map(|(s, i)| (s, i, None))?,
     };
     // Defaults per data for a CARMEN log (σ, max_range; flags override).
     let params = match &args.log {
-        Some(path) => match defaults::for_log(path, args.unit, &args.params)? {
+        Some(_) => match found {
             Some((params, warning)) => {
                 warning
                     .into_iter()

@@ -11,6 +11,9 @@
 //! * [`PtyPort`] — the other end: a pseudo-terminal's master as an
 //!   `embedded-io` 0.7 port, for the core's `CoProcessor` running in a
 //!   thread (`host-bridge verify --host`).
+//! * [`Arrivals`] — the co-processor's sensor port on a computer, each
+//!   byte with its estimated arrival time (the co-processor on a loaded
+//!   machine judges scans by when they arrived, not when its loop ran).
 //! * [`line_time`] — how long bytes take on the line (8N1).
 //!
 //! `host-bridge simulate` plays a sensor on a pty's master with its own
@@ -22,9 +25,11 @@ use std::time::Duration;
 
 use lms_core::telegram::Baud;
 
+mod arrivals;
 mod port;
 mod pty_port;
 
+pub use arrivals::{Arrivals, STEP};
 pub use port::{OpenError, SerialLink};
 pub use pty_port::PtyPort;
 

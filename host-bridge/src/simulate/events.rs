@@ -43,6 +43,7 @@ fn describe(h: Handled) -> String {
             }
         ),
         Handled::Reset => "10: reset".into(),
+        Handled::PartialScans => "20 2A: continuous output of partial scans".into(),
         Handled::Unknown { command, data_len } => {
             format!("{command:02X} with {data_len} data bytes: unknown, answered 92")
         }

@@ -8,6 +8,7 @@
 //!                      [--scans N] [--quit-after SECONDS] [--restart-delay SECONDS]
 //!                      [--bit-error-rate P] [--drop-rate P] [--fault-seed N]
 //!                      [--variant FOV/RES] [--units cm|mm] [--range-mode 8|16|32]
+//!                      [--foxglove [ADDR]]
 //! ```
 //!
 //! `--variant`, `--units` and `--range-mode` are the sensor's stored
@@ -79,6 +80,14 @@
 //! link: the sensor NAKs damaged requests, the client has to skip damaged
 //! telegrams. The summary counts the bits flipped and bytes dropped.
 //!
+//! # Live view
+//!
+//! `--foxglove [ADDR]` serves the scans sent, with the features the std
+//! pipeline computes for them (default parameters), to Foxglove
+//! ([`crate::live_view`]): while a Foxglove client is subscribed, the bytes
+//! sent are framed, and each `B0` goes to a thread that runs the pipeline
+//! and publishes; the sensor's loop never waits for it.
+//!
 //! # Exit
 //!
 //! SIGINT, SIGTERM, `--quit-after SECONDS` or `--scans N` end the run
@@ -115,8 +124,10 @@ use anyhow::{ensure, Result};
 use clap::builder::TypedValueParser as _;
 use clap::Args;
 use lms_core::device::emulator::{Emulator, Settings};
-use lms_core::telegram::Baud;
+use lms_core::telegram::{Baud, RangeBits};
+use lms_core::ValidParams;
 
+use crate::live_view::StreamView;
 use crate::pty::Pty;
 use crate::synthetic::SceneArgs;
 use line::PtyLine;
@@ -147,6 +158,9 @@ pub struct SimulateArgs {
     /// synthetic scene, looping; resampled to the variant asked for
     #[arg(long = "replay", value_name = "LOG")]
     pub log: Option<PathBuf>,
+    /// The topic of a ROS 2 bag replayed.
+    #[command(flatten)]
+    pub topic: crate::options::TopicArg,
     /// Exit after this many scans (B0 telegrams) have been sent
     #[arg(long, value_name = "N")]
     pub scans: Option<u64>,
@@ -183,6 +197,9 @@ pub struct SimulateArgs {
           value_parser = clap::builder::PossibleValuesParser::new(["8", "16", "32"])
               .map(|s: String| s.parse::<u8>().unwrap_or(8)))]
     pub range_mode: u8,
+    /// `--foxglove`: the scans sent, with their features, live in Foxglove.
+    #[command(flatten)]
+    pub live: crate::live_view::FoxgloveArgs,
 }
 
 impl SimulateArgs {
@@ -289,11 +306,16 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let settings = args.settings();
     let mut lms = Emulator::new(source, settings, micros_since(clock));
     let mut line = PtyLine::new(pty, args, clock);
-    let reason = serve(args, &mut lms, &mut line, &stop, clock)?;
+    // The features of the scans sent, as `extract` computes them by default.
+    let mut live = StreamView::from_args(&args.live, "host-bridge simulate", ValidParams::DEFAULT)?;
+    let reason = serve(args, &mut lms, &mut line, &stop, clock, &mut live)?;
     if reason == "--scans" {
         linger(&mut line, &stop)?;
     }
     eprintln!("{}", summary(reason, clock, &lms, &line));
+    if let Some(live) = live {
+        eprintln!("host-bridge simulate: {}", live.summary());
+    }
     drop(link);
     Ok(())
 }
@@ -305,6 +327,7 @@ fn serve(
     line: &mut PtyLine,
     stop: &AtomicBool,
     clock: Instant,
+    live: &mut Option<StreamView>,
 ) -> Result<&'static str> {
     let quit_after = args.quit_after.map(Duration::from_secs_f64);
     let mut out = [0u8; 4096];
@@ -331,6 +354,10 @@ fn serve(
                 break;
             }
             line.send_to_client(&out[..n], rate)?;
+            if let Some(live) = live.as_mut() {
+                let bits = RangeBits::from_measuring_mode(lms.config().measuring_mode());
+                live.sensor_bytes(&out[..n], bits);
+            }
         }
         events::handle_events(lms, line, args.restart_delay);
     }

@@ -20,6 +20,8 @@ use crate::warning::warn;
 /// the start at its end.
 pub struct ReplaySource {
     path: PathBuf,
+    /// The topic of a ROS 2 bag (`None`: its only LaserScan topic).
+    topic: Option<String>,
     file: Box<ScanFile>,
     /// The scan sent last (sent again if the file cannot be read again).
     current: Box<Frame>,
@@ -46,6 +48,15 @@ impl std::fmt::Debug for ReplaySource {
     }
 }
 
+/// The log, capture or bag at `path`, its unit decided per file.
+fn open_input(path: &Path, topic: Option<&str>) -> Result<ScanFile> {
+    let options = input::ReadOptions {
+        unit: UnitArg::Auto,
+        keep_damaged: false,
+    };
+    input::open_topic(path, options, topic)
+}
+
 impl ReplaySource {
     /// Read a capture recorded by `host-bridge scan` (recognised by its
     /// magic) or a CARMEN log (error codes per file as `carmen` decides),
@@ -53,7 +64,13 @@ impl ReplaySource {
     /// first one's beam count (a cut file keeps its complete scans), then
     /// the scans are streamed.
     pub fn open(path: &Path) -> Result<Self> {
-        let mut file = input::open(path, UnitArg::Auto)?;
+        ReplaySource::open_topic(path, None)
+    }
+
+    /// [`ReplaySource::open`] reading `topic` of a ROS 2 bag (`None`: the
+    /// bag's only LaserScan topic).
+    pub fn open_topic(path: &Path, topic: Option<&str>) -> Result<Self> {
+        let mut file = open_input(path, topic)?;
         let capture = *file.kind() == Kind::Capture;
         let first = file
             .next()
@@ -82,7 +99,8 @@ impl ReplaySource {
         .with_context(|| format!("{}: {beams} beams per scan", path.display()))?;
         Ok(ReplaySource {
             path: path.to_path_buf(),
-            file: Box::new(input::open(path, UnitArg::Auto)?),
+            topic: topic.map(str::to_owned),
+            file: Box::new(open_input(path, topic)?),
             current: Box::new(first.frame),
             scans,
             variant,
@@ -94,7 +112,7 @@ impl ReplaySource {
 
     /// Start again from the first scan.
     fn rewind(&mut self) {
-        match input::open(&self.path, UnitArg::Auto) {
+        match open_input(&self.path, self.topic.as_deref()) {
             Ok(f) => *self.file = f,
             Err(e) => warn(&format!("replay: {e:#}; the last scan is sent again")),
         }

@@ -19,7 +19,10 @@ impl Source {
     /// The source the options ask for.
     pub fn open(args: &SimulateArgs) -> Result<Self> {
         match &args.log {
-            Some(path) => Ok(Source::Replay(ReplaySource::open(path)?)),
+            Some(path) => Ok(Source::Replay(ReplaySource::open_topic(
+                path,
+                args.topic.name(),
+            )?)),
             None => {
                 let bits =
                     lms_core::telegram::RangeBits::from_measuring_mode(args.measuring_mode());

@@ -63,6 +63,9 @@ pub struct VerifyArgs {
     /// `scan` instead of the synthetic scene
     #[arg(long = "replay", value_name = "LOG")]
     pub log: Option<PathBuf>,
+    /// The topic of a ROS 2 bag replayed.
+    #[command(flatten)]
+    pub topic: crate::options::TopicArg,
     /// Frames of the log to play: A..B (B exclusive), A..=B, A.., ..B or A
     #[arg(long, value_name = "A..B", requires = "log")]
     pub frames: Option<FrameRange>,
@@ -81,8 +84,10 @@ pub struct VerifyArgs {
     /// with features (0 = never) [default: 1 with --qemu, whose UARTs take
     /// a third of the line rate (more would queue in the firmware and reach
     /// its host-line budget back to back, which drops what does not fit one
-    /// scan period; five scans fit its 4 KiB sensor queue); else 0, as a
-    /// real sensor never waits]
+    /// scan period); 1 with --host, whose thread a loaded computer holds off
+    /// the CPU (the sensor would run free meanwhile, faster than a scan
+    /// with its features fits the host line); 0 with --ports, as a real
+    /// sensor never waits]
     #[arg(long, value_name = "N")]
     pub max_in_flight: Option<usize>,
     /// Switch the simulated LMS off and on once, after this many scans of the
@@ -104,6 +109,11 @@ pub struct VerifyArgs {
     /// Log the phases of the run and the sensor-side requests on stderr
     #[arg(long, short)]
     pub verbose: bool,
+    /// Testing only: the sensor streams at its own pace, held neither for
+    /// the host line nor for scans in flight (so that a host line slower
+    /// than the sensor's stream makes the co-processor drop scans)
+    #[arg(long, hide = true)]
+    pub sensor_runs_free: bool,
     /// Testing only: recompute with this tau instead of the echoed one (so
     /// that the check must fail)
     #[arg(long, hide = true, value_name = "T", allow_negative_numbers = true)]

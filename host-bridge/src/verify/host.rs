@@ -14,27 +14,31 @@ use lms_core::{Params, ValidParams};
 use super::dut::{Dut, Lines};
 use super::TICK;
 use crate::pty::Pty;
-use crate::serial::{PtyPort, SerialLink};
+use crate::serial::{Arrivals, PtyPort, SerialLink};
 
-/// Run a [`CoProcessor`] on two ports until `stop`: poll, then wait up to
-/// 1 ms for sensor bytes. Returns its counters.
+/// Run a [`CoProcessor`] on two ports until `stop`: poll (the sensor's
+/// bytes at their arrival times, [`Arrivals`]), then wait up to 1 ms for
+/// sensor bytes. Returns its counters.
 pub fn run_coprocessor(
     params: ValidParams,
-    mut sensor: PtyPort,
+    sensor: PtyPort,
     mut host: PtyPort,
     stop: &AtomicBool,
 ) -> Result<Counters, String> {
     let clock = Instant::now();
     let now_us = || u64::try_from(clock.elapsed().as_micros()).unwrap_or(u64::MAX);
     let mut cop = Box::new(CoProcessor::new(params, SensorSetup::default()));
+    let mut sensor = Arrivals::new(sensor);
     cop.start(now_us());
     while !stop.load(Ordering::Relaxed) {
-        cop.poll(&mut sensor, &mut host, now_us())
+        sensor
+            .poll(&mut cop, &mut host, now_us)
             .map_err(|e| match e {
                 PollError::Sensor(e) => format!("co-processor thread: sensor port: {e}"),
                 PollError::Host(e) => format!("co-processor thread: host port: {e}"),
             })?;
         sensor
+            .port_mut()
             .wait_readable(TICK)
             .map_err(|e| format!("co-processor thread: {e}"))?;
     }

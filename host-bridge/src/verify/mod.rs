@@ -42,8 +42,19 @@
 //!   not back (default with `--qemu`: as many 732-byte `B0`s as fit the
 //!   firmware's 1023-byte sensor receive queue, 1; QEMU moves only ~10 KB/s
 //!   into a UART, a third of the 500 kBd line rate, so all of them may be
-//!   waiting in that queue; off otherwise);
-//! * after the last scan of the selection has gone out, or at `--timeout`.
+//!   waiting in that queue; with `--host` 1 too: a loaded computer holds
+//!   the co-processor's thread off the CPU for up to a third of a second,
+//!   nothing comes back meanwhile, and a sensor running free would outrun
+//!   the host line, which takes 27.2 ms on average for a CSAIL scan with
+//!   its features at 500 kBd, more than the 26.7 ms scan period; off with
+//!   `--ports`);
+//! * while the host line is still busy, at its rate, with what came back
+//!   (so that the co-processor's host-line budget passes every scan on);
+//! * after the last scan of the selection has gone out, or at `--timeout`;
+//! * while verify's own loop is held off the CPU: the clock advances at
+//!   most 5 ms from one pass of the loop to the next, so that a stalled
+//!   loop does not find several scans due at once and send them back to
+//!   back (no LMS does).
 //!
 //! The LMS's first mirror tick falls at the very start of its stream, so
 //! one scan is drawn before the clock can be held (a warm-up scan); it
@@ -74,8 +85,11 @@
 //!
 //! and the run ends with `N/N scans bit-identical`, the scans lost (sent by
 //! the sensor side, never back with features, found by counting; the
-//! co-processor's own `scans_dropped` must agree), and the
-//! co-processor's counters from the final `55`. The exit status is 1 on any
+//! co-processor's drop counters, `scans_dropped`, `host_scans_dropped`,
+//! `scans_rejected` and `scans_other_setting`, must add up to them, and
+//! every message names the counters that counted them as the counters line
+//! does, e.g. `host_scans_dropped=3`), and the co-processor's counters
+//! from the final `55`. The exit status is 1 on any
 //! mismatch, on a restart of the sensor's bring-up by the co-processor
 //! while the selection plays, or on any lost scan (not back although the host line went quiet for
 //! 3 s), when fewer than `--scans` scans were checked before `--timeout`
@@ -87,7 +101,9 @@
 //! * `--host` (default): the core's [`CoProcessor`](lms_core::device::coprocessor::CoProcessor) runs natively in a
 //!   thread on the masters of two pseudo-terminals ([`crate::pty`], behind
 //!   [`PtyPort`](crate::serial::PtyPort), an `embedded-io` 0.7 port); verify opens the two slave
-//!   devices with the `serialport` crate, exactly as in `--ports`.
+//!   devices with the `serialport` crate, exactly as in `--ports`. The
+//!   sensor's bytes reach the co-processor with their arrival times
+//!   ([`Arrivals`](crate::serial::Arrivals)), as in `host-bridge coprocessor`.
 //! * `--qemu [ELF]`: the firmware under `qemu-system-arm -M netduinoplus2`
 //!   (extra QEMU arguments from the `QEMU_EXTRA` environment variable)
 //!   with its three serial ports on TCP sockets on 127.0.0.1 (free ports

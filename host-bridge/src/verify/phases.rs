@@ -69,6 +69,10 @@ impl Session {
         self.play(deadline)?;
         let missing = self.await_rest(deadline)?;
         let streaming = streaming.elapsed();
+        self.log(format_args!(
+            "the sensor's clock left out {:.1} ms while verify's loop was held off the CPU",
+            self.clock.away().as_secs_f64() * 1000.0
+        ));
         self.note_unfinished();
         let closing = self.close();
         Ok(self.outcome(missing, closing, streaming))

@@ -48,17 +48,42 @@ pub(super) struct Outcome {
 }
 
 impl Outcome {
-    /// Every scan the sensor side sent and never got back with features.
+    /// Every scan the sensor side sent and never got back with features
+    /// (but the warm-up scans dropped by the budget before the client's
+    /// stream was on).
     pub(super) fn all_lost(&self) -> usize {
         self.lost + self.other_lost
     }
 
-    /// The co-processor's `scans_dropped` disagrees with verify's own count
-    /// of lost scans (only when both are known: no scan still late).
-    fn dropped_miscounted(&self) -> Option<u32> {
+    /// Every scan the sensor side sent that did not come back, the warm-up
+    /// scans the budget dropped included (not those written off to an MCU
+    /// reset): what the co-processor's drop counters must add up to.
+    fn not_back(&self) -> usize {
+        self.all_lost() + self.warmup_dropped
+    }
+
+    /// The co-processor's drop counters that are not 0, and the warm-up
+    /// scans among them (as [`not_back`](Self::not_back) counts them).
+    fn counted(&self) -> String {
+        let Some(c) = &self.counters else {
+            return "nothing (no counters)".into();
+        };
+        match self.warmup_dropped {
+            0 => counted_drops(c),
+            n => format!(
+                "{}, {n} of them warm-up scans dropped before the client's stream was on",
+                counted_drops(c)
+            ),
+        }
+    }
+
+    /// The co-processor's drop counters ([`drop_counters`]) do not add up
+    /// to verify's own count of the scans not back (only when both are
+    /// known: no scan still late): what they say.
+    fn dropped_miscounted(&self) -> Option<String> {
         let c = self.counters.as_ref()?;
-        let counted = usize::try_from(c.scans_dropped).ok()?;
-        (self.late == 0 && counted != self.all_lost()).then_some(c.scans_dropped)
+        let counted: u64 = drop_counters(c).iter().map(|&(_, n)| u64::from(n)).sum();
+        (self.late == 0 && counted != self.not_back() as u64).then(|| counted_drops(c))
     }
 
     pub(super) fn ok(&self) -> bool {
@@ -103,18 +128,26 @@ impl Outcome {
         if self.tally.problems > 0 {
             why.push(format!("{} mismatches", self.tally.problems));
         }
+        let miscounted = self.dropped_miscounted();
         if self.all_lost() > 0 {
+            let counted = match (&self.counters, &miscounted) {
+                (Some(_), None) => format!(", as the co-processor counted ({})", self.counted()),
+                _ => String::new(),
+            };
             why.push(format!(
                 "{} scans lost (sent by the sensor side, not back although the host line \
-                 was quiet for {} s)",
+                 was quiet for {} s){counted}",
                 self.all_lost(),
                 QUIET.as_secs()
             ));
         }
-        if let Some(counted) = self.dropped_miscounted() {
+        if let Some(counted) = miscounted {
             why.push(format!(
-                "the co-processor counted scans_dropped={counted}, verify {} lost",
-                self.all_lost()
+                "the co-processor's drop counters ({counted}) do not add up to the {} scans \
+                 not back ({} lost, {} warm-up scans dropped before the client's stream was on)",
+                self.not_back(),
+                self.all_lost(),
+                self.warmup_dropped
             ));
         }
         if self.sensor_restarts > 0 {
@@ -141,6 +174,33 @@ impl Outcome {
         why.extend(self.power_cycle_problem());
         why.extend(self.mcu_reset_problem());
         bail!("verify failed: {}", why.join(", "));
+    }
+}
+
+/// The co-processor's counters of the scans of the sensor's stream it did
+/// not pass on, by name: lost on the way in, dropped by the host-line
+/// budget, rejected, of another setting.
+fn drop_counters(c: &Counters) -> [(&'static str, u32); 4] {
+    [
+        ("scans_dropped", c.scans_dropped),
+        ("host_scans_dropped", c.host_scans_dropped),
+        ("scans_rejected", c.scans_rejected),
+        ("scans_other_setting", c.scans_other_setting),
+    ]
+}
+
+/// The drop counters that are not 0, as the counters line names them
+/// (`host_scans_dropped=3`), or that all are 0.
+fn counted_drops(c: &Counters) -> String {
+    let named: Vec<String> = drop_counters(c)
+        .iter()
+        .filter(|&&(_, n)| n > 0)
+        .map(|(name, n)| format!("{name}={n}"))
+        .collect();
+    if named.is_empty() {
+        "scans_dropped, host_scans_dropped, scans_rejected and scans_other_setting all 0".into()
+    } else {
+        named.join(", ")
     }
 }
 
@@ -222,7 +282,7 @@ pub(super) fn report(o: &Outcome) {
     );
     if o.all_lost() > 0 {
         line.push_str(&match &o.counters {
-            Some(c) => format!("; the co-processor counted {} dropped", c.scans_dropped),
+            Some(_) => format!("; the co-processor counted {}", o.counted()),
             None => "; the co-processor's count is unknown".into(),
         });
     }
@@ -276,4 +336,96 @@ pub(super) fn report(o: &Outcome) {
             0.0
         }
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run of 10 scans of which `lost` did not come back, with the
+    /// co-processor's counters `counters`.
+    fn outcome(lost: usize, warmup_dropped: usize, counters: Counters) -> Outcome {
+        Outcome {
+            wanted: 10,
+            lost,
+            late: 0,
+            other_lost: 0,
+            play_sent: 10,
+            sensor_restarts: 0,
+            timeout: Duration::from_secs(60),
+            power_cycle: None,
+            mcu_reset: None,
+            warmup_dropped,
+            written_off: 0,
+            garbled: (0, 0),
+            tally: Tally {
+                play_back: 10 - lost,
+                play_identical: 10 - lost,
+                ..Tally::default()
+            },
+            counters: Some(counters),
+            counters_error: None,
+            firmware_report: None,
+            elapsed: Duration::from_secs(1),
+            streaming: Duration::from_secs(1),
+        }
+    }
+
+    fn verdict(o: &Outcome) -> String {
+        format!("{:#}", o.verdict().unwrap_err())
+    }
+
+    #[test]
+    fn a_loss_is_named_by_the_counter_that_counted_it() {
+        let counters = Counters {
+            host_scans_dropped: 3,
+            ..Counters::ZERO
+        };
+        let o = outcome(3, 0, counters);
+        let why = verdict(&o);
+        assert!(
+            why.contains("3 scans lost") && why.contains("host_scans_dropped=3"),
+            "{why}"
+        );
+        assert!(!why.contains("do not add up"), "{why}");
+        // A warm-up scan dropped too: the same counter, the same number.
+        let counters = Counters {
+            host_scans_dropped: 4,
+            ..Counters::ZERO
+        };
+        let why = verdict(&outcome(3, 1, counters));
+        assert!(
+            why.contains("host_scans_dropped=4, 1 of them warm-up"),
+            "{why}"
+        );
+        assert!(!why.contains("do not add up"), "{why}");
+    }
+
+    #[test]
+    fn counters_that_do_not_add_up_fail_the_run_and_say_so() {
+        // Lost scans the co-processor did not count.
+        let why = verdict(&outcome(2, 0, Counters::ZERO));
+        assert!(why.contains("2 scans lost"), "{why}");
+        assert!(
+            why.contains(
+                "drop counters (scans_dropped, host_scans_dropped, scans_rejected and \
+                 scans_other_setting all 0) do not add up to the 2 scans not back"
+            ),
+            "{why}"
+        );
+        // Drops counted, nothing lost: fails too.
+        let counters = Counters {
+            scans_dropped: 1,
+            ..Counters::ZERO
+        };
+        let o = outcome(0, 0, counters);
+        assert!(!o.ok());
+        let why = verdict(&o);
+        assert!(
+            why.contains("(scans_dropped=1) do not add up to the 0 scans"),
+            "{why}"
+        );
+        // All back, nothing counted: passes.
+        assert!(outcome(0, 0, Counters::ZERO).ok());
+    }
 }

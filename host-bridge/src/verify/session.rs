@@ -30,26 +30,64 @@ pub(super) struct HostReply {
     pub(super) data: Vec<u8>,
 }
 
-/// The emulator's clock: the real one, minus the time it was held.
+/// Longest step of the emulator's clock from one pass of verify's loop to
+/// the next ([`EmuClock::pass`]); a pass waits at most [`super::TICK`].
+pub(super) const MAX_STEP: Duration = Duration::from_millis(5);
+
+/// The emulator's clock: the real one, minus the time it was held and the
+/// time verify's loop was away.
+///
+/// A real LMS sends every scan one period after the last, whatever its
+/// client does. The emulator sends what is due by its clock when verify's
+/// loop runs; on a loaded machine that loop is held off the CPU for tens
+/// to hundreds of milliseconds (seen: 100 ms), and a clock that ran on
+/// meanwhile had three scans due at once, which reached the co-processor
+/// back to back, as no sensor sends them. So the clock advances at most
+/// [`MAX_STEP`] from one pass to the next: time the loop was away beyond
+/// that is not the sensor's (`away`).
 pub(super) struct EmuClock {
     origin: Instant,
     held_since: Option<Instant>,
     held: Duration,
+    away: Duration,
+    last_pass: Instant,
 }
 
 impl EmuClock {
     fn new() -> Self {
+        let origin = Instant::now();
         EmuClock {
-            origin: Instant::now(),
+            origin,
             held_since: None,
             held: Duration::ZERO,
+            away: Duration::ZERO,
+            last_pass: origin,
         }
     }
 
     pub(super) fn now_us(&self) -> u64 {
         let now = self.held_since.unwrap_or_else(Instant::now);
-        let t = now.duration_since(self.origin).saturating_sub(self.held);
+        let t = now
+            .duration_since(self.origin)
+            .saturating_sub(self.held + self.away);
         u64::try_from(t.as_micros()).unwrap_or(u64::MAX)
+    }
+
+    /// A pass of verify's loop begins: a gap since the last one beyond
+    /// [`MAX_STEP`], while the clock ran, does not count.
+    pub(super) fn pass(&mut self) {
+        let now = Instant::now();
+        let gap = now.duration_since(self.last_pass);
+        if self.held_since.is_none() && gap > MAX_STEP {
+            self.away += gap - MAX_STEP;
+        }
+        self.last_pass = now;
+    }
+
+    /// Time verify's loop was away, beyond [`MAX_STEP`] a pass, while the
+    /// clock ran (not counted on it).
+    pub(super) fn away(&self) -> Duration {
+        self.away
     }
 
     fn hold(&mut self) {
@@ -183,6 +221,9 @@ pub(super) struct Session {
     pub(super) host_baud: Baud,
     /// Hold the sensor until nothing is in flight (before the power cycle).
     pub(super) quiesce: bool,
+    /// `--sensor-runs-free`: not held for the host line nor for scans in
+    /// flight.
+    pub(super) runs_free: bool,
     pub(super) framer: Framer,
     pub(super) assembler: FeatureAssembler,
     /// The last `B0` on the host line, waiting for its features.
@@ -223,9 +264,17 @@ impl Session {
         // sensor queue (QEMU's UART is slow) are processed back to back, and
         // the co-processor's host-line budget drops a scan that finds the
         // line busy for more than a scan period (docs/PROTOCOL.md §2c);
-        // `qemu_max_in_flight()` is the most the queue could hold.
+        // `qemu_max_in_flight()` is the most the queue could hold. In a
+        // thread one at a time too: the sensor is otherwise paced by what
+        // comes back on the host line, and while the co-processor's thread
+        // is held off the CPU nothing comes back, the sensor runs free, and
+        // a 361-value scan with its features (≈ 28 ms at 500 kBd) does not
+        // fit the 26.7 ms scan period: after a stall of a third of a second
+        // the budget dropped one of the scans queued meanwhile.
         let max_in_flight = args.max_in_flight.unwrap_or(if args.qemu.is_some() {
             qemu_max_in_flight().min(1)
+        } else if args.ports.is_none() {
+            1
         } else {
             0
         });
@@ -255,6 +304,7 @@ impl Session {
             qemu_intake: QemuIntake::new(),
             host_baud: Baud::B9600,
             quiesce: false,
+            runs_free: args.sensor_runs_free,
             framer: host_framer(),
             assembler: FeatureAssembler::new(),
             pending_b0: None,
@@ -285,6 +335,7 @@ impl Session {
         if self.stop.load(Ordering::Relaxed) {
             bail!("interrupted");
         }
+        self.clock.pass();
         self.dut.check()?;
         self.pump_lines(wait).map_err(|e| self.dut.explain(e))
     }
@@ -372,13 +423,20 @@ impl Session {
             || (self.sensor_streaming && !armed && !self.recovering)
             || (self.recovering && self.qemu_intake.full())
             || (armed && self.play_sent >= self.wanted)
-            || (armed && self.max_in_flight > 0 && in_flight >= self.max_in_flight)
-            || (armed && self.host_line_free > Instant::now() + HOST_LINE_SLACK);
+            || (armed && !self.runs_free && self.paced_hold(in_flight));
         if hold {
             self.clock.hold();
         } else {
             self.clock.release();
         }
+    }
+
+    /// The sensor waits for the co-processor: `in_flight` scans are out
+    /// and not back, as many as `--max-in-flight` allows, or the host line
+    /// is still busy with what came back.
+    fn paced_hold(&self, in_flight: usize) -> bool {
+        (self.max_in_flight > 0 && in_flight >= self.max_in_flight)
+            || self.host_line_free > Instant::now() + HOST_LINE_SLACK
     }
 
     /// Send what the emulator has due, act on its events.

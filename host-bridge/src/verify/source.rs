@@ -149,7 +149,11 @@ pub fn play_source(args: &VerifyArgs) -> Result<(PlaySource, String)> {
     let (mut source, about) = match &args.log {
         Some(path) => {
             // A log or a capture, streamed: only the selection is kept.
-            let mut file = crate::input::open(path, crate::options::UnitArg::Auto)?;
+            let options = crate::input::ReadOptions {
+                unit: crate::options::UnitArg::Auto,
+                keep_damaged: false,
+            };
+            let mut file = crate::input::open_topic(path, options, args.topic.name())?;
             let range = args.frames.unwrap_or_default();
             let mut labels = Vec::new();
             let mut frames = Vec::new();

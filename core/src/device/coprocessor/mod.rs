@@ -10,18 +10,30 @@
 //!   the host line carries exactly what an LMS would; a client that sends
 //!   `56 01` ([`REQ_FEATURES`]) also gets each scan's feature telegrams
 //!   ([`crate::telegram::features`]) right after its `B0` (and after the
-//!   `B0` of a `30 01`), until `56 00` or a reset (`10`). The request `55`
-//!   reads the [`Counters`].
+//!   `B0` of a `30 01`), until `56 00` or the end of its session: a rate
+//!   request (`20 4x`, with which every LMS driver starts) or a reset
+//!   (`10`) (docs/PROTOCOL.md §2a). The request `55` reads the [`Counters`].
 //! - Transparency: the host face reports the sensor's variant and units
 //!   (`B1`, `F4`, `BB`); a client's accepted `3B` or `77` that changes the
 //!   variant or the units brings the sensor up again with them
 //!   ([`SensorLink::reconfigure`]); until its scans come, scans of the old
 //!   setting are not passed on ([`Counters::scans_other_setting`]); a
-//!   `77` is written to the sensor whole. `3A` and the value modes
-//!   (`20 26`/`27`/`28`) are relayed ([`ScanSource::relay`]): `ACK` at
-//!   once, the sensor's reply byte for byte, then its `B6`/`B7`/`BF`
-//!   passed through (no features: the pipeline takes whole single scans)
-//!   until another mode, `3B`, `77` or `10` brings the sensor back to `B0`s.
+//!   `77` is written to the sensor whole. `3A`, the value modes
+//!   (`20 26`/`27`/`28`) and the partial scans (`20 2A`) are relayed
+//!   ([`ScanSource::relay`]): `ACK` at once, the sensor's reply byte for
+//!   byte, then its `B6`/`B7`/`BF` passed through (no features: the
+//!   pipeline takes whole single scans), or its partial `B0`s passed
+//!   through and joined into whole scans for the pipeline
+//!   ([`Counters::partial_scans_unassembled`] where they cannot be), until
+//!   another mode, `3B`, `77` or `10` brings the sensor back to `B0`s.
+//!   Scans with real-time indices (configuration availability bit 1) pass
+//!   through as sent; the pipeline reads their values.
+//! - Nothing stays claimed: a relayed request is taken only if the face's
+//!   reply queue has room (else dropped whole and counted,
+//!   [`Counters::host_requests_dropped`]); one that comes while another is
+//!   in flight is refused at once ([`Counters::relays_refused`]); one the
+//!   sensor does not answer within [`RELAY_TIMEOUT_US`] fails
+//!   ([`Counters::relays_failed`]); a reset lets it go.
 //! - Host-line budget ([`host_line`]): the co-processor models the host
 //!   line's time at the client's rate; a scan (with its features, if on) is
 //!   sent whole only if the line is free within one scan period, else it is
@@ -42,11 +54,14 @@
 
 pub mod host_line;
 pub mod sensor_link;
+#[cfg(test)]
+mod tests;
 
 use embedded_io::{Read, ReadReady, Write};
 
 use crate::device::emulator::{
-    Emulator, Event as HostEvent, Handled, ScanSource, Settings, ValueMode, MIN_TX_CAPACITY,
+    partial_values, turns_per_scan, Emulator, Event as HostEvent, Handled, ScanSource, Settings,
+    ValueMode, MIN_TX_CAPACITY, MODE_PARTIAL,
 };
 use crate::features::Features;
 use crate::params::ValidParams;
@@ -90,6 +105,8 @@ pub struct LatestScan {
     values: [u16; MAX_VALUES],
     count: usize,
     variant: Variant,
+    /// The latest scan's real-time index, if the sensor sent one.
+    index: Option<u8>,
     counters: Counters,
     /// The client has switched the feature telegrams on (`56 01`).
     features_on: bool,
@@ -105,6 +122,9 @@ pub struct LatestScan {
     /// only then (before, the face answers it, as the sensor may take
     /// seconds to come up).
     sensor_up: bool,
+    /// Relayed requests answered by the face instead because another
+    /// one was in flight ([`Counters::relays_refused`]).
+    relays_refused: u32,
 }
 
 impl LatestScan {
@@ -115,6 +135,7 @@ impl LatestScan {
             values: [0; MAX_VALUES],
             count: 0,
             variant: Variant::Fov180Res100,
+            index: None,
             counters: Counters::ZERO,
             features_on: false,
             relay: Relay::Idle,
@@ -124,6 +145,7 @@ impl LatestScan {
             relay_reply: [0; RELAY_REPLY_CAPACITY],
             relay_len: 0,
             sensor_up: false,
+            relays_refused: 0,
         }
     }
 }
@@ -149,6 +171,12 @@ impl ScanSource for LatestScan {
             .get(index)
             .copied()
             .filter(|_| variant == self.variant)
+    }
+
+    /// The sensor's index of the latest scan, sent with a `30 01` `B0`
+    /// when the configuration asks for indices.
+    fn real_time_index(&self) -> Option<u8> {
+        self.index
     }
 
     /// Every variant: the co-processor sets the sensor up for the one the
@@ -182,13 +210,19 @@ impl ScanSource for LatestScan {
     fn relay(&mut self, command: u8, data: &[u8]) -> bool {
         let wanted = match command {
             0x3A => data.is_empty() && self.sensor_up,
-            _ if face_interprets(command) => ValueMode::parse(command, data).is_some(),
+            _ if face_interprets(command) => relayed_mode(command, data),
             _ => self.sensor_up,
         };
         let Some(slot) = self.relay_data.get_mut(..data.len()) else {
             return false;
         };
-        if !wanted || self.relay != Relay::Idle {
+        if !wanted {
+            return false;
+        }
+        if self.relay != Relay::Idle {
+            // Refused at once (the face answers it: `92`, or its own `BA`
+            // for `3A`), counted.
+            self.relays_refused = self.relays_refused.wrapping_add(1);
             return false;
         }
         slot.copy_from_slice(data);
@@ -214,6 +248,26 @@ impl ScanSource for LatestScan {
             Relay::Idle | Relay::Asked | Relay::Sent => None,
         }
     }
+
+    fn relay_dropped(&mut self) {
+        self.relay = Relay::Idle;
+    }
+
+    /// The feature opt-in (`56 01`) belongs to the client that sent it.
+    fn new_session(&mut self) {
+        self.features_on = false;
+    }
+}
+
+/// `true` for the mode requests the sensor answers through the face: the
+/// value modes `20 26`/`27`/`28` and the partial scans `20 2A`.
+fn relayed_mode(command: u8, data: &[u8]) -> bool {
+    ValueMode::parse(command, data).is_some() || is_partial_mode(command, data)
+}
+
+/// `true` for `20 2A` (continuous output of partial scans).
+fn is_partial_mode(command: u8, data: &[u8]) -> bool {
+    (command, data) == (crate::telegram::request::code::MODE, &[MODE_PARTIAL][..])
 }
 
 /// `true` for the commands the face answers itself: those of an LMS 2xx it
@@ -297,11 +351,29 @@ pub struct CoProcessor {
     /// passed on, no features), averaging this many scans (1: none).
     values_samples: u8,
     values_stream: bool,
+    /// The relayed stream is the sensor's partial scans (`20 2A`): each
+    /// passed on; joined into whole scans for the pipeline.
+    partial_stream: bool,
+    /// The partial scan expected next of the scan being joined (0: none
+    /// begun).
+    partial_next: u8,
     /// The sensor is to go back to `B0`s (`20 24`, forwarded by itself).
     restore_stream: bool,
     /// Feature telegrams of the latest scan still to go to the host.
     pump: Pump,
+    /// The link's forward under way is the client's relayed request (not
+    /// the co-processor's own `20 24`).
+    client_forward: bool,
+    /// A relayed request not answered by then (µs) fails: the client gets
+    /// no reply, as from a sensor that does not answer (0: none waits).
+    relay_deadline_us: u64,
 }
+
+/// Time a relayed request may wait for the sensor's reply, from when the
+/// co-processor took it (µs): past it the request fails
+/// ([`Counters::relays_failed`]) and the face's queue moves on (a sensor
+/// being brought up again may take longer).
+pub const RELAY_TIMEOUT_US: u64 = 2_000_000;
 
 /// The feature telegrams of the latest scan still to go to the host: from
 /// index `next` on (of [`emit_features_from`]), each when the host port
@@ -360,12 +432,16 @@ impl CoProcessor {
             face_synced: false,
             values_samples: 0,
             values_stream: false,
+            partial_stream: false,
+            partial_next: 0,
             restore_stream: false,
             pump: Pump {
                 active: false,
                 next: 0,
                 at_us: 0,
             },
+            client_forward: false,
+            relay_deadline_us: 0,
         }
     }
 
@@ -470,15 +546,7 @@ impl CoProcessor {
         let mut buf = [0u8; MAX_TELEGRAM_LEN];
 
         // 1. Host requests into the emulator; its replies out.
-        while host.read_ready().map_err(PollError::Host)? {
-            let mut chunk = [0u8; CHUNK];
-            let n = host.read(&mut chunk).map_err(PollError::Host)?;
-            if n == 0 {
-                break;
-            }
-            // `min`: a port that claims more than it was given is not trusted.
-            self.host.receive(now_us, &chunk[..n.min(CHUNK)]);
-        }
+        self.read_host(host, now_us, &mut outcome)?;
         self.drain_host(host, now_us, &mut outcome)?;
 
         // 2. Sensor bytes: bring-up replies and scans.
@@ -520,7 +588,7 @@ impl CoProcessor {
             Some(LinkEvent::Forwarded { answered }) => self.forwarded(answered),
             _ => {}
         }
-        self.hand_to_sensor();
+        self.hand_to_sensor(now_us);
         // 4. The next bring-up request, if one is due (none in a poll that
         // switches the sensor UART: the board switches after it returns).
         let due = match outcome.sensor_baud {
@@ -532,6 +600,29 @@ impl CoProcessor {
         }
         self.sync_counters();
         Ok(outcome)
+    }
+
+    /// Every request the host port has ready, into the face; the events of
+    /// each chunk acted on at once (a burst must not overflow them).
+    fn read_host<H: Read + ReadReady, E>(
+        &mut self,
+        host: &mut H,
+        now_us: u64,
+        outcome: &mut PollOutcome,
+    ) -> Result<(), PollError<E, H::Error>> {
+        while host.read_ready().map_err(PollError::Host)? {
+            let mut chunk = [0u8; CHUNK];
+            let n = host.read(&mut chunk).map_err(PollError::Host)?;
+            if n == 0 {
+                break;
+            }
+            // `min`: a port that claims more than it was given is not trusted.
+            self.host.receive(now_us, &chunk[..n.min(CHUNK)]);
+            while let Some(event) = self.host.next_event() {
+                self.on_host_event(event, now_us, outcome);
+            }
+        }
+        Ok(())
     }
 
     /// Hand the host what the emulator has queued, as far as the host port
@@ -569,9 +660,6 @@ impl CoProcessor {
     fn on_host_event(&mut self, event: HostEvent, now_us: u64, outcome: &mut PollOutcome) {
         match event {
             HostEvent::BaudSwitched { to, .. } => outcome.host_baud = Some(to),
-            HostEvent::BadChecksum => {
-                self.counters.host_crc_errors = self.counters.host_crc_errors.wrapping_add(1);
-            }
             // The B0 of a `30 01` has gone out whole: its features follow.
             HostEvent::ScanSent {
                 continuous: false, ..
@@ -589,7 +677,15 @@ impl CoProcessor {
             }
             HostEvent::Request(Handled::Reset) => {
                 self.leave_values();
-                self.host.source_mut().features_on = false;
+                // Nothing of the last session goes on: its features either.
+                self.pump = Pump::default();
+                self.have_features = false;
+            }
+            // A new client session (docs/PROTOCOL.md §2a): the rest of the
+            // last client's feature group is not sent (the reply goes next).
+            HostEvent::Request(Handled::SetBaud(_)) => {
+                self.pump = Pump::default();
+                self.have_features = false;
             }
             HostEvent::Request(
                 Handled::Continuous | Handled::OnRequest | Handled::InstallationMode { .. },
@@ -610,13 +706,34 @@ impl CoProcessor {
 
     /// Requests for the sensor: back to `B0`s after a value mode, then the
     /// client's relayed request; a relayed request the link dropped (a
-    /// restart) fails.
-    fn hand_to_sensor(&mut self) {
-        if self.restore_stream && self.link.forward(0x20, &[0x24]) {
+    /// restart) or that waits past [`RELAY_TIMEOUT_US`] fails (counted),
+    /// and a forward of a relayed request the face let go (a reset) is
+    /// withdrawn: nothing stays claimed.
+    fn hand_to_sensor(&mut self, now_us: u64) {
+        if self.client_forward && self.host.source().relay == Relay::Idle {
+            // The face let the request go (power-on): not to be sent.
+            self.client_forward = !self.link.cancel_forward();
+        }
+        if self.restore_stream && !self.client_forward && self.link.forward(0x20, &[0x24]) {
             self.restore_stream = false;
         }
         let latest = &mut self.host.source_mut();
+        let waiting = matches!(latest.relay, Relay::Asked | Relay::Sent);
+        self.relay_deadline_us = match (waiting, self.relay_deadline_us) {
+            (false, _) => 0,
+            (true, 0) => now_us.saturating_add(RELAY_TIMEOUT_US).max(1),
+            (true, d) => d,
+        };
+        let late = waiting && now_us >= self.relay_deadline_us;
         match latest.relay {
+            // A forward on the line ends by the link's own time-out.
+            Relay::Asked | Relay::Sent if late && !self.link.forward_sent() => {
+                if self.client_forward {
+                    self.client_forward = !self.link.cancel_forward();
+                }
+                latest.relay = Relay::Failed;
+                self.counters.relays_failed = self.counters.relays_failed.wrapping_add(1);
+            }
             Relay::Asked => {
                 let data = latest.relay_data;
                 let data = data.get(..usize::from(latest.relay_data_len));
@@ -625,9 +742,14 @@ impl CoProcessor {
                     .forward(latest.relay_command, data.unwrap_or_default())
                 {
                     latest.relay = Relay::Sent;
+                    self.client_forward = true;
                 }
             }
-            Relay::Sent if !self.link.forwarding() => latest.relay = Relay::Failed,
+            Relay::Sent if !self.link.forwarding() => {
+                latest.relay = Relay::Failed;
+                self.client_forward = false;
+                self.counters.relays_failed = self.counters.relays_failed.wrapping_add(1);
+            }
             _ => {}
         }
     }
@@ -637,7 +759,12 @@ impl CoProcessor {
     /// until answered).
     fn forwarded(&mut self, answered: bool) {
         let latest = self.host.source_mut();
-        if latest.relay != Relay::Sent {
+        let client = core::mem::take(&mut self.client_forward);
+        if client && latest.relay != Relay::Sent {
+            // The client's, let go meanwhile (a reset): its reply is dropped.
+            return;
+        }
+        if !client {
             // Ours (`20 24`): done when the sensor took it (`A0`).
             let reply = self.link.scan_bytes().get(4).copied();
             let accepted = answered && reply == Some(crate::telegram::reply::code::MODE_CHANGED);
@@ -654,6 +781,7 @@ impl CoProcessor {
             .filter(|_| answered)
         else {
             latest.relay = Relay::Failed;
+            self.counters.relays_failed = self.counters.relays_failed.wrapping_add(1);
             return;
         };
         slot.copy_from_slice(reply);
@@ -664,11 +792,19 @@ impl CoProcessor {
             .get(..usize::from(latest.relay_data_len))
             .unwrap_or_default();
         let mode = ValueMode::parse(latest.relay_command, data);
+        let partial = is_partial_mode(latest.relay_command, data);
         let ok = matches!(reply.get(5), Some(0x00)) && reply.get(4) == Some(&0xA0);
-        if let (Some(mode), true) = (mode, ok) {
+        let samples = match (mode, partial) {
+            (Some(mode), _) => Some(mode.samples().max(1)),
+            (None, true) => Some(1),
+            (None, false) => None,
+        };
+        if let (Some(samples), true) = (samples, ok) {
             self.values_stream = true;
-            self.values_samples = mode.samples().max(1);
-            self.link.set_stream_samples(self.values_samples);
+            self.partial_stream = partial;
+            self.partial_next = 0;
+            self.values_samples = samples;
+            self.link.set_stream_samples(samples);
         }
     }
 
@@ -678,6 +814,8 @@ impl CoProcessor {
         if core::mem::take(&mut self.values_stream) {
             self.restore_stream = true;
         }
+        self.partial_stream = false;
+        self.partial_next = 0;
     }
 
     /// The client changed the face's variant, units or configuration:
@@ -715,6 +853,14 @@ impl CoProcessor {
             RangeBits::from_measuring_mode(c.measuring_mode())
         });
         let bytes = self.link.scan_bytes();
+        let partial = Telegram::new_checked(bytes, Direction::SensorToHost)
+            .ok()
+            .and_then(|t| MeasuredView::parse(&t).ok())
+            .and_then(|m| m.partial_offset());
+        if let Some(offset) = partial {
+            return self.process_partial(host, now_us, offset, bits);
+        }
+        let bytes = self.link.scan_bytes();
         let frame = &mut self.frame;
         let measured = Telegram::new_checked(bytes, Direction::SensorToHost)
             .ok()
@@ -741,8 +887,10 @@ impl CoProcessor {
         self.scan_counter = self.counters.scans_in;
         // The host's `30 01` and `31` see this scan.
         let face_variant = self.host.variant();
+        let index = measured.real_time_index();
         let latest = self.host.source_mut();
         latest.variant = face_variant;
+        latest.index = index;
         latest.count = 0;
         for (slot, word) in latest.values.iter_mut().zip(measured.words()) {
             *slot = word;
@@ -759,6 +907,84 @@ impl CoProcessor {
             self.pump(host)?;
         }
         Ok(())
+    }
+
+    /// A partial scan (`20 2A`) at `offset` × 0.25° from the sensor: to the
+    /// client as is ([`Self::pass_values`]); its values into the latest
+    /// scan at their places; when the last partial scan of a scan has come
+    /// after all the others in order, the pipeline runs on the whole scan
+    /// and an opted-in client gets its features. A partial scan that cannot
+    /// be joined (one missing or out of order, the host line still busy
+    /// with the last features) is counted
+    /// ([`Counters::partial_scans_unassembled`]), with those of its scan
+    /// already taken.
+    fn process_partial<H: WriteRoom, E>(
+        &mut self,
+        host: &mut H,
+        now_us: u64,
+        offset: u8,
+        bits: RangeBits,
+    ) -> Result<(), PollError<E, H::Error>> {
+        let variant = self.host.variant();
+        let sent_before = self.counters.scans_out;
+        self.pass_values(host, now_us)?;
+        let passed = self.counters.scans_out != sent_before;
+        if !self.partial_stream {
+            return Ok(());
+        }
+        let turns = turns_per_scan(variant) as u8;
+        let step = (variant.resolution_centideg() / 25) as u8;
+        let part = offset / step.max(1);
+        let (first, stride, count) = partial_values(variant, part);
+        let bytes = self.link.scan_bytes();
+        let measured = Telegram::new_checked(bytes, Direction::SensorToHost)
+            .ok()
+            .and_then(|t| MeasuredView::parse(&t).ok())
+            .filter(|m| m.count() == count && m.units() == self.host.units())
+            .filter(|_| offset % step.max(1) == 0 && part < turns);
+        let fits = measured.is_some() && part == self.partial_next && !self.host_busy();
+        let Some(measured) = measured.filter(|_| fits) else {
+            // This one and those of its scan taken so far.
+            let lost = u32::from(self.partial_next) + 1;
+            self.count_unassembled(lost);
+            self.partial_next = 0;
+            return Ok(());
+        };
+        let latest = self.host.source_mut();
+        let slots = latest.values.iter_mut().skip(first).step_by(stride.max(1));
+        for (slot, word) in slots.zip(measured.words()) {
+            *slot = word;
+        }
+        latest.index = measured.real_time_index();
+        self.partial_next = part + 1;
+        if self.partial_next < turns {
+            return Ok(());
+        }
+        self.partial_next = 0;
+        let units = self.host.units();
+        let latest = self.host.source_mut();
+        latest.variant = variant;
+        latest.count = variant.beams();
+        let words = latest.values.get(..variant.beams()).unwrap_or_default();
+        if crate::telegram::measured::frame_from_words(words, units, bits, &mut self.frame).is_err()
+        {
+            self.counters.scans_rejected = self.counters.scans_rejected.wrapping_add(1);
+            return Ok(());
+        }
+        self.scan_counter = self.counters.scans_in;
+        self.beams = self.frame.len() as u16;
+        self.extractor.run(&self.frame, &self.params);
+        self.have_features = true;
+        if passed && self.features_on() {
+            self.pump = Pump::start(now_us);
+            self.pump(host)?;
+        }
+        Ok(())
+    }
+
+    fn count_unassembled(&mut self, n: u32) {
+        let c = &mut self.counters.partial_scans_unassembled;
+        *c = c.wrapping_add(n);
     }
 
     /// `true` while the host line still carries the latest scan: its
@@ -782,8 +1008,16 @@ impl CoProcessor {
             self.counters.scans_other_setting = self.counters.scans_other_setting.wrapping_add(1);
             return Ok(());
         }
-        let period = crate::device::emulator::scan_period_us(self.host.variant())
-            .saturating_mul(u64::from(self.values_samples.max(1)));
+        let variant = self.host.variant();
+        let period = match self.partial_stream {
+            // One partial scan per mirror turn.
+            true => crate::maths::div_u64(
+                crate::device::emulator::scan_period_us(variant),
+                turns_per_scan(variant),
+            ),
+            false => crate::device::emulator::scan_period_us(variant)
+                .saturating_mul(u64::from(self.values_samples.max(1))),
+        };
         let fits = self.fits_now(host, now_us, period, self.link.scan_bytes().len())?;
         if !fits {
             self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
@@ -887,6 +1121,12 @@ impl CoProcessor {
         self.counters.sensor_crc_errors = s.crc_errors;
         self.counters.sensor_resyncs = s.resyncs;
         self.counters.sensor_bytes_skipped = s.bytes_skipped;
+        // Every bad host telegram (each got its NAK), every request the
+        // face's full queue dropped, every relay refused.
+        let face = *self.host.stats();
+        self.counters.host_crc_errors = face.naks;
+        self.counters.host_requests_dropped = face.dropped_requests;
+        self.counters.relays_refused = self.host.source().relays_refused;
         self.host.source_mut().counters = self.counters;
         self.host.source_mut().sensor_up = self.link.step() == sensor_link::Step::Streaming;
     }

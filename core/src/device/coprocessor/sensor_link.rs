@@ -475,6 +475,21 @@ impl SensorLink {
         true
     }
 
+    /// Withdraw a [`forward`](SensorLink::forward)ed request not yet sent:
+    /// `true` if there is none now (withdrawn, or none was under way);
+    /// `false` if it is on the line (its reply or time-out ends it).
+    pub fn cancel_forward(&mut self) -> bool {
+        if self.forward == Forward::Due {
+            self.forward = Forward::Idle;
+        }
+        self.forward == Forward::Idle
+    }
+
+    /// `true` while a forwarded request is on the line (its reply awaited).
+    pub fn forward_sent(&self) -> bool {
+        self.forward == Forward::Sent
+    }
+
     /// `true` while a [`forward`](SensorLink::forward)ed request waits or
     /// is out.
     pub fn forwarding(&self) -> bool {

@@ -50,6 +50,8 @@ pub enum Handled {
         /// `true` if taken (`A0 00`), `false` for bad parameters (`A0 02`).
         accepted: bool,
     },
+    /// `20 2A`: continuous output of partial scans.
+    PartialScans,
     /// A command the LMS does not know, answered by the source
     /// ([`ScanSource::extra_command`]).
     Extra {

@@ -23,11 +23,17 @@
 //! | `3A` | `BA "LMS200;30106x;V02.10"` |
 //! | `3B` | `BB 01` and the new variant, if it is one of the five and the [`ScanSource`] supports it; else `BB 00` and the variant kept (so 0.25° only with 100°) |
 //! | `74` | `F4` + the 34-byte configuration |
+//! | `20 2A` | `A0 00`; then one `B0` per mirror turn, each a partial scan (count word bit 13, bits 11–12 its offset in 0.25°; see [`partial_values`]); on the co-processor's face relayed to the sensor |
 //! | `20 26 n`, `20 27 a b`, `20 28 n a b` | mean values, subrange, mean subrange ([`ValueMode`]): `A0 00`, then a stream of `B6` / `B7` / `BF` (one per `n` scans for the means); `A0 02` for bad parameters; on the co-processor's face ([`Settings::external_scans`]) relayed to the sensor ([`ScanSource::relay`]) |
 //! | `77` | in installation mode: `F7 01` + the new configuration (units byte `[6]`: 0 cm, 1 mm; other codes are refused with `F7 00`); otherwise `F7 00` + the configuration kept |
 //! | `10` | `ACK`, `91`; input ignored and the stream stopped; [`Settings::restart_us`] after the `91`, back to 9600 Bd, mode `25`, the power-on variant, and the `90` telegram. The configuration survives, as the real sensor keeps it in EEPROM. |
 //!
 //! Every reply ends with the status byte [`Settings::status`] (`0x10`).
+//! With real-time indices in the configuration (availability byte `[4]`
+//! bit 1, written with `77`), every `B0`, `B6`, `B7` and `BF` carries one
+//! more byte after its values, the real-time scan index: the number of the
+//! mirror scan it holds (since the stream started; for `30 01`, one more
+//! than the last), modulo 256.
 //!
 //! # Timing (PROTOCOL.md §3)
 //!
@@ -105,7 +111,7 @@ mod transmit;
 mod value_modes;
 
 pub use events::{EmulatorStats, Event, Handled};
-pub use settings::{OperatingMode, Settings};
+pub use settings::{OperatingMode, Settings, MODE_PARTIAL};
 pub use source::{FnSource, ScanSource, EXTRA_REPLY_CAPACITY};
 pub use value_modes::{ValueMode, MODE_MEAN, MODE_MEAN_SUBRANGE, MODE_SUBRANGE};
 
@@ -116,6 +122,7 @@ use heapless::Deque;
 use crate::frame::{Invalid, Variant};
 use crate::telegram::crc::Crc;
 use crate::telegram::measured::{count_word as measured_count_word, MEASURED_COMMAND};
+use crate::telegram::partial_scan_flags;
 use crate::telegram::reply::POWER_ON_LEN;
 use crate::telegram::status::STATUS_BLOCK_LEN;
 use crate::telegram::{
@@ -154,8 +161,10 @@ const TURN_US_TIMES_3: u64 = 40_000;
 /// reaches neither [`ScanSource::extra_command`] nor [`ScanSource::relay`].
 pub const REQUEST_CAPACITY: usize = 64;
 
-/// Requests (and NAKs) waiting for the line.
+/// Requests (and runs of NAKs) waiting for the line.
 pub const PENDING_CAPACITY: usize = 8;
+/// `NAK`s one queue slot holds (a run of bad telegrams in a row).
+pub const NAKS_PER_FRAME: usize = 64;
 /// Events held until [`Emulator::next_event`] takes them.
 pub const EVENT_CAPACITY: usize = 32;
 /// Largest frame on the line: `ACK` + the largest telegram; the default
@@ -186,6 +195,36 @@ pub const fn turns_per_scan(variant: Variant) -> u64 {
         50 => 2,
         _ => 4,
     }
+}
+
+/// The values of partial scan `part` (0 … turns − 1) of a `variant` scan:
+/// the whole scan's values `part`, `part + turns`, `part + 2·turns`, …
+/// (`turns` = [`turns_per_scan`]): every value of the 1° grid shifted by
+/// `part` × the resolution that falls inside the field. So at 0.25° the
+/// four partial scans have 101, 100, 100 and 100 values (offsets 0, 1, 2,
+/// 3 × 0.25°), at 0.5° the two have 181 and 180 (offsets 0 and 2 × 0.25°)
+/// or 101 and 100, and at 1° the one partial scan is the whole scan.
+/// Returns the first index, the step and the count.
+pub const fn partial_values(variant: Variant, part: u8) -> (usize, usize, usize) {
+    let turns = match turns_per_scan(variant) as usize {
+        0 => 1,
+        t => t,
+    };
+    let first = (part as usize) % turns;
+    let beams = variant.beams();
+    let count = (beams - first).div_ceil(turns);
+    (first, turns, count)
+}
+
+/// The count-word offset (in 0.25°) of partial scan `part` of `variant`.
+/// (`turns` is never 0; the `match` says so to the link-time panic proof.)
+pub const fn partial_offset_code(variant: Variant, part: u8) -> u8 {
+    let turns = match turns_per_scan(variant) as u8 {
+        0 => 1,
+        t => t,
+    };
+    let step = (variant.resolution_centideg() / 25) as u8;
+    (part % turns) * step
 }
 
 /// Time between complete scans in continuous mode (µs, rounded): 13333 at
@@ -230,9 +269,14 @@ pub struct Emulator<S, const TX: usize = TX_CAPACITY> {
     streamed: bool,
     streamed_head: u8,
     streamed_values: u16,
+    /// The streamed `B0`'s real-time index, if it has one.
+    streamed_index: Option<u8>,
     streamed_crc: Crc,
     /// When the line finished the last frame (µs).
     line_free_us: u64,
+    /// The real-time scan index of the last `B0` (mirror scans, modulo
+    /// 256): sent after the values when the configuration asks for it.
+    scan_index: u8,
     events: Deque<Event, EVENT_CAPACITY>,
     stats: EmulatorStats,
 }
@@ -289,8 +333,10 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             streamed: false,
             streamed_head: 0,
             streamed_values: 0,
+            streamed_index: None,
             streamed_crc: Crc::new(),
             line_free_us: 0,
+            scan_index: 0,
             events: Deque::new(),
             stats: EmulatorStats::ZERO,
         }
@@ -346,6 +392,10 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
         self.tx_done = Done::Nothing;
         self.streamed = false;
         self.line_free_us = now_us;
+        // What was queued is lost: a relayed request too; and the client's
+        // session ends.
+        self.source.relay_dropped();
+        self.source.new_session();
         self.queue(now_us, Outgoing::PowerOn);
     }
 

@@ -2,6 +2,7 @@
 
 use super::transmit::ReplyKind;
 use super::*;
+use crate::telegram::request::code;
 use crate::telegram::Telegram;
 
 /// A received telegram, copied out of the framer.
@@ -44,6 +45,8 @@ struct Classified {
     extra: Option<(u8, usize)>,
     /// A value mode the sensor model answers itself.
     value_mode: Option<ValueMode>,
+    /// `20 2A` (partial scans), answered by the sensor model itself.
+    partial: bool,
     /// The sensor behind the face answers it (co-processor).
     relay: bool,
 }
@@ -59,6 +62,7 @@ impl Classified {
             data_len: usize::from(len).saturating_sub(1),
             extra: None,
             value_mode: None,
+            partial: false,
             relay: false,
         }
     }
@@ -72,6 +76,7 @@ fn classify<S: ScanSource>(
     settings: &Settings,
     source: &mut S,
     extra: &mut [u8; EXTRA_REPLY_CAPACITY],
+    room: bool,
 ) -> Option<Classified> {
     let request = Request::parse(t).ok()?;
     let ours = t.address() == settings.address;
@@ -83,6 +88,7 @@ fn classify<S: ScanSource>(
         data_len: t.data().len(),
         extra: None,
         value_mode: None,
+        partial: false,
         relay: false,
     };
     if let Request::Unknown { command, data } = request {
@@ -96,10 +102,15 @@ fn classify<S: ScanSource>(
         // itself (not on the co-processor's face).
         if !settings.external_scans {
             classified.value_mode = ValueMode::parse(command, data);
+            classified.partial = (command, data) == (code::MODE, &[MODE_PARTIAL][..]);
         }
     }
-    // A request the sensor behind the face answers (co-processor).
-    classified.relay = settings.external_scans && ours && source.relay(t.command(), t.data());
+    // A request the sensor behind the face answers (co-processor), taken
+    // only if the reply queue has room for it: a request the queue cannot
+    // hold is dropped and counted whole (`handle`), never left claimed by
+    // the source with no reply to come.
+    classified.relay =
+        settings.external_scans && ours && room && source.relay(t.command(), t.data());
     Some(classified)
 }
 
@@ -120,7 +131,8 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             let done = fed.event.is_none();
             let request = match fed.event {
                 Some(FramerEvent::Telegram(t)) => {
-                    classify(&t, &self.settings, &mut self.source, &mut self.extra)
+                    let room = !self.pending.is_full();
+                    classify(&t, &self.settings, &mut self.source, &mut self.extra, room)
                 }
                 // Longer than the request buffer: no request the sensor
                 // interprets is (`92`, as for any unknown or malformed one).
@@ -132,12 +144,11 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
                 Some(FramerEvent::Ack | FramerEvent::Nak) | None => None,
             };
             for _ in 0..naks {
-                self.stats.naks = self.stats.naks.wrapping_add(1);
-                self.queue(now_us, Outgoing::Nak);
-                self.event(Event::BadChecksum);
+                self.nak(now_us);
             }
             match request {
                 Some(r) if r.relay => self.relay(now_us, r.incoming.request.command()),
+                Some(r) if r.partial => self.handle_partial(now_us, r.incoming),
                 Some(r) => self.handle(now_us, r.incoming, r.data_len, r.extra, r.value_mode),
                 None => {}
             }
@@ -155,15 +166,43 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
         }
     }
 
-    /// A relayed request: `ACK` now, the sensor's reply when it comes.
+    /// A bad checksum: one `NAK`, joined to the `NAK`s queued right before
+    /// it (so a burst of bad telegrams gets one `NAK` each however long it
+    /// is, [`NAKS_PER_FRAME`] to a queue slot).
+    fn nak(&mut self, now_us: u64) {
+        self.stats.naks = self.stats.naks.wrapping_add(1);
+        self.event(Event::BadChecksum);
+        if let Some(Pending {
+            what: Outgoing::Naks(n),
+            ..
+        }) = self.pending.back_mut()
+        {
+            if usize::from(*n) < NAKS_PER_FRAME {
+                *n = n.saturating_add(1);
+                return;
+            }
+        }
+        self.queue(now_us, Outgoing::Naks(1));
+    }
+
+    /// A relayed request (the source has taken it, the queue has room):
+    /// `ACK` now, the sensor's reply when it comes.
     fn relay(&mut self, now_us: u64, command: u8) {
-        if self.pending.len() + 2 > PENDING_CAPACITY {
+        self.stats.requests = self.stats.requests.wrapping_add(1);
+        if self
+            .pending
+            .push_back(Pending {
+                ready_us: now_us,
+                what: Outgoing::Relay { acked: false },
+            })
+            .is_err()
+        {
+            // Cannot happen (`classify` checked the room): the source lets
+            // the request go, counted.
             self.stats.dropped_requests = self.stats.dropped_requests.wrapping_add(1);
+            self.source.relay_dropped();
             return;
         }
-        self.stats.requests = self.stats.requests.wrapping_add(1);
-        self.queue(now_us, Outgoing::Ack);
-        self.queue(now_us, Outgoing::Relay);
         self.event(Event::Request(Handled::Extra { command }));
     }
 
@@ -217,7 +256,11 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
                 self.stop_stream();
                 (ok, Done::Nothing, Handled::OnRequest)
             }
-            Request::SetBaud(b) => (ok, Done::SwitchBaud(b), Handled::SetBaud(b)),
+            Request::SetBaud(b) => {
+                // Every LMS client sets the rate as it starts: a new session.
+                self.source.new_session();
+                (ok, Done::SwitchBaud(b), Handled::SetBaud(b))
+            }
             Request::OneScan => (ReplyKind::OneScan, Done::Nothing, Handled::OneScan),
             Request::Status => (
                 ReplyKind::Status(self.status_fields()),
@@ -236,6 +279,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             ),
             Request::WriteConfig(c) => self.config_write(c),
             Request::Reset => {
+                self.source.new_session();
                 self.stop_stream();
                 self.resetting = true;
                 self.event(Event::Restarting);
@@ -257,6 +301,33 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
                 ),
             },
         }
+    }
+
+    /// `20 2A` for this sensor: `A0 00`, then the partial scans (every
+    /// variant has them; at 1° each is the whole scan).
+    fn handle_partial(&mut self, now_us: u64, incoming: Incoming) {
+        if incoming.address != self.settings.address {
+            self.stats.ignored = self.stats.ignored.wrapping_add(1);
+            self.event(Event::IgnoredAddress {
+                address: incoming.address,
+            });
+            return;
+        }
+        if self.pending.is_full() {
+            self.stats.dropped_requests = self.stats.dropped_requests.wrapping_add(1);
+            return;
+        }
+        self.stats.requests = self.stats.requests.wrapping_add(1);
+        self.mode = OperatingMode::Partial;
+        let reply = ReplyKind::Mode(ModeResult::Ok);
+        self.queue(
+            now_us,
+            Outgoing::Reply {
+                reply,
+                then: Done::StartStream,
+            },
+        );
+        self.event(Event::Request(Handled::PartialScans));
     }
 
     /// `20 26`/`27`/`28`: the value mode, if its parameters fit the

@@ -2,6 +2,9 @@
 
 use super::*;
 
+/// `20 2A`: continuous output of partial scans.
+pub const MODE_PARTIAL: u8 = 0x2A;
+
 /// The power-on state and fixed properties of the simulated sensor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -63,6 +66,9 @@ pub enum OperatingMode {
     OnRequest,
     /// `26`/`27`/`28`: mean values, a subrange, a mean subrange.
     Values(ValueMode),
+    /// `2A`: continuous output of the partial scans, one `B0` per mirror
+    /// turn (count word bit 13 set, bits 11–12 its offset).
+    Partial,
 }
 
 impl OperatingMode {
@@ -73,6 +79,7 @@ impl OperatingMode {
             OperatingMode::Continuous => 0x24,
             OperatingMode::OnRequest => 0x25,
             OperatingMode::Values(m) => m.mode_code(),
+            OperatingMode::Partial => MODE_PARTIAL,
         }
     }
 }

@@ -24,6 +24,13 @@ pub trait ScanSource {
         None
     }
 
+    /// The real-time scan index of the scan [`word`](ScanSource::word)
+    /// reads (the co-processor's latest, as its sensor sent it), if the
+    /// source knows it; `None` (the default): the emulator counts its own.
+    fn real_time_index(&self) -> Option<u8> {
+        None
+    }
+
     /// `false` if this source cannot produce `variant` (the sensor then
     /// refuses a `3B` for it with `BB 00`). Every variant by default.
     fn supports(&self, variant: Variant) -> bool {
@@ -59,10 +66,19 @@ pub trait ScanSource {
         let _ = out;
         Some(0)
     }
+
+    /// The request the source took with [`relay`](ScanSource::relay) will
+    /// not be answered (the emulator powered on again and dropped its
+    /// queue): let it go, so that the next one can be taken.
+    fn relay_dropped(&mut self) {}
+
+    /// A new client session begins (a rate request `20 4x`, a reset `10`,
+    /// power-on): whatever the last client switched on for itself ends.
+    fn new_session(&mut self) {}
 }
 
 /// Largest reply data a [`ScanSource::extra_command`] may write.
-pub const EXTRA_REPLY_CAPACITY: usize = 64;
+pub const EXTRA_REPLY_CAPACITY: usize = 80;
 
 /// A [`ScanSource`] from a closure `(variant, units, out) -> written`.
 #[derive(Clone, Copy, Debug)]

@@ -788,3 +788,100 @@ fn emulator_small_buffer_sends_no_value_telegrams() {
     assert_eq!(split(&got), std::vec![std::vec![ACK], A0_OK.to_vec()]);
     assert!(e.stats().emit_errors > 0 && e.stats().scans_sent == 0);
 }
+
+#[test]
+fn emulator_partial_scans_interlace_at_a_quarter_degree() {
+    let mut e = lms();
+    e.receive(T0, &BAUD_500K);
+    drain(&mut e, T0 + 20_000);
+    e.receive(T0 + 20_000, &VARIANT_100_025);
+    drain(&mut e, T0 + 40_000);
+    // 20 2A: A0 00, then one B0 per mirror turn (13.3 ms), offsets 0…3.
+    e.receive(T0 + 40_000, &request(&[0x20, 0x2A]));
+    let got = split(&drain(&mut e, T0 + 40_000 + 13_334 * 8));
+    assert_eq!(got[1], A0_OK);
+    let b0: Vec<_> = got.iter().filter(|t| t.len() > 4 && t[4] == 0xB0).collect();
+    assert!(b0.len() >= 7, "{}", b0.len());
+    assert_eq!(e.status_fields().operating_mode, 0x2A);
+    for (k, t) in b0.iter().enumerate() {
+        let w = u16::from_le_bytes([t[5], t[6]]);
+        let part = (k % 4) as u16;
+        // Bit 13 partial scan, bits 11–12 the offset in 0.25°, cm.
+        let count = if part == 0 { 101 } else { 100 };
+        assert_eq!(w, 0x2000 | part << 11 | count, "partial {k}");
+        // Value i of partial p is beam p + 4i of the ramp (1000 + beam).
+        let first = u16::from_le_bytes([t[7], t[8]]);
+        let second = u16::from_le_bytes([t[9], t[10]]);
+        assert_eq!((first, second), (1000 + part, 1004 + part));
+        assert_eq!(t.len(), 4 + 1 + 2 + 2 * count as usize + 1 + 2);
+    }
+}
+
+#[test]
+fn emulator_partial_scans_at_half_a_degree_and_one_degree() {
+    for (variant_request, counts, offsets) in [
+        (&VARIANT_180_050[..], [181u16, 180], [0u16, 2]),
+        (
+            &request(&[0x3B, 0xB4, 0x00, 0x64, 0x00])[..],
+            [181, 181],
+            [0, 0],
+        ),
+    ] {
+        let mut e = lms();
+        e.receive(T0, &BAUD_500K);
+        drain(&mut e, T0 + 20_000);
+        e.receive(T0 + 20_000, variant_request);
+        drain(&mut e, T0 + 40_000);
+        e.receive(T0 + 40_000, &request(&[0x20, 0x2A]));
+        let got = split(&drain(&mut e, T0 + 40_000 + 13_334 * 4));
+        let b0: Vec<_> = got.iter().filter(|t| t.len() > 4 && t[4] == 0xB0).collect();
+        assert!(b0.len() >= 3);
+        for (k, t) in b0.iter().enumerate() {
+            let w = u16::from_le_bytes([t[5], t[6]]);
+            assert_eq!(w, 0x2000 | offsets[k % 2] << 11 | counts[k % 2]);
+        }
+    }
+}
+
+#[test]
+fn emulator_sends_real_time_indices_when_the_configuration_asks() {
+    let mut e = lms();
+    e.receive(T0, &BAUD_500K);
+    drain(&mut e, T0 + 20_000);
+    e.receive(T0 + 20_000, &INSTALL);
+    drain(&mut e, T0 + 30_000);
+    let mut config = Config::ZERO;
+    config.set_availability(0x02);
+    let mut write = std::vec![0x77];
+    write.extend_from_slice(config.as_bytes());
+    e.receive(T0 + 30_000, &request(&write));
+    drain(&mut e, T0 + 40_000);
+    assert!(e.config().real_time_indices());
+    // 30 01: B0 | W | 181 values | index | status.
+    e.receive(T0 + 40_000, &ONE_SCAN);
+    let got = split(&drain(&mut e, T0 + 60_000));
+    let b0 = &got[1];
+    assert_eq!(u16::from_le_bytes([b0[2], b0[3]]), 1 + 2 + 362 + 1 + 1);
+    assert_eq!(b0[5 + 2 + 362 + 1], 0x10, "the status after the index");
+    // The stream: each B0 carries its mirror scan's number.
+    e.receive(T0 + 60_000, &START);
+    let got = split(&drain(&mut e, T0 + 60_000 + 13_334 * 6));
+    let indices: Vec<u8> = got
+        .iter()
+        .filter(|t| t.len() > 4 && t[4] == 0xB0)
+        .map(|t| t[5 + 2 + 362])
+        .collect();
+    assert!(indices.len() >= 4);
+    assert!(
+        indices.windows(2).all(|w| w[1] == w[0].wrapping_add(1)),
+        "{indices:?}"
+    );
+    // Value telegrams too: B7 | a b | W | values | index | status.
+    e.receive(T0 + 200_000, &request(&[0x20, 0x27, 1, 0, 2, 0]));
+    let got = split(&drain(&mut e, T0 + 260_000));
+    let b7 = got.iter().find(|t| t.len() > 4 && t[4] == 0xB7).unwrap();
+    assert_eq!(u16::from_le_bytes([b7[2], b7[3]]), 1 + 4 + 2 + 4 + 1 + 1);
+}
+
+/// After the power-on telegram of [`lms`] (its line is free by then).
+const T0: u64 = 1_000_000;

@@ -41,11 +41,15 @@ pub(super) enum Done {
 /// A frame waiting for the line.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Outgoing {
-    Nak,
-    /// `ACK` alone (a relayed request's, [`ScanSource::relay`]).
-    Ack,
-    /// The relayed request's reply ([`ScanSource::relayed_reply`]).
-    Relay,
+    /// `NAK`s for this many bad telegrams in a row (one byte each).
+    Naks(u16),
+    /// A relayed request ([`ScanSource::relay`]): its `ACK` at once
+    /// (`acked` then set), then the sensor's reply
+    /// ([`ScanSource::relayed_reply`]). One queue slot for both, so that a
+    /// request the queue takes is always answered whole.
+    Relay {
+        acked: bool,
+    },
     PowerOn,
     /// `ACK` + the reply, then `then`.
     Reply {
@@ -181,7 +185,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             Done::StartStream => {
                 let streams = matches!(
                     self.mode,
-                    OperatingMode::Continuous | OperatingMode::Values(_)
+                    OperatingMode::Continuous | OperatingMode::Values(_) | OperatingMode::Partial
                 );
                 if streams && !self.resetting {
                     if self.settings.external_scans {
@@ -237,23 +241,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
                 self.feed(at, &[]);
             }
         }
-        if self.tx_len != 0 {
-            return;
-        }
-        if let Some(p) = self.pending.front().copied() {
-            if matches!(p.what, Outgoing::Relay) {
-                // The sensor's reply, when it has come (all waits for it).
-                let Some(n) = self.source.relayed_reply(&mut self.tx) else {
-                    return;
-                };
-                self.pending.pop_front();
-                if n > 0 {
-                    self.set_frame(p.ready_us, Some(n.min(TX)), Done::Nothing);
-                }
-                return;
-            }
-            self.pending.pop_front();
-            self.start_frame(p.ready_us, p.what);
+        if self.tx_len != 0 || self.next_pending() {
             return;
         }
         let turns = self.stream_turns();
@@ -270,6 +258,9 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             None => k,
         };
         stream.sent = k.saturating_add(1);
+        // The mirror scan's number: partial scans count turns, whole ones
+        // scans.
+        self.scan_index = k as u8;
         let skipped = u32::try_from(skipped).unwrap_or(u32::MAX);
         let done = Done::Scan {
             continuous: true,
@@ -280,8 +271,49 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             // in `emit_errors`); the co-processor's face never streams here.
             OperatingMode::Values(_) if TX < TX_CAPACITY => self.set_frame(tick, None, done),
             OperatingMode::Values(mode) => self.start_value_scan(tick, mode, done),
+            OperatingMode::Partial if TX < TX_CAPACITY => self.set_frame(tick, None, done),
+            OperatingMode::Partial => {
+                let part = crate::maths::div_rem_u64(k, turns_per_scan(self.variant)).1 as u8;
+                self.start_partial_scan(tick, part, done);
+            }
             _ => self.start_scan(tick, false, done),
         }
+    }
+
+    /// The line is free: the first queued frame goes on it, if any (a
+    /// relayed request's `ACK`, then its reply when it has come: all waits
+    /// for it). Returns `true` if something is queued.
+    fn next_pending(&mut self) -> bool {
+        if let Some(p) = self.pending.front_mut() {
+            if let Outgoing::Relay {
+                acked: acked @ false,
+            } = &mut p.what
+            {
+                *acked = true;
+                let ready_us = p.ready_us;
+                if let Some(b) = self.tx.first_mut() {
+                    *b = ACK;
+                }
+                self.set_frame(ready_us, Some(1), Done::Nothing);
+                return true;
+            }
+        }
+        let Some(p) = self.pending.front().copied() else {
+            return false;
+        };
+        if matches!(p.what, Outgoing::Relay { .. }) {
+            let Some(n) = self.source.relayed_reply(&mut self.tx) else {
+                return true;
+            };
+            self.pending.pop_front();
+            if n > 0 {
+                self.set_frame(p.ready_us, Some(n.min(TX)), Done::Nothing);
+            }
+            return true;
+        }
+        self.pending.pop_front();
+        self.start_frame(p.ready_us, p.what);
+        true
     }
 
     /// Mirror turns per stream telegram: a scan's, times the samples of a
@@ -289,6 +321,8 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
     fn stream_turns(&self) -> u64 {
         let samples = match self.mode {
             OperatingMode::Values(m) => u64::from(m.samples()),
+            // One partial scan per mirror turn.
+            OperatingMode::Partial => return 1,
             _ => 1,
         };
         turns_per_scan(self.variant).saturating_mul(samples.max(1))
@@ -320,7 +354,50 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             .get(start..start.saturating_add(count))
             .unwrap_or_default();
         let (address, status) = (self.settings.address, self.settings.status);
-        let n = mode.emit(address, status, units, values, &mut self.tx);
+        let index = self.index_byte();
+        let n = mode.emit_with_index(address, status, units, values, index, &mut self.tx);
+        self.set_frame(ready_us, n.ok(), done);
+    }
+
+    /// The real-time scan index to send after the values, if the
+    /// configuration asks for it (the source's, if it has one: the
+    /// co-processor's face sends the sensor's).
+    fn index_byte(&self) -> Option<u8> {
+        let index = self.source.real_time_index().unwrap_or(self.scan_index);
+        self.config.real_time_indices().then_some(index)
+    }
+
+    /// Partial scan `part` of a scan from the source ([`partial_values`]):
+    /// a `B0` with count word bit 13 and the partial scan's offset. Never
+    /// inlined, as [`Self::start_value_scan`] (its scan buffer).
+    #[inline(never)]
+    fn start_partial_scan(&mut self, ready_us: u64, part: u8, done: Done) {
+        let variant = self.variant;
+        let units = self.units();
+        let beams = variant.beams().min(MAX_VALUES);
+        let mut scan = [0u16; MAX_VALUES];
+        let not_valid = RangeBits::Bits13.encode_invalid(Invalid::NoEcho);
+        let out = scan.get_mut(..beams).unwrap_or_default();
+        let written = self.source.next_scan(variant, units, out).min(out.len());
+        out.get_mut(written..).unwrap_or_default().fill(not_valid);
+        let (first, step, count) = partial_values(variant, part);
+        let status = self.settings.status;
+        let values = MeasuredValues::from_fill(count, units, status, |dst| {
+            let picked = scan.iter().skip(first).step_by(step.max(1));
+            for (slot, &w) in dst.iter_mut().zip(picked) {
+                *slot = w;
+            }
+        });
+        let address = self.settings.address;
+        let index = self.index_byte();
+        let n = match values {
+            Ok(mut v) => {
+                v.set_scan_flags(partial_scan_flags(partial_offset_code(variant, part)));
+                v.set_real_time_index(index);
+                v.emit(address, &mut self.tx)
+            }
+            Err(_) => Ok(0),
+        };
         self.set_frame(ready_us, n.ok(), done);
     }
 
@@ -329,20 +406,13 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
         let address = self.settings.address;
         let status = self.settings.status;
         match what {
-            Outgoing::Nak => {
-                if let Some(b) = self.tx.first_mut() {
-                    *b = NAK;
-                }
-                self.set_frame(ready_us, Some(1), Done::Nothing);
-            }
-            Outgoing::Ack => {
-                if let Some(b) = self.tx.first_mut() {
-                    *b = ACK;
-                }
-                self.set_frame(ready_us, Some(1), Done::Nothing);
+            Outgoing::Naks(n) => {
+                let n = usize::from(n).min(TX);
+                self.tx.get_mut(..n).unwrap_or_default().fill(NAK);
+                self.set_frame(ready_us, Some(n), Done::Nothing);
             }
             // Taken in `advance`.
-            Outgoing::Relay => {}
+            Outgoing::Relay { .. } => {}
             Outgoing::PowerOn => {
                 let n = Reply::PowerOn(POWER_ON_DATA).emit(address, status, &mut self.tx);
                 self.set_frame(ready_us, n.ok(), Done::PowerOn);
@@ -424,6 +494,14 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             out.get_mut(written..).unwrap_or_default().fill(not_valid);
         });
         let address = self.settings.address;
+        if ack {
+            self.scan_index = self.scan_index.wrapping_add(1);
+        }
+        let index = self.index_byte();
+        let values = values.map(|mut v| {
+            v.set_real_time_index(index);
+            v
+        });
         let n = match values {
             Ok(v) if ack => self.emit_after_ack(|buf| v.emit(address, buf)),
             Ok(v) => v.emit(address, &mut self.tx),
@@ -439,8 +517,12 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
     /// are those [`MeasuredValues::emit`] writes (flags 0).
     fn start_streamed_scan(&mut self, ready_us: u64, ack: bool, done: Done) {
         let beams = self.variant.beams().min(MAX_VALUES);
-        // count word + values + command + status: at most 806 < MAX_LEN.
-        let len = 2 + 2 * beams + 2;
+        if ack {
+            self.scan_index = self.scan_index.wrapping_add(1);
+        }
+        self.streamed_index = self.index_byte();
+        // count word + values + index + command + status: at most 807 < MAX_LEN.
+        let len = 2 + 2 * beams + usize::from(self.streamed_index.is_some()) + 2;
         let [lo, hi] = (len as u16).to_le_bytes();
         let [w_lo, w_hi] = measured_count_word(beams, self.units()).to_le_bytes();
         let address = Direction::SensorToHost.address_byte(self.settings.address);
@@ -484,7 +566,14 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             return self.tx.get(at).copied().unwrap_or(0);
         };
         let values = 2 * usize::from(self.streamed_values);
-        let byte = if j < values {
+        let (index, values) = match self.streamed_index {
+            Some(i) if j == values => (Some(i), values + 1),
+            Some(_) => (None, values + 1),
+            None => (None, values),
+        };
+        let byte = if let Some(i) = index {
+            i
+        } else if j < values && j < 2 * usize::from(self.streamed_values) {
             let not_valid = RangeBits::Bits13.encode_invalid(Invalid::NoEcho);
             let units = self.units();
             let word = self.source.word(self.variant, units, j / 2);

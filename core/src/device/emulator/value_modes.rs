@@ -143,6 +143,20 @@ impl ValueMode {
         values: &[u16],
         buf: &mut [u8],
     ) -> Result<usize, EmitError> {
+        self.emit_with_index(address, status, units, values, None, buf)
+    }
+
+    /// [`ValueMode::emit`] with the real-time scan `index` after the values
+    /// (`Some` when the configuration asks for indices).
+    pub fn emit_with_index(
+        self,
+        address: u8,
+        status: u8,
+        units: Unit,
+        values: &[u16],
+        index: Option<u8>,
+        buf: &mut [u8],
+    ) -> Result<usize, EmitError> {
         let prefix: &[u8] = &match self {
             ValueMode::Mean { samples } => [samples, 0, 0, 0, 0],
             ValueMode::Subrange { first, last } => {
@@ -167,7 +181,7 @@ impl ValueMode {
         };
         let count = u16::try_from(values.len()).unwrap_or(0) & 0x3FF;
         let word = count | (units.count_word_bits() & 0xC000);
-        let len = prefix.len() + 2 + 2 * values.len();
+        let len = prefix.len() + 2 + 2 * values.len() + usize::from(index.is_some());
         emit_telegram_with(
             buf,
             REPLY_ADDRESS_BIT | address,
@@ -184,6 +198,9 @@ impl ValueMode {
                     if let [lo, hi] = pair {
                         [*lo, *hi] = w.to_le_bytes();
                     }
+                }
+                if let (Some(i), Some(last)) = (index, rest.last_mut()) {
+                    *last = i;
                 }
             },
         )
@@ -279,6 +296,20 @@ mod tests {
         assert_eq!(
             &buf[..n - 2],
             &[0x02, 0x80, 0x0C, 0x00, 0xB7, 1, 0, 2, 0, 2, 0, 100, 0, 200, 0, 0x10]
+        );
+    }
+
+    #[test]
+    fn b7_bytes_with_a_real_time_index() {
+        // The index 0x2C after the values, before the status: LEN 13.
+        let mut buf = [0u8; 32];
+        let sub = ValueMode::Subrange { first: 1, last: 2 };
+        let n = sub
+            .emit_with_index(0, 0x10, Unit::Centimetre, &[100, 200], Some(0x2C), &mut buf)
+            .unwrap();
+        assert_eq!(
+            &buf[..n - 2],
+            &[0x02, 0x80, 0x0D, 0x00, 0xB7, 1, 0, 2, 0, 2, 0, 100, 0, 200, 0, 0x2C, 0x10]
         );
     }
 
