@@ -271,7 +271,6 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
     if let Some(elf) = &args.qemu {
         return run_qemu(args, link, elf.as_deref());
     }
-    // The sensor's bytes reach the co-processor at their arrival times.
     let mut sensor = Arrivals::new(LinkPort {
         link,
         buf: Vec::new(),

@@ -8,7 +8,7 @@
 //! * empty lines and comment lines are skipped;
 //! * `cargo test --workspace` is CI's own test step (`.ci/run`) and skipped;
 //! * a line ending in one of the [`MARKERS`] (`# needs a sensor`,
-//!   `# needs a board`, `# needs QEMU`, `# run by CI`) is not run here: it
+//!   `# needs a board`, `# needs QEMU`, `# needs ROS 2`, `# run by CI`) is not run here: it
 //!   needs hardware, QEMU and the firmware, or a build that CI does;
 //! * `mkdir -p DIR…` creates the folders;
 //! * `cargo run --release -p host-bridge -- ARGS` and `host-bridge ARGS`
@@ -38,10 +38,11 @@ mod common;
 use common::{files_under, workspace, BIN};
 
 /// Trailing comments that mark a command this test does not run.
-const MARKERS: [&str; 4] = [
+const MARKERS: [&str; 5] = [
     "# needs a sensor",
     "# needs a board",
     "# needs QEMU",
+    "# needs ROS 2",
     "# run by CI",
 ];
 
