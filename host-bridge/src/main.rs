@@ -121,13 +121,12 @@ fn main() -> ExitCode {
     }
 }
 
-/// The frames of a log or capture selected by `range`, streamed: reading
-/// stops after the range's end.
-fn file_inputs<'a>(
+/// The scans of `file` selected by `range`, streamed; reading stops before
+/// the selection's last frame is passed.
+fn selected_scans<'a>(
     file: &'a mut input::ScanFile,
     range: &'a FrameRange,
-) -> impl Iterator<Item = Result<InputFrame>> + 'a {
-    // Stop before reading past the selection's last frame.
+) -> impl Iterator<Item = Result<input::InputScan>> + 'a {
     std::iter::from_fn(move || {
         if range.is_past(file.read()) {
             return None;
@@ -135,13 +134,33 @@ fn file_inputs<'a>(
         file.next()
     })
     .filter(move |s| s.as_ref().map_or(true, |s| range.contains(s.index)))
-    .map(|s| {
+}
+
+/// The frames of a log or capture selected by `range`, streamed: reading
+/// stops after the range's end.
+fn file_inputs<'a>(
+    file: &'a mut input::ScanFile,
+    range: &'a FrameRange,
+) -> impl Iterator<Item = Result<InputFrame>> + 'a {
+    selected_scans(file, range).map(|s| {
         s.map(|s| InputFrame {
             index: s.index,
             frame: s.frame,
             pose: s.pose,
         })
     })
+}
+
+/// The synthetic scene in a summary line.
+fn scene_about(sc: &SceneArgs) -> String {
+    format!(
+        "scene {} (seed {}, {} frames, noise {} m, dropout {})",
+        sc.scene_name(),
+        sc.seed,
+        sc.count,
+        sc.noise_sigma,
+        sc.dropout
+    )
 }
 
 /// The frames of the synthetic scene selected by `range`, streamed.
@@ -234,14 +253,7 @@ fn run_extract(args: ExtractArgs) -> Result<()> {
                 None => extract::extract_named(scene, &params, out, &out_name)?,
             };
             let sc = &args.scene;
-            let about = format!(
-                "scene {} (seed {}, {} frames, noise {} m, dropout {})",
-                sc.scene_name(),
-                sc.seed,
-                sc.count,
-                sc.noise_sigma,
-                sc.dropout
-            );
+            let about = scene_about(sc);
             (s, about)
         }
     };
@@ -304,15 +316,9 @@ fn replay_file(
     params: &lms_core::Params,
     out: (Box<dyn Write>, &str),
 ) -> Result<extract::Summary> {
-    let frames = std::iter::from_fn(|| {
-        if range.is_past(file.read()) {
-            return None;
-        }
-        file.next()
-    })
-    .filter(|s| s.as_ref().map_or(true, |s| range.contains(s.index)))
-    .map(|s| s.map(live_view::timed))
-    .map_while(|t| replay.due(t));
+    let frames = selected_scans(file, range)
+        .map(|s| s.map(live_view::timed))
+        .map_while(|t| replay.due(t));
     let mut show = |f: &InputFrame, features: &lms_core::Features| replay.show(f, features);
     extract::extract_observed(frames, params, out.0, out.1, true, &mut show)
 }
@@ -368,14 +374,7 @@ fn run_extract_ros(
             });
             let s = extract::extract_to_ros(frames, params, ros)?;
             let sc = &args.scene;
-            let about = format!(
-                "scene {} (seed {}, {} frames, noise {} m, dropout {})",
-                sc.scene_name(),
-                sc.seed,
-                sc.count,
-                sc.noise_sigma,
-                sc.dropout
-            );
+            let about = scene_about(sc);
             (s, about, sc.count)
         }
     };
@@ -392,14 +391,7 @@ fn file_ros_inputs<'a>(
     file: &'a mut input::ScanFile,
     range: &'a FrameRange,
 ) -> impl Iterator<Item = Result<(InputFrame, Stamp)>> + 'a {
-    std::iter::from_fn(move || {
-        if range.is_past(file.read()) {
-            return None;
-        }
-        file.next()
-    })
-    .filter(move |s| s.as_ref().map_or(true, |s| range.contains(s.index)))
-    .map(|s| {
+    selected_scans(file, range).map(|s| {
         s.map(|s| {
             let stamp = stamp_for(
                 s.index,
