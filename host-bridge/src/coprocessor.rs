@@ -304,6 +304,9 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
         if quit_after.is_some_and(|q| clock.elapsed() >= q) {
             break "--quit-after";
         }
+        // The client line is the face's UART: a client at another rate
+        // (a driver's power-on search) is noise to it, as on a real line.
+        host.set_line_rate(cop.host_face().baud().bits_per_second());
         let outcome = sensor
             .poll(&mut cop, &mut host, now_us)
             .map_err(|e| match e {
@@ -319,7 +322,7 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
         }
         sensor.port_mut().follow(&cop);
         if args.status_every > 0.0 && Instant::now() >= next_status {
-            eprintln!("{}", status(&cop, clock));
+            eprintln!("{}", status(&cop, &host, clock));
             next_status += status_every;
         }
         sensor.port_mut().fill(TICK)?;
@@ -327,7 +330,7 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
     stop_sensor(sensor.port_mut());
     eprintln!(
         "host-bridge coprocessor: stopped ({reason}); {}",
-        status(&cop, clock)
+        status(&cop, &host, clock)
     );
     close_outputs(sensor.port_mut())?;
     drop(symlink);
@@ -370,7 +373,8 @@ fn stop_sensor(sensor: &mut LinkPort) {
 }
 
 /// The status line.
-fn status(cop: &CoProcessor, clock: Instant) -> String {
+/// The status line; `host` is the client line (its bytes at another rate).
+fn status(cop: &CoProcessor, host: &PtyPort, clock: Instant) -> String {
     let c = cop.counters();
     let face = cop.host_face();
     let mut line = format!(
@@ -402,12 +406,13 @@ fn status(cop: &CoProcessor, clock: Instant) -> String {
     let _ = write!(
         line,
         "; client CRC errors {} (each NAKed), requests dropped {} (queue full), relayed \
-         refused {} failed {}, partial scans not joined {}",
+         refused {} failed {}, partial scans not joined {}, bytes at another rate {}",
         c.host_crc_errors,
         c.host_requests_dropped,
         c.relays_refused,
         c.relays_failed,
         c.partial_scans_unassembled,
+        host.bytes_at_another_rate(),
     );
     line
 }

@@ -173,6 +173,35 @@ impl Pty {
     }
 }
 
+/// Noise for bytes sent at the wrong speed: what a UART at one rate makes
+/// of bytes sent at another (xorshift32 over the bytes; never `STX`, `ACK`
+/// or `NAK`, so that noise frames nothing).
+#[derive(Debug)]
+pub struct Scrambler(u32);
+
+impl Default for Scrambler {
+    fn default() -> Self {
+        Scrambler(0x2545_F491)
+    }
+}
+
+impl Scrambler {
+    /// What `b` looks like at the other end.
+    pub fn byte(&mut self, b: u8) -> u8 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.0 = x;
+        let g = b ^ (x >> 24) as u8;
+        if matches!(g, 0x02 | 0x06 | 0x15) {
+            g ^ 0x80
+        } else {
+            g
+        }
+    }
+}
+
 /// The standard termios rates this tool knows, as (bits per second, rate).
 const RATES: [(u32, BaudRate); 14] = [
     (1200, BaudRate::B1200),
@@ -204,6 +233,16 @@ pub fn bits_per_second(rate: BaudRate) -> Option<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn scrambled_bytes_never_look_like_framing() {
+        let mut s = Scrambler::default();
+        for _ in 0..10 {
+            for b in 0..=255u8 {
+                assert!(!matches!(s.byte(b), 0x02 | 0x06 | 0x15));
+            }
+        }
+    }
     use std::fs::File;
     use std::io::{Read, Write};
     use std::os::fd::AsFd;

@@ -445,6 +445,10 @@ fn a_burst_and_the_next_client_through_the_firmware_under_qemu() {
     port.ask_until(&[0x20, 0x25], 0xA0, 60, wait);
     to_500k(&mut port);
     burst_then_relay(&mut port, &dir, wait, false);
+    // It leaves as the common drivers do, the line back at 9600 Bd, where
+    // the next client starts.
+    let got = port.ask_until(&[0x20, 0x42], 0xA0, 5, wait);
+    assert!(got.telegrams.iter().any(|t| t[4..6] == [0xA0, 0x00]));
     drop(port);
     opted_in_then_plain(&link, wait, Duration::from_secs(6));
 }
@@ -537,4 +541,105 @@ fn partial_scans_through_the_firmware_under_qemu() {
         port.collect(wait);
     }
     assert!(checked >= 2, "{checked} feature groups checked");
+}
+
+/// Real-time indices on (installation mode, `74`, then `77` with byte
+/// `[4]` bit 1), features on, streaming: every `B0` reaches the client
+/// whole with its index, and the features after it are bit for bit the std
+/// build's features of that `B0`'s values; the configuration is put back
+/// as it was. Returns the feature groups checked.
+fn indexed_scans_and_their_features(port: &mut Port, wait: Duration, stream: Duration) -> usize {
+    port.ask(&[0x56, 0x01], wait);
+    port.ask(&[0x20, 0x25], wait);
+    let mut install = vec![0x20, 0x00];
+    install.extend_from_slice(b"SICK_LMS");
+    let got = port.ask_until(&install, 0xA0, 5, wait);
+    assert!(got.telegrams.iter().any(|t| t[4..6] == [0xA0, 0x00]));
+    let got = port.ask_until(&[0x74], 0xF4, 5, wait);
+    let f4 = got.telegrams.iter().find(|t| t[4] == 0xF4).unwrap();
+    let mut write = vec![0x77];
+    write.extend_from_slice(&f4[5..39]);
+    write[1 + 4] |= 0x02;
+    let got = port.ask_until(&write, 0xF7, 5, wait);
+    assert!(got.telegrams.iter().any(|t| t[4..6] == [0xF7, 0x01]));
+    // The co-processor brings the sensor up again with the written bytes.
+    std::thread::sleep(Duration::from_secs(3));
+    let got = port.ask(&[0x20, 0x24], stream);
+    let from = got
+        .telegrams
+        .iter()
+        .position(|t| t[4] == 0xB0 && measured(t).real_time_index().is_some())
+        .expect("a scan with its real-time index");
+    let telegrams = &got.telegrams[from..];
+    let indices: Vec<u8> = telegrams
+        .iter()
+        .filter(|t| t[4] == 0xB0)
+        .map(|t| measured(t).real_time_index().expect("every scan indexed"))
+        .collect();
+    assert!(indices.len() >= 8, "{} indexed scans", indices.len());
+    assert!(indices.windows(2).all(|w| w[1] != w[0]), "{indices:?}");
+    let checked = features_follow_their_scans(telegrams);
+    // Back as it was (the configuration is kept like EEPROM).
+    port.ask(&[0x20, 0x25], wait);
+    port.collect(wait);
+    write[1 + 4] &= !0x02;
+    port.ask_until(&install, 0xA0, 5, wait);
+    port.ask_until(&write, 0xF7, 5, wait);
+    checked
+}
+
+/// The features of every whole `B0` in `telegrams`, recomputed by the std
+/// build, equal the feature group that follows it; returns the groups
+/// checked.
+fn features_follow_their_scans(telegrams: &[Vec<u8>]) -> usize {
+    use lms_core::telegram::features::{Assembled, FeatureAssembler};
+    let mut asm = FeatureAssembler::new();
+    let mut extractor = lms_core::Extractor::new();
+    let (mut want, mut checked) = (None, 0);
+    for t in telegrams {
+        let tel = Telegram::new_checked(&t[..], Direction::SensorToHost).unwrap();
+        if t[4] == 0xB0 {
+            let frame = measured(t)
+                .to_frame(lms_core::telegram::RangeBits::Bits13)
+                .unwrap();
+            want = Some(
+                extractor
+                    .run(&frame, &lms_core::ValidParams::DEFAULT)
+                    .clone(),
+            );
+        } else if let Ok(Assembled::Complete(_, features)) = asm.push(&tel) {
+            let want = want.take().expect("features after a scan");
+            let diffs = host_bridge::verify::differences(features, &want);
+            assert!(diffs.is_empty(), "{diffs:?}");
+            checked += 1;
+        }
+    }
+    checked
+}
+
+#[test]
+fn real_time_indices_through_the_coprocessor_with_bit_identical_features() {
+    let dir = common::scratch("lms-modes", "indices");
+    let (_sim, _cop, link) = chain(&dir, &[]);
+    let mut port = Port::open(&link);
+    to_500k(&mut port);
+    port.ask_until(&[0x3A], 0xBA, 100, SHORT);
+    let checked = indexed_scans_and_their_features(&mut port, SHORT, Duration::from_secs(2));
+    assert!(checked >= 8, "{checked} feature groups checked");
+}
+
+/// The same through the firmware under QEMU.
+#[test]
+#[ignore = "needs qemu-system-arm and the firmware ELF: cd firmware && cargo build --release"]
+fn real_time_indices_through_the_firmware_under_qemu() {
+    let elf = common::qemu_firmware();
+    let dir = common::scratch("lms-modes", "qemu-indices");
+    let (_sim, _cop, link) = chain(&dir, &["--qemu", elf.to_str().unwrap()]);
+    let mut port = Port::open(&link);
+    let wait = Duration::from_secs(2);
+    port.ask_until(&[0x20, 0x25], 0xA0, 60, wait);
+    to_500k(&mut port);
+    port.ask_until(&[0x3A], 0xBA, 60, wait);
+    let checked = indexed_scans_and_their_features(&mut port, wait, Duration::from_secs(8));
+    assert!(checked >= 4, "{checked} feature groups checked");
 }

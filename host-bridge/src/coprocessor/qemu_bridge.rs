@@ -2,8 +2,11 @@
 //! the sensor port and the client's pty. The bytes are passed both ways as
 //! they come; the sensor port follows the firmware's baud switch (its `20 4x`
 //! request and the sensor's `A0 00` reply, seen on the way), as a UART
-//! would; the client line's rate is the firmware's business (QEMU's UARTs
-//! carry bytes at its own pace).
+//! would. The client's pty follows the firmware's host UART the same way
+//! (the client's `20 4x` and the firmware's `A0 00`; back to 9600 Bd with
+//! the firmware's power-on telegram `90`), so that a client at another
+//! rate is noise to the firmware, as on a real line ([`PtyPort`]); QEMU's
+//! UARTs themselves carry bytes at their own pace whatever the rate.
 //!
 //! QEMU's USART takes a received byte per turn of its main loop, about
 //! 10 KB/s (less under load), while the sensor streams 15–28 KB/s at
@@ -23,6 +26,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use embedded_io::{Read as _, ReadReady as _, Write as _};
+use lms_core::telegram::reply::code as reply_code;
 use lms_core::telegram::{Baud, Direction, Event, Framer, Handshake, Request};
 
 use crate::qemu_intake::QemuIntake;
@@ -83,14 +87,19 @@ struct BaudWatch {
     requests: Framer,
     replies: Framer,
     pending: Option<Baud>,
+    /// The power-on telegram `90` puts the line back to 9600 Bd (the
+    /// client line: the firmware's face restarts at the LMS's power-on
+    /// rate after a `10` or a reboot).
+    power_on_resets: bool,
 }
 
 impl BaudWatch {
-    fn new() -> Self {
+    fn new(power_on_resets: bool) -> Self {
         BaudWatch {
             requests: Framer::new(Direction::HostToSensor, Handshake::Ignored),
             replies: Framer::new(Direction::SensorToHost, Handshake::Expected),
             pending: None,
+            power_on_resets,
         }
     }
 
@@ -121,6 +130,12 @@ impl BaudWatch {
             match fed.event {
                 Some(Event::Telegram(t)) if t.command() == 0xA0 && t.data().first() == Some(&0) => {
                     switch = switch.or(self.pending.take());
+                }
+                Some(Event::Telegram(t))
+                    if self.power_on_resets && t.command() == reply_code::POWER_ON =>
+                {
+                    self.pending = None;
+                    switch = Some(Baud::B9600);
                 }
                 Some(_) => {}
                 None => return switch,
@@ -159,7 +174,9 @@ fn pass_bytes(
     feed: &mut SensorFeed,
 ) -> Result<&'static str> {
     let started = Instant::now();
-    let mut watch = BaudWatch::new();
+    let mut watch = BaudWatch::new(false);
+    let mut client_watch = BaudWatch::new(true);
+    client.set_line_rate(Baud::B9600.bits_per_second());
     let mut buf = [0u8; 4096];
     let mut to_qemu = Vec::new();
     loop {
@@ -175,9 +192,13 @@ fn pass_bytes(
                 break;
             }
             qemu.host.send(&buf[..n]).context("firmware host UART")?;
+            client_watch.requests(&buf[..n]);
         }
         let n = qemu.host.receive(&mut buf, Duration::ZERO)?;
         client.write_all(&buf[..n])?;
+        if let Some(b) = client_watch.replies(&buf[..n]) {
+            client.set_line_rate(b.bits_per_second());
+        }
         let n = qemu.sensor.receive(&mut buf, Duration::ZERO)?;
         if n > 0 {
             sensor.send(&buf[..n]).context("sensor port")?;

@@ -5,7 +5,7 @@ use std::io;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use crate::pty::{Pty, ReadOutcome, WriteOutcome};
+use crate::pty::{Pty, ReadOutcome, Scrambler, WriteOutcome};
 
 use super::WRITE_TIMEOUT;
 
@@ -20,14 +20,51 @@ use super::WRITE_TIMEOUT;
 ///   transmits at its own pace), at most [`WRITE_TIMEOUT`] (2 s); bytes
 ///   written while nobody has the other end open are dropped, like a UART
 ///   with nothing attached.
+///
+/// With a line rate set ([`PtyPort::set_line_rate`]: the rate of the UART
+/// this port stands for), the port also models a client at another speed
+/// as a real line would: what such a client sends is noise to the UART
+/// (dropped, counted in [`PtyPort::bytes_at_another_rate`]) and what the
+/// UART sends is noise to the client (scrambled, never framing bytes). A
+/// pty itself carries bytes whatever its speed says; the client's speed is
+/// the one it set on the slave ([`Pty::client_speed`]).
 pub struct PtyPort {
     pty: Pty,
+    line_rate: Option<u32>,
+    scrambler: Scrambler,
+    /// Bytes received (dropped) or sent (scrambled) while the client's
+    /// speed was not the line rate.
+    bytes_at_another_rate: u64,
 }
 
 impl PtyPort {
-    /// Wrap a pseudo-terminal.
+    /// Wrap a pseudo-terminal (no line rate: bytes pass whatever the
+    /// client's speed).
     pub fn new(pty: Pty) -> Self {
-        PtyPort { pty }
+        PtyPort {
+            pty,
+            line_rate: None,
+            scrambler: Scrambler::default(),
+            bytes_at_another_rate: 0,
+        }
+    }
+
+    /// The rate of the UART this port stands for, in bits per second.
+    pub fn set_line_rate(&mut self, bps: u32) {
+        self.line_rate = Some(bps);
+    }
+
+    /// Bytes lost to a client at another speed (see the type's docs).
+    pub fn bytes_at_another_rate(&self) -> u64 {
+        self.bytes_at_another_rate
+    }
+
+    /// `true` if the client's speed is the line rate (or none is set).
+    fn speeds_match(&self) -> io::Result<bool> {
+        match self.line_rate {
+            None => Ok(true),
+            Some(rate) => Ok(self.pty.client_speed().map_err(to_io)? == Some(rate)),
+        }
     }
 
     /// The device the other end opens.
@@ -56,10 +93,15 @@ impl embedded_io::ReadReady for PtyPort {
 }
 
 impl embedded_io::Read for PtyPort {
+    /// What the client sent; bytes sent at another speed are noise the UART
+    /// drops (0 is returned once they are all gone).
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        match self.pty.read(buf).map_err(to_io)? {
-            ReadOutcome::Data(n) => Ok(n),
-            ReadOutcome::Empty | ReadOutcome::Closed => Ok(0),
+        loop {
+            match self.pty.read(buf).map_err(to_io)? {
+                ReadOutcome::Data(n) if self.speeds_match()? => return Ok(n),
+                ReadOutcome::Data(n) => self.bytes_at_another_rate += n as u64,
+                ReadOutcome::Empty | ReadOutcome::Closed => return Ok(0),
+            }
         }
     }
 }
@@ -69,10 +111,23 @@ impl embedded_io::Write for PtyPort {
         if buf.is_empty() {
             return Ok(0);
         }
+        let noise: Vec<u8>;
+        let scrambled = !self.speeds_match()?;
+        let buf = if scrambled {
+            noise = buf.iter().map(|&b| self.scrambler.byte(b)).collect();
+            &noise
+        } else {
+            buf
+        };
         let until = Instant::now() + WRITE_TIMEOUT;
         loop {
             match self.pty.write(buf).map_err(to_io)? {
-                WriteOutcome::Written(n) if n > 0 => return Ok(n),
+                WriteOutcome::Written(n) if n > 0 => {
+                    if scrambled {
+                        self.bytes_at_another_rate += n as u64;
+                    }
+                    return Ok(n);
+                }
                 WriteOutcome::Closed => return Ok(buf.len()),
                 WriteOutcome::Written(_) | WriteOutcome::Full => {
                     if Instant::now() >= until {

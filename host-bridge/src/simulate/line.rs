@@ -9,28 +9,7 @@ use lms_core::device::emulator::{Emulator, ScanSource};
 use lms_core::telegram::Baud;
 
 use super::SimulateArgs;
-use crate::pty::{Pty, ReadOutcome, WriteOutcome};
-
-/// Noise for bytes sent at the wrong speed: xorshift32, never `STX`, `ACK`
-/// or `NAK`.
-#[derive(Debug)]
-struct Scrambler(u32);
-
-impl Scrambler {
-    fn byte(&mut self, b: u8) -> u8 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.0 = x;
-        let g = b ^ (x >> 24) as u8;
-        if matches!(g, 0x02 | 0x06 | 0x15) {
-            g ^ 0x80
-        } else {
-            g
-        }
-    }
-}
+use crate::pty::{Pty, ReadOutcome, Scrambler, WriteOutcome};
 
 /// Bit errors and lost bytes on the line (`--bit-error-rate`,
 /// `--drop-rate`): xorshift64*, one draw per bit and per byte.
@@ -128,7 +107,7 @@ impl PtyLine {
             pty,
             connected: false,
             mismatch: None,
-            scrambler: Scrambler(0x2545_F491),
+            scrambler: Scrambler::default(),
             faults: [
                 LineFaults::new(args.bit_error_rate, args.drop_rate, args.fault_seed),
                 LineFaults::new(
@@ -264,20 +243,5 @@ impl PtyLine {
             }
         }
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn scrambled_bytes_never_look_like_framing() {
-        let mut s = Scrambler(0x2545_F491);
-        for _ in 0..10 {
-            for b in 0..=255u8 {
-                assert!(!matches!(s.byte(b), 0x02 | 0x06 | 0x15));
-            }
-        }
     }
 }

@@ -17,12 +17,16 @@ use crate::warning::warn;
 
 /// The scans of a CARMEN log or a capture as a scan source (see the
 /// module docs), streamed: one scan in memory, the file read again from
-/// the start at its end.
+/// the start at its end. Input that cannot be read twice (a pipe, a FIFO,
+/// standard input `-`) is read once and its scans kept in memory (about
+/// 2 KB a 361-beam scan), to loop over them.
 pub struct ReplaySource {
     path: PathBuf,
     /// The topic of a ROS 2 bag (`None`: its only LaserScan topic).
     topic: Option<String>,
     file: Box<ScanFile>,
+    /// The scans of input that cannot be read again, and the next one.
+    held: Option<(Vec<Frame>, usize)>,
     /// The scan sent last (sent again if the file cannot be read again).
     current: Box<Frame>,
     /// Scans in the file (counted by the first pass).
@@ -57,6 +61,12 @@ fn open_input(path: &Path, topic: Option<&str>) -> Result<ScanFile> {
     input::open_topic(path, options, topic)
 }
 
+/// `true` for a regular file or a folder (a rosbag2 bag): input that can
+/// be opened again to loop; `false` for a pipe, a FIFO or standard input.
+fn can_read_again(path: &Path) -> bool {
+    path != Path::new("-") && std::fs::metadata(path).is_ok_and(|m| m.is_file() || m.is_dir())
+}
+
 impl ReplaySource {
     /// Read a capture recorded by `host-bridge scan` (recognised by its
     /// magic) or a CARMEN log (error codes per file as `carmen` decides),
@@ -76,6 +86,7 @@ impl ReplaySource {
             .next()
             .with_context(|| format!("{}: no scans", path.display()))??;
         let beams = first.frame.len();
+        let mut held = (!can_read_again(path)).then(|| vec![first.frame.clone()]);
         for scan in file.by_ref() {
             let scan = scan?;
             if scan.frame.len() != beams {
@@ -88,6 +99,9 @@ impl ReplaySource {
                     scan.frame.len()
                 );
             }
+            if let Some(held) = held.as_mut() {
+                held.push(scan.frame);
+            }
         }
         file.warn_if_cut();
         let scans = file.read();
@@ -97,10 +111,16 @@ impl ReplaySource {
             carmen::variant_for_beams(beams)
         }
         .with_context(|| format!("{}: {beams} beams per scan", path.display()))?;
+        let (file, held) = match held {
+            // From the first scan, as a file opened again.
+            Some(frames) => (file, Some((frames, 0))),
+            None => (open_input(path, topic)?, None),
+        };
         Ok(ReplaySource {
             path: path.to_path_buf(),
             topic: topic.map(str::to_owned),
-            file: Box::new(open_input(path, topic)?),
+            file: Box::new(file),
+            held,
             current: Box::new(first.frame),
             scans,
             variant,
@@ -118,8 +138,26 @@ impl ReplaySource {
         }
     }
 
+    /// The index of the next held scan (input read once), from the first
+    /// again after the last; `None` for a file read again.
+    fn next_held(&mut self) -> Option<usize> {
+        let (frames, next) = self.held.as_mut()?;
+        if *next >= frames.len() {
+            *next = 0;
+            self.loops += 1;
+        }
+        *next += 1;
+        Some(*next - 1)
+    }
+
     /// The next scan of the file, from the start again after the last.
     fn next_frame(&mut self) -> &Frame {
+        if let Some(i) = self.next_held() {
+            if let Some((frames, _)) = &self.held {
+                (*self.current).clone_from(&frames[i]);
+            }
+            return &self.current;
+        }
         for _ in 0..2 {
             match self.file.next() {
                 Some(Ok(scan)) if scan.frame.len() == self.beams => {
@@ -246,6 +284,37 @@ mod tests {
         };
         assert!(!src.supports(Variant::Fov180Res50));
         assert!(src.supports(Variant::Fov100Res25));
+    }
+
+    /// A log on a pipe (standard input, a FIFO) is read once and looped
+    /// from memory, scan for scan as the file.
+    #[test]
+    fn replay_of_a_fifo_loops_as_the_file() {
+        let dir = std::env::temp_dir().join(format!("replay-fifo-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let line = |r: &str| format!("FLASER 181 {} 0 0 0 0 0 0 1 h 1\n", vec![r; 181].join(" "));
+        let text = format!("{}{}{}", line("1.50"), line("2.50"), line("3.50"));
+        let file = dir.join("log.log");
+        std::fs::write(&file, &text).unwrap();
+        let fifo = dir.join("log.fifo");
+        let _ = std::fs::remove_file(&fifo);
+        nix::unistd::mkfifo(&fifo, nix::sys::stat::Mode::S_IRWXU).unwrap();
+        let writer = {
+            let (fifo, text) = (fifo.clone(), text.clone());
+            std::thread::spawn(move || std::fs::write(fifo, text).unwrap())
+        };
+        let mut piped = ReplaySource::open(&fifo).unwrap();
+        writer.join().unwrap();
+        let mut from_file = ReplaySource::open(&file).unwrap();
+        assert_eq!(piped.scans, 3);
+        let (mut a, mut b) = ([0u16; 181], [0u16; 181]);
+        for _ in 0..7 {
+            piped.next_scan(Variant::Fov180Res100, Unit::Centimetre, &mut a);
+            from_file.next_scan(Variant::Fov180Res100, Unit::Centimetre, &mut b);
+            assert_eq!(a, b);
+        }
+        assert_eq!((piped.loops, from_file.loops), (2, 2));
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// A cut log is replayed with its complete scans, looping, one scan in
