@@ -459,41 +459,28 @@ fn a_burst_and_the_next_client_through_the_firmware_under_qemu() {
 /// checked.
 fn joined_features_match(got: &Got, variant: lms_core::Variant) -> usize {
     use lms_core::device::emulator::{partial_values, turns_per_scan};
-    use lms_core::telegram::features::{Assembled, FeatureAssembler};
     let turns = turns_per_scan(variant) as usize;
     let step = (variant.resolution_centideg() / 25) as u8;
-    let mut asm = FeatureAssembler::new();
-    let mut extractor = lms_core::Extractor::new();
-    let (mut words, mut next, mut want, mut checked) = (vec![0u16; variant.beams()], 0, None, 0);
-    for t in &got.telegrams {
-        let tel = Telegram::new_checked(&t[..], Direction::SensorToHost).unwrap();
-        if t[4] == 0xB0 {
-            let m = measured(t);
-            let part = usize::from(m.partial_offset().expect("a partial scan") / step.max(1));
-            next = if part == next { next + 1 } else { 0 };
-            let (first, stride, _) = partial_values(variant, part as u8);
-            for (k, w) in m.words().enumerate() {
-                words[first + k * stride] = w;
-            }
-            if next == turns {
-                next = 0;
-                let v = lms_core::telegram::MeasuredValues::from_raw(&words, m.units(), 0x10);
-                let frame = v.unwrap().to_frame(lms_core::telegram::RangeBits::Bits13);
-                let frame = frame.unwrap();
-                want = Some(
-                    extractor
-                        .run(&frame, &lms_core::ValidParams::DEFAULT)
-                        .clone(),
-                );
-            }
-        } else if let Ok(Assembled::Complete(_, features)) = asm.push(&tel) {
-            let want = want.take().expect("features after a joined scan");
-            let diffs = host_bridge::verify::differences(features, &want);
-            assert!(diffs.is_empty(), "{diffs:?}");
-            checked += 1;
+    let (mut words, mut next) = (vec![0u16; variant.beams()], 0);
+    features_follow_their_scans(&got.telegrams, |t| {
+        let m = measured(t);
+        let part = usize::from(m.partial_offset().expect("a partial scan") / step.max(1));
+        next = if part == next { next + 1 } else { 0 };
+        let (first, stride, _) = partial_values(variant, part as u8);
+        for (k, w) in m.words().enumerate() {
+            words[first + k * stride] = w;
         }
-    }
-    checked
+        if next < turns {
+            return None;
+        }
+        next = 0;
+        let v = lms_core::telegram::MeasuredValues::from_raw(&words, m.units(), 0x10);
+        Some(
+            v.unwrap()
+                .to_frame(lms_core::telegram::RangeBits::Bits13)
+                .unwrap(),
+        )
+    })
 }
 
 /// Partial scans through the firmware under QEMU: passed on, joined, and
@@ -578,7 +565,13 @@ fn indexed_scans_and_their_features(port: &mut Port, wait: Duration, stream: Dur
         .collect();
     assert!(indices.len() >= 8, "{} indexed scans", indices.len());
     assert!(indices.windows(2).all(|w| w[1] != w[0]), "{indices:?}");
-    let checked = features_follow_their_scans(telegrams);
+    let checked = features_follow_their_scans(telegrams, |t| {
+        Some(
+            measured(t)
+                .to_frame(lms_core::telegram::RangeBits::Bits13)
+                .unwrap(),
+        )
+    });
     // Back as it was (the configuration is kept like EEPROM).
     port.ask(&[0x20, 0x25], wait);
     port.collect(wait);
@@ -588,10 +581,14 @@ fn indexed_scans_and_their_features(port: &mut Port, wait: Duration, stream: Dur
     checked
 }
 
-/// The features of every whole `B0` in `telegrams`, recomputed by the std
-/// build, equal the feature group that follows it; returns the groups
+/// The features of every whole scan in `telegrams` (`whole_scan` makes
+/// it from a `B0`, or `None` while it is not whole yet), recomputed by the
+/// std build, equal the feature group that follows it; returns the groups
 /// checked.
-fn features_follow_their_scans(telegrams: &[Vec<u8>]) -> usize {
+fn features_follow_their_scans(
+    telegrams: &[Vec<u8>],
+    mut whole_scan: impl FnMut(&[u8]) -> Option<lms_core::Frame>,
+) -> usize {
     use lms_core::telegram::features::{Assembled, FeatureAssembler};
     let mut asm = FeatureAssembler::new();
     let mut extractor = lms_core::Extractor::new();
@@ -599,16 +596,12 @@ fn features_follow_their_scans(telegrams: &[Vec<u8>]) -> usize {
     for t in telegrams {
         let tel = Telegram::new_checked(&t[..], Direction::SensorToHost).unwrap();
         if t[4] == 0xB0 {
-            let frame = measured(t)
-                .to_frame(lms_core::telegram::RangeBits::Bits13)
-                .unwrap();
-            want = Some(
-                extractor
-                    .run(&frame, &lms_core::ValidParams::DEFAULT)
-                    .clone(),
-            );
+            if let Some(frame) = whole_scan(t) {
+                let features = extractor.run(&frame, &lms_core::ValidParams::DEFAULT);
+                want = Some(features.clone());
+            }
         } else if let Ok(Assembled::Complete(_, features)) = asm.push(&tel) {
-            let want = want.take().expect("features after a scan");
+            let want = want.take().expect("features after a whole scan");
             let diffs = host_bridge::verify::differences(features, &want);
             assert!(diffs.is_empty(), "{diffs:?}");
             checked += 1;
