@@ -483,6 +483,21 @@ fn joined_features_match(got: &Got, variant: lms_core::Variant) -> usize {
     })
 }
 
+/// A chain through the firmware under QEMU (`coprocessor --qemu`) with a
+/// client at 500 kBd once the sensor streams (a relayed `3A` answered),
+/// and the wait for a reply on QEMU's slower lines.
+fn qemu_streaming(name: &str) -> ((Proc, Proc), Port, Duration) {
+    let elf = common::qemu_firmware();
+    let dir = common::scratch("lms-modes", name);
+    let (sim, cop, link) = chain(&dir, &["--qemu", elf.to_str().unwrap()]);
+    let mut port = Port::open(&link);
+    let wait = Duration::from_secs(2);
+    port.ask_until(&[0x20, 0x25], 0xA0, 60, wait);
+    to_500k(&mut port);
+    port.ask_until(&[0x3A], 0xBA, 60, wait);
+    ((sim, cop), port, wait)
+}
+
 /// Partial scans through the firmware under QEMU: passed on, joined, and
 /// the features of the joined scans bit-identical to the std build's.
 /// 180°/1° (each partial scan is a whole one) and 100°/0.5° (two partial
@@ -490,14 +505,7 @@ fn joined_features_match(got: &Got, variant: lms_core::Variant) -> usize {
 #[test]
 #[ignore = "needs qemu-system-arm and the firmware ELF: cd firmware && cargo build --release"]
 fn partial_scans_through_the_firmware_under_qemu() {
-    let elf = common::qemu_firmware();
-    let dir = common::scratch("lms-modes", "qemu-partial");
-    let (_sim, _cop, link) = chain(&dir, &["--qemu", elf.to_str().unwrap()]);
-    let mut port = Port::open(&link);
-    let wait = Duration::from_secs(2);
-    port.ask_until(&[0x20, 0x25], 0xA0, 60, wait);
-    to_500k(&mut port);
-    port.ask_until(&[0x3A], 0xBA, 60, wait);
+    let (_chain, mut port, wait) = qemu_streaming("qemu-partial");
     port.ask(&[0x56, 0x01], wait);
     let mut checked = 0;
     for (request, variant) in [
@@ -625,14 +633,7 @@ fn real_time_indices_through_the_coprocessor_with_bit_identical_features() {
 #[test]
 #[ignore = "needs qemu-system-arm and the firmware ELF: cd firmware && cargo build --release"]
 fn real_time_indices_through_the_firmware_under_qemu() {
-    let elf = common::qemu_firmware();
-    let dir = common::scratch("lms-modes", "qemu-indices");
-    let (_sim, _cop, link) = chain(&dir, &["--qemu", elf.to_str().unwrap()]);
-    let mut port = Port::open(&link);
-    let wait = Duration::from_secs(2);
-    port.ask_until(&[0x20, 0x25], 0xA0, 60, wait);
-    to_500k(&mut port);
-    port.ask_until(&[0x3A], 0xBA, 60, wait);
+    let (_chain, mut port, wait) = qemu_streaming("qemu-indices");
     let checked = indexed_scans_and_their_features(&mut port, wait, Duration::from_secs(8));
     assert!(checked >= 4, "{checked} feature groups checked");
 }
