@@ -41,5 +41,4 @@ echo "static RAM (.data + .bss + .uninit): $ram B ($(kib $ram) KiB; goal <= 16 K
 LMS_ITERATIONS=30 measure "30 passes" 
 LMS_ITERATIONS=1 measure "1 pass"
 LMS_ITERATIONS=30 measure "30 passes, fast-math" --features fast-math
-LMS_ITERATIONS=30 measure "30 passes, split" --features split-before-reject
 LMS_ITERATIONS=30 cargo build -q --release

@@ -53,13 +53,10 @@ use crate::options::{ParamArgs, UnitArg};
 use crate::pty::Pty;
 use crate::ros2::mcap_out::Recording;
 use crate::scan::{variant_name, VariantChoice};
-use crate::serial::{Arrivals, Link, PtyPort, SerialLink};
+use crate::serial::{Arrivals, Link, PtyPort, SerialLink, TICK};
 use crate::simulate::symlink::Symlink;
 
 mod qemu_bridge;
-
-/// Longest wait for sensor bytes per loop (the host side is polled as often).
-const TICK: Duration = Duration::from_millis(1);
 
 /// Options of `host-bridge coprocessor`.
 #[derive(Args, Debug, Clone)]

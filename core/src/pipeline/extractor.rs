@@ -23,8 +23,7 @@ use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{EdgeList, Segmenter};
 use crate::pipeline::smoothing::{
-    interleaved_turns, smoothing_pass_strided, usable, usable_windows_strided, WindowSink,
-    WINDOW_WORDS,
+    interleaved_turns, smoothing_pass, usable, usable_windows, WindowSink, WINDOW_WORDS,
 };
 use crate::pipeline::split::split_before_reject;
 
@@ -316,7 +315,7 @@ impl ScaleSpace<'_> {
     /// with windows of `stride`, `D` of each pass into `trace`, the last
     /// pass's into `seg` (§6), `after_pass` after each.
     fn run<F, const S: usize, L: EdgeList>(
-        mut self,
+        self,
         frame: &Frame,
         params: &Params,
         stride: usize,
@@ -335,7 +334,14 @@ impl ScaleSpace<'_> {
         for x in trace.iter_mut().skip(computed) {
             *x = f32::INFINITY;
         }
-        self.mark_usable_windows(frame, params, stride, windows);
+        usable_windows(
+            frame.beams(),
+            frame.ranges(),
+            params.max_range,
+            stride,
+            windows,
+            &mut self.window_ok[..],
+        );
         let filter = window_filter(params, stride as f32 * frame.geometry().step);
         for pass in 1..=params.iterations {
             let last = pass == params.iterations;
@@ -343,32 +349,12 @@ impl ScaleSpace<'_> {
                 trace: &mut *trace,
                 segmenter: if last { Some(&mut *seg) } else { None },
             };
-            run_pass(&filter, stride, self.window_ok, self.smoothed, &mut sink);
+            smoothing_pass(&filter, stride, self.window_ok, self.smoothed, &mut sink);
             after_pass(pass, trace, self.smoothed);
         }
         for i in computed..windows {
             seg.window(i, f32::INFINITY);
         }
-    }
-
-    /// The usable-window bitset of `frame` for windows of `stride` (§2, §10).
-    fn mark_usable_windows(
-        &mut self,
-        frame: &Frame,
-        params: &Params,
-        stride: usize,
-        windows: usize,
-    ) {
-        let (beams, raw) = (frame.beams(), frame.ranges());
-        // At stride 1 the strided spans are §2's usable windows.
-        usable_windows_strided(
-            beams,
-            raw,
-            params.max_range,
-            stride,
-            windows,
-            &mut self.window_ok[..],
-        );
     }
 }
 
@@ -393,21 +379,6 @@ fn window_filter(params: &Params, step: f32) -> WindowFilter {
         return filter.with_grazing(params.grazing_noise, t, step);
     }
     filter
-}
-
-/// One smoothing pass: the strided pass at every stride, which at stride
-/// 1 is §4's pass bit for bit ([`smoothing_pass`], kept as the reference
-/// it is tested against): one pass in the firmware's flash (−1.1 KB; stop
-/// 25, for the arcs' pairs), a few per cent more instructions per 1° scan.
-#[inline(always)]
-fn run_pass(
-    filter: &WindowFilter,
-    stride: usize,
-    ok: &[u32],
-    r: &mut [f32],
-    d: &mut dyn WindowSink,
-) {
-    smoothing_pass_strided(filter, stride, ok, r, d);
 }
 
 /// Beams of `frame` that are valid and below `max_range`, and valid beams

@@ -35,14 +35,6 @@ pub fn weight(mahalanobis: f32) -> f32 {
     }
 }
 
-/// Whether each window `i` (beams `i, i+1, i+2`) has three valid beams
-/// (§1); writes `beams.len() − 2` flags into `window_ok` (as many as fit).
-pub fn valid_windows(beams: &[Beam], window_ok: &mut [bool]) {
-    for (ok, b) in window_ok.iter_mut().zip(beams.windows(3)) {
-        *ok = b[0].is_valid() && b[1].is_valid() && b[2].is_valid();
-    }
-}
-
 /// Whether beam `beam` with range `d` (m) takes part in the pipeline: valid
 /// and below `max_range` (ALGORITHM.md v2 §1; a range at or beyond it is a
 /// fill value or an error code of another mode).
@@ -55,25 +47,14 @@ pub fn usable(beam: Beam, d: f32, max_range: f32) -> bool {
 /// `i % 32` of word `i / 32` (one word per smoothing block).
 pub const WINDOW_WORDS: usize = MAX_WINDOWS.div_ceil(BLOCK);
 
-/// [`valid_windows`] with the range limit, as a bitset: window `i` (beams
-/// `i, i+1, i+2`) is set iff its three beams are [`usable`]. Sets the bits
+/// The usable windows of stride `stride` as a bitset: window `i` (beams
+/// `i, i+stride, i+2·stride`) is set iff every beam of `i..=i + 2·stride`
+/// is [`usable`], so that a segment (a run of windows) never spans an
+/// unusable beam (§2; at stride 1, the window's three beams). Sets the bits
 /// of the first `windows` windows (as many as `window_ok` holds) and clears
-/// every other bit.
+/// every other bit. One pass over the beams with the length of the current
+/// run of usable beams.
 pub fn usable_windows(
-    beams: &[Beam],
-    ranges: &[f32],
-    max_range: f32,
-    windows: usize,
-    window_ok: &mut [u32],
-) {
-    usable_spans(beams, ranges, max_range, 1, windows, window_ok);
-}
-
-/// Window `i` of stride `stride` is set iff every beam of
-/// `i..=i + 2·stride` is usable (the first `windows` windows, as many as
-/// `window_ok` holds); every other bit is cleared. One pass over the beams
-/// with the length of the current run of usable beams.
-fn usable_spans(
     beams: &[Beam],
     ranges: &[f32],
     max_range: f32,
@@ -101,22 +82,6 @@ fn usable_spans(
             }
         }
     }
-}
-
-/// [`usable_windows`] for windows of stride `stride` (same-turn windows), into
-/// the same bitset (the first `windows` windows): window
-/// `i` needs every beam of `i..=i + 2·stride` usable, so that a segment
-/// (a run of windows) never spans an unusable beam. `stride = 1` is
-/// [`usable_windows`].
-pub fn usable_windows_strided(
-    beams: &[Beam],
-    ranges: &[f32],
-    max_range: f32,
-    stride: usize,
-    windows: usize,
-    window_ok: &mut [u32],
-) {
-    usable_spans(beams, ranges, max_range, stride, windows, window_ok);
 }
 
 /// Where a pass puts `D` of its windows: block by block, in window order,
@@ -150,109 +115,10 @@ impl WindowSink for () {
 /// hundred bytes whatever the frame size.
 const BLOCK: usize = 32;
 
-/// Per-block working storage. Slots `0` and `1` of `third_weight` and
-/// `posterior` carry the last two windows of the previous block.
-struct Block {
-    third_weight: [f32; BLOCK + 2],
-    posterior: [[f32; BLOCK + 2]; 3],
-    /// `D` of the block's windows.
-    d: [f32; BLOCK],
-}
-
-/// Run one Jacobi smoothing pass in place.
-///
-/// - `window_ok`: for each of the `n − 2` windows, whether its three beams
-///   are usable, as the bitset of [`usable_windows`] (bit `i % 32` of word
-///   `i / 32`); invalid beams never take part in a window.
-/// - `ranges`: the ranges of the previous pass (m), replaced by the new ones.
-///   A point all of whose windows are invalid (in particular an invalid
-///   beam) gets weight 0 from each and so keeps its value exactly.
-/// - `sink`: receives `D_i` of the `n − 2` windows block by block, in
-///   order (`+inf` for invalid windows).
-///
-/// Slices shorter than expected are handled by processing only the common
-/// length; nothing panics.
-///
-/// In place is Jacobi here: the windows of a block read points `≥` the
-/// block's first window, and only points of earlier windows have been written.
-// Never inlined: its block (0.7 KB) would sit in the extractor's stack frame
-// beside the strided pass's own, which the extractor calls (the firmware's
-// loop stack peak rose by 0.57 KB with both).
-#[inline(never)]
-pub fn smoothing_pass(
-    filter: &WindowFilter,
-    window_ok: &[u32],
-    ranges: &mut [f32],
-    sink: &mut dyn WindowSink,
-) {
-    let windows = (window_ok.len() * BLOCK).min(ranges.len().saturating_sub(2));
-    if windows == 0 {
-        return;
-    }
-    let n = windows + 2;
-    let mut block = Block {
-        third_weight: [0.0; BLOCK + 2],
-        posterior: [[0.0; BLOCK + 2]; 3],
-        d: [0.0; BLOCK],
-    };
-    let mut start = 0;
-    while start < windows {
-        let m = BLOCK.min(windows - start);
-        let (Some(points), Some(&ok)) = (
-            ranges.get(start..start + m + 2),
-            window_ok.get(start / BLOCK),
-        ) else {
-            break; // not reached: `windows` fits both slices
-        };
-        // The filter on every window of the block (§2–3).
-        filter_block(filter, points, &mut block, m);
-        // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
-        // A window whose beams are not all usable gets D = +inf and weight
-        // 0 here (its estimates, finite or 0, then add 0 to every point).
-        let mut ok = ok; // bit 0: the next window
-        let d = &mut block.d[..m];
-        for d in d.iter_mut() {
-            if ok & 1 == 0 {
-                *d = f32::INFINITY;
-            }
-            ok >>= 1;
-        }
-        third_weights(d, &mut block.third_weight[2..]);
-        sink.windows(start, d);
-        // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
-        let Some(points) = ranges.get_mut(start..start + m) else {
-            break; // not reached, as above
-        };
-        for (t, point) in points.iter_mut().enumerate() {
-            *point = blend(&block, *point, t + 2);
-        }
-        // Carry the last two windows into slots 0 and 1.
-        for slot in 0..2 {
-            block.third_weight[slot] = block.third_weight[m + slot];
-            for k in 0..3 {
-                block.posterior[k][slot] = block.posterior[k][m + slot];
-            }
-        }
-        start += m;
-    }
-    // Points n−2 and n−1 have no window starting at them. Slots 0 and 1
-    // hold windows n−4 and n−3; slots 2 and 3 stand for absent windows.
-    block.third_weight[2] = 0.0;
-    block.third_weight[3] = 0.0;
-    if let Some(point) = ranges.get_mut(n - 2) {
-        *point = blend(&block, *point, 2);
-    }
-    if let Some(point) = ranges.get_mut(n - 1) {
-        *point = blend(&block, *point, 3);
-    }
-}
-
 /// The weights `w/3` (eq. 11) of windows with `D` in `d` (0 for `+inf`).
 ///
-/// One function for every pass (§4 and the strided same-turn passes):
-/// `expf` then has one call site and is inlined into it. With a
-/// call site in each pass it was not inlined at all (+0.13 M instructions
-/// per scan on the M4F).
+/// Kept out of line so that `expf` has a single call site, into which it is
+/// inlined (docs/DESIGN.md, instructions per scan).
 #[inline(never)]
 fn third_weights(d: &[f32], third_weight: &mut [f32]) {
     for (w, &d) in third_weight.iter_mut().zip(d.iter()) {
@@ -264,48 +130,7 @@ fn third_weights(d: &[f32], third_weight: &mut [f32]) {
     }
 }
 
-/// Eq. 12 for one point whose window `j` sits in `slot` (`≥ 2`):
-/// `(1 − Σ w/3)·d_j + Σ (w/3)·x⁺[j − i]` over windows `j`, `j − 1`, `j − 2`,
-/// added in that order. Absent or invalid windows have weight 0 and estimate 0.
-#[inline]
-fn blend(block: &Block, d: f32, slot: usize) -> f32 {
-    let w = &block.third_weight;
-    let x = &block.posterior;
-    let weight_sum = w[slot] + w[slot - 1] + w[slot - 2];
-    let estimate_sum =
-        w[slot] * x[0][slot] + w[slot - 1] * x[1][slot - 1] + w[slot - 2] * x[2][slot - 2];
-    (1.0 - weight_sum) * d + estimate_sum
-}
-
-/// The window filter on `m` consecutive windows, `ranges` holding their
-/// `m + 2` points. Writes `D` (or `+inf`) and the estimates (or 0) of
-/// window `t` into `block.d[t]` and slot `t + 2` of the block; a window the
-/// filter finds valid has finite estimates (the caller masks windows with
-/// unusable beams).
-///
-/// Branch-free over the windows: every window is computed, invalid ones are
-/// masked afterwards. The arithmetic per window is exactly that of
-/// [`WindowFilter::update`].
-#[inline]
-fn filter_block(filter: &WindowFilter, ranges: &[f32], block: &mut Block, m: usize) {
-    let m = m.min(ranges.len().saturating_sub(2)).min(BLOCK);
-    // Exactly the block's points: `t + 2 < m + 2` below needs no check.
-    let Some(ranges) = ranges.get(..m + 2) else {
-        return;
-    };
-    let post = &mut block.posterior;
-    let d = &mut block.d;
-    for t in 0..m {
-        let z = Vec3([ranges[t], ranges[t + 1], ranges[t + 2]]);
-        let (est, keep) = filter.update_unchecked(z);
-        d[t] = if keep { est.mahalanobis } else { f32::INFINITY };
-        post[0][t + 2] = if keep { est.posterior.0[0] } else { 0.0 };
-        post[1][t + 2] = if keep { est.posterior.0[1] } else { 0.0 };
-        post[2][t + 2] = if keep { est.posterior.0[2] } else { 0.0 };
-    }
-}
-
-/// Largest window stride of [`smoothing_pass_strided`] (the 0.25° modes'
+/// Largest window stride of [`smoothing_pass`] (the 0.25° modes'
 /// four interleaved mirror turns).
 pub const MAX_STRIDE: usize = 4;
 
@@ -330,23 +155,36 @@ const CARRY: usize = 2 * MAX_STRIDE;
 /// Per-block working storage. Slots `CARRY − 2·k .. CARRY` of
 /// `third_weight` and `posterior` carry the last `2·k` windows of the
 /// previous block.
-struct StridedBlock {
+struct Block {
     third_weight: [f32; BLOCK + CARRY],
     posterior: [[f32; BLOCK + CARRY]; 3],
 }
 
-/// [`smoothing_pass`] with windows of stride `k` (same-turn windows,
-/// `Params::same_turn_windows`, the default in the interleaved 0.5° and
-/// 0.25° modes; docs/ALGORITHM.md): window `i` is beams
-/// `i, i+k, i+2k` (the filter built for the angle `k·γ`), point `j` is
-/// blended from windows `j, j−k, j−2k` in that order; there are `n − 2k`
-/// windows (the sink hears of no window beyond them; `window_ok` bits
-/// beyond them are ignored). `k = 1` is §4 exactly. `k` above [`MAX_STRIDE`] does nothing.
-// Never inlined, and `k` a run-time value: one copy for every stride in
-// flash (two const-generic copies cost 1 KB more for 2 % fewer
-// instructions), its block on the stack only while it runs.
+/// Run one Jacobi smoothing pass in place, with windows of stride `k`.
+///
+/// Window `i` is beams `i, i+k, i+2k` (`filter` built for the angle `k·γ`);
+/// point `j` is blended from windows `j, j−k, j−2k` in that order (eq. 12).
+/// `k = 1` is §4's pass; `k = 2` and `4` are the same-turn windows of the
+/// interleaved 0.5° and 0.25° modes (`Params::same_turn_windows`). `k` of 0
+/// or above [`MAX_STRIDE`] does nothing.
+///
+/// - `window_ok`: the bitset of [`usable_windows`] for stride `k`; windows
+///   whose beams are not all usable get `D = +inf` and weight 0, so a point
+///   all of whose windows are unusable (an invalid beam in particular)
+///   keeps its value exactly.
+/// - `ranges`: the ranges of the previous pass (m), replaced by the new
+///   ones; there are `n − 2k` windows.
+/// - `sink`: receives `D_i` of the `n − 2k` windows block by block, in
+///   order (`+inf` for unusable windows).
+///
+/// Slices shorter than expected are handled by processing only the common
+/// length; nothing panics. In place is Jacobi here: the windows of a block
+/// read points `≥` the block's first window, and only points of earlier
+/// windows have been written.
+// Never inlined, with `k` a run-time value: one copy for every stride in
+// flash, and its block on the stack only while it runs.
 #[inline(never)]
-pub fn smoothing_pass_strided(
+pub fn smoothing_pass(
     filter: &WindowFilter,
     k: usize,
     window_ok: &[u32],
@@ -361,7 +199,7 @@ pub fn smoothing_pass_strided(
         return;
     }
     let n = windows + 2 * k;
-    let mut block = StridedBlock {
+    let mut block = Block {
         third_weight: [0.0; BLOCK + CARRY],
         posterior: [[0.0; BLOCK + CARRY]; 3],
     };
@@ -369,24 +207,26 @@ pub fn smoothing_pass_strided(
     let mut start = 0;
     while start < windows {
         let m = BLOCK.min(windows - start);
+        // `windows` is bounded by both slices, so every `get` below succeeds.
+        debug_assert!(start + m + 2 * k <= ranges.len() && start / BLOCK < window_ok.len());
         let (Some(points), Some(&ok), Some(d)) = (
             ranges.get(start..start + m + 2 * k),
             window_ok.get(start / BLOCK),
             d_block.get_mut(..m),
         ) else {
-            break; // not reached: `windows` fits all three slices
+            break;
         };
         // The filter on every window of the block (§2–3).
-        filter_block_strided(filter, k, points, ok, &mut block, d);
+        filter_block(filter, k, points, ok, &mut block, d);
         // Weights w/3 (eq. 11), in a separate loop: exp is not vectorisable.
         third_weights(d, &mut block.third_weight[CARRY..]);
         sink.windows(start, d);
-        // Blend the block's points (eq. 12): windows j, j−1, j−2 in that order.
+        // Blend the block's points (eq. 12): windows j, j−k, j−2k in that order.
         let Some(points) = ranges.get_mut(start..start + m) else {
-            break; // not reached, as above
+            break;
         };
         for (t, point) in points.iter_mut().enumerate() {
-            *point = blend_strided(&block, k, *point, t + CARRY);
+            *point = blend(&block, k, *point, t + CARRY);
         }
         // Carry the last 2k windows into the slots before CARRY.
         for slot in CARRY - 2 * k..CARRY {
@@ -405,7 +245,7 @@ pub fn smoothing_pass_strided(
     }
     for t in 0..2 * k {
         if let Some(point) = ranges.get_mut(n - 2 * k + t) {
-            *point = blend_strided(&block, k, *point, CARRY + t);
+            *point = blend(&block, k, *point, CARRY + t);
         }
     }
 }
@@ -415,7 +255,7 @@ pub fn smoothing_pass_strided(
 /// `j − 2k`, added in that order. Absent or invalid windows have weight 0
 /// and estimate 0.
 #[inline]
-fn blend_strided(block: &StridedBlock, k: usize, d: f32, slot: usize) -> f32 {
+fn blend(block: &Block, k: usize, d: f32, slot: usize) -> f32 {
     let w = &block.third_weight;
     let x = &block.posterior;
     let (s1, s2) = (slot - k, slot - 2 * k);
@@ -432,12 +272,12 @@ fn blend_strided(block: &StridedBlock, k: usize, d: f32, slot: usize) -> f32 {
 /// masked afterwards. The arithmetic per window is exactly that of
 /// [`WindowFilter::update`].
 #[inline]
-fn filter_block_strided(
+fn filter_block(
     filter: &WindowFilter,
     k: usize,
     ranges: &[f32],
     ok: u32,
-    block: &mut StridedBlock,
+    block: &mut Block,
     d: &mut [f32],
 ) {
     let m = d.len().min(ranges.len().saturating_sub(2 * k)).min(BLOCK);
@@ -454,7 +294,7 @@ fn filter_block_strided(
     filter_windows(filter, k, ranges, &window_ok, block, d, m);
 }
 
-/// The loop of [`filter_block_strided`]; the filter's grazing switch picks
+/// The loop of [`filter_block`]; the filter's grazing switch picks
 /// the window's `R` (ALGORITHM.md §3, or with the grazing term of §10's
 /// proposal, feature `section10`), a branch per window (only with the
 /// grazing term built in, and
@@ -465,7 +305,7 @@ fn filter_windows(
     k: usize,
     ranges: &[f32],
     window_ok: &[bool; BLOCK],
-    block: &mut StridedBlock,
+    block: &mut Block,
     d: &mut [f32],
     m: usize,
 ) {
@@ -518,14 +358,59 @@ mod tests {
         r
     }
 
+    /// Eq. 11–12 written out window by window: every window of the
+    /// previous ranges first (Jacobi), then each point blended from its
+    /// windows `j, j−1, j−2` in that order, as §4 states it.
+    fn spec_pass(filter: &WindowFilter, ranges: &mut [f32], d: &mut [f32]) {
+        let n = ranges.len();
+        let mut w3 = [0.0f32; 41];
+        let mut x = [[0.0f32; 3]; 41];
+        for i in 0..n - 2 {
+            let z = Vec3([ranges[i], ranges[i + 1], ranges[i + 2]]);
+            match filter.update(z) {
+                Some(e) => {
+                    d[i] = e.mahalanobis;
+                    w3[i] = weight(e.mahalanobis) / 3.0;
+                    x[i] = e.posterior.0;
+                }
+                None => d[i] = f32::INFINITY,
+            }
+        }
+        for (j, point) in ranges.iter_mut().enumerate() {
+            let window = |back: usize| match j.checked_sub(back) {
+                Some(i) if i < n - 2 => (w3[i], x[i][back]),
+                _ => (0.0, 0.0),
+            };
+            let ((w0, x0), (w1, x1), (w2, x2)) = (window(0), window(1), window(2));
+            *point = (1.0 - (w0 + w1 + w2)) * *point + (w0 * x0 + w1 * x1 + w2 * x2);
+        }
+    }
+
+    #[test]
+    fn stride_one_is_the_spec_pass_bit_for_bit() {
+        let n = 41;
+        let filter = WindowFilter::new(GAMMA, 0.01, 0.0);
+        let (mut a, mut b) = (wall(n), wall(n));
+        let ok = [u32::MAX; 2]; // every window usable
+        let (mut da, mut db) = ([0.0f32; 39], [0.0f32; 39]);
+        spec_pass(&filter, &mut a[..n], &mut da);
+        smoothing_pass(&filter, 1, &ok, &mut b[..n], &mut &mut db[..]);
+        assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits));
+        assert_eq!(da.map(f32::to_bits), db.map(f32::to_bits));
+        assert!(
+            a.iter().zip(&wall(n)).any(|(s, r)| s != r),
+            "the pass moved no point"
+        );
+    }
+
     #[test]
     fn stride_two_is_two_independent_sub_scans_bit_for_bit() {
         let n = 41;
         let filter = WindowFilter::new(2.0 * GAMMA, 0.01, 0.0);
         let mut all = wall(n);
-        let ok = [u32::MAX; 2]; // every window usable (the bitset of usable_windows)
+        let ok = [u32::MAX; 2]; // every window usable
         let mut d = [0.0f32; 39];
-        smoothing_pass_strided(&filter, 2, &ok, &mut all[..n], &mut &mut d[..]);
+        smoothing_pass(&filter, 2, &ok, &mut all[..n], &mut &mut d[..]);
         // The same pass on the even and on the odd beams alone (stride 1).
         let raw = wall(n);
         for parity in 0..2 {
@@ -535,7 +420,7 @@ mod tests {
                 *x = raw[parity + 2 * k];
             }
             let mut sub_d = [0.0f32; 19];
-            smoothing_pass(&filter, &ok, &mut sub[..m], &mut &mut sub_d[..m - 2]);
+            smoothing_pass(&filter, 1, &ok, &mut sub[..m], &mut &mut sub_d[..m - 2]);
             for k in 0..m {
                 assert_eq!(
                     sub[k].to_bits(),
@@ -551,19 +436,6 @@ mod tests {
     }
 
     #[test]
-    fn stride_one_is_the_spec_pass() {
-        let n = 41;
-        let filter = WindowFilter::new(GAMMA, 0.01, 0.0);
-        let (mut a, mut b) = (wall(n), wall(n));
-        let ok = [u32::MAX; 2];
-        let (mut da, mut db) = ([0.0f32; 39], [0.0f32; 39]);
-        smoothing_pass(&filter, &ok, &mut a[..n], &mut &mut da[..]);
-        smoothing_pass_strided(&filter, 1, &ok, &mut b[..n], &mut &mut db[..]);
-        assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits));
-        assert_eq!(da.map(f32::to_bits), db.map(f32::to_bits));
-    }
-
-    #[test]
     fn strided_windows_need_every_beam_of_their_span() {
         use crate::frame::{Frame, Invalid, Variant};
         let mut frame = Frame::for_variant(Variant::Fov180Res50);
@@ -574,7 +446,7 @@ mod tests {
         frame.set_metres(30, 90.0); // beyond max_range below
         let n = frame.len();
         let mut ok = [u32::MAX; WINDOW_WORDS];
-        usable_windows_strided(frame.beams(), frame.ranges(), 80.0, 2, n - 2, &mut ok);
+        usable_windows(frame.beams(), frame.ranges(), 80.0, 2, n - 2, &mut ok);
         for i in 0..WINDOW_WORDS * BLOCK {
             let w = (ok[i / BLOCK] >> (i % BLOCK)) & 1 != 0;
             let want = i + 4 < n && (i..=i + 4).all(|j| j != 10 && j != 30);

@@ -639,8 +639,10 @@ impl State {
                 if event.is_some() {
                     self.drop_front(buf, 1);
                 } else {
-                    // Not reached (the front is not STX); skip to be sure
-                    // the caller's loop makes progress.
+                    // The front is a handshake byte, so this is never taken;
+                    // were it taken, skipping the byte keeps the caller's
+                    // loop making progress.
+                    debug_assert!(false, "handshake byte not recognised");
                     self.skip(buf, 1);
                 }
                 event

@@ -30,11 +30,8 @@ use lms_core::telegram::reply::code as reply_code;
 use lms_core::telegram::{Baud, Direction, Event, Framer, Handshake, Request};
 
 use crate::qemu_intake::QemuIntake;
-use crate::serial::{Link, PtyPort, SerialLink};
+use crate::serial::{Link, PtyPort, SerialLink, TICK};
 use crate::verify::QemuLines;
-
-/// Longest wait for sensor bytes per round.
-const TICK: Duration = Duration::from_millis(1);
 
 /// The sensor's bytes on their way to QEMU (see the module docs).
 pub(super) struct SensorFeed {

@@ -39,6 +39,11 @@ pub const BITS_PER_BYTE: u64 = 10;
 /// A write that cannot go out in this time is an error (the peer is stuck).
 pub const WRITE_TIMEOUT: Duration = Duration::from_secs(2);
 
+/// Longest wait for bytes in one round of a host loop: the co-processor on a
+/// PC, `verify`'s sensor and client, the QEMU bridge (1 ms, the pacing
+/// granularity of their emulated lines).
+pub const TICK: Duration = Duration::from_millis(1);
+
 /// Time `bytes` take on the line at `baud` (8N1: 10 bits per byte).
 pub fn line_time(bytes: usize, baud: Baud) -> Duration {
     let bits = bytes as u64 * BITS_PER_BYTE;

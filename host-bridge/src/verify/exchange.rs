@@ -9,7 +9,8 @@ use lms_core::telegram::features::{
 use lms_core::telegram::{emit_telegram, Request};
 
 use super::session::Session;
-use super::{RETRY, TICK};
+use super::RETRY;
+use crate::serial::TICK;
 
 impl Session {
     /// Send `request` on the host line until the reply `reply` comes (every

@@ -12,8 +12,8 @@ use lms_core::telegram::Baud;
 use lms_core::{Params, ValidParams};
 
 use super::dut::{Dut, Lines};
-use super::TICK;
 use crate::pty::Pty;
+use crate::serial::TICK;
 use crate::serial::{Arrivals, PtyPort, SerialLink};
 
 /// Run a [`CoProcessor`] on two ports until `stop`: poll (the sensor's

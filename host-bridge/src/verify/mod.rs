@@ -207,8 +207,6 @@ const RETRY: Duration = Duration::from_millis(500);
 const QUIET: Duration = Duration::from_secs(3);
 /// Time for the closing `20 25` and `55` (also after `--timeout`).
 const CLOSING: Duration = Duration::from_secs(5);
-/// Longest wait of one pass of the loop (the emulator's pacing granularity).
-const TICK: Duration = Duration::from_millis(1);
 
 /// The checked options that are not the play source: the host line's
 /// rate and the pipeline parameters.

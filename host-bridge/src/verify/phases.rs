@@ -10,7 +10,8 @@ use lms_core::telegram::{Baud, Request};
 
 use super::report::Outcome;
 use super::session::{Session, SETTLE};
-use super::{CLOSING, QUIET, TICK};
+use super::{CLOSING, QUIET};
+use crate::serial::TICK;
 
 /// A disruption wanted after `after` scans of the selection back: `true`
 /// once that many are back and it has not happened yet; once it has

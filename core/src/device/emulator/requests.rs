@@ -197,8 +197,9 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             })
             .is_err()
         {
-            // Cannot happen (`classify` checked the room): the source lets
-            // the request go, counted.
+            // Never taken (`classify` checked the room); were it taken, the
+            // source lets the request go, counted.
+            debug_assert!(false, "no room for a relayed request");
             self.stats.dropped_requests = self.stats.dropped_requests.wrapping_add(1);
             self.source.relay_dropped();
             return;

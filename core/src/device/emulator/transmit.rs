@@ -505,8 +505,11 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
         let n = match values {
             Ok(v) if ack => self.emit_after_ack(|buf| v.emit(address, buf)),
             Ok(v) => v.emit(address, &mut self.tx),
-            // Cannot happen: `beams <= MAX_VALUES`.
-            Err(_) => Ok(0),
+            // Never taken: `beams <= MAX_VALUES`.
+            Err(_) => {
+                debug_assert!(false, "more beams than a B0 holds");
+                Ok(0)
+            }
         };
         self.set_frame(ready_us, n.ok(), done);
     }
