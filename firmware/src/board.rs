@@ -154,6 +154,20 @@ pub struct Boot {
     pub bor: Bor,
 }
 
+impl Boot {
+    /// The reset flags and the previous boot's fault as the co-processor
+    /// reports them (`D5`, the console): 0 where there is no fault record.
+    pub fn record(&self) -> lms_core::telegram::features::BootRecord {
+        let f = self.last_fault;
+        lms_core::telegram::features::BootRecord {
+            reset_flags: self.reset.0,
+            fault_cause: f.map_or(0, |f| f.cause as u32),
+            fault_pc: f.map_or(0, |f| f.pc),
+            fault_lr: f.map_or(0, |f| f.lr),
+        }
+    }
+}
+
 /// What [`init`] hands to the main loop.
 pub struct Board {
     /// USART1.

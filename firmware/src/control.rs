@@ -7,24 +7,26 @@
 //! | `q` | report, then exit through semihosting with code 0 (QEMU); a software reset (board) |
 //! | anything else | ignored |
 //!
-//! The report line, all values decimal:
+//! The report line, `key=value` pairs, all values decimal:
 //!
-//! ```text
-//! now_us=… scans=… stack_peak=… stack_size=… emulator_us=… host_rx=… host_dropped=… host_overrun=… host_line_errors=… host_peak=… sensor_rx=… sensor_dropped=… sensor_overrun=… sensor_line_errors=… sensor_peak=… scans_in=… feature_scans_out=… feature_telegrams_out=… sensor_crc_errors=… sensor_resyncs=… sensor_bytes_skipped=… host_crc_errors=… scans_dropped=… scans_rejected=… host_scans_dropped=… scans_other_setting=… scans_out=… host_requests_dropped=… relays_refused=… relays_failed=… partial_scans_unassembled=… sysclk_hz=… reset_flags=… fault_cause=… fault_pc=… fault_lr=… fault_detail=…
-//! ```
-//!
-//! Then twelve of the co-processor's [`Counters`] (also readable by the host
-//! with request `55`), then the boot's: SYSCLK (Hz), `RCC_CSR`'s reset flags
-//! ([`crate::fault::ResetCause`]; 0 under QEMU), and the previous boot's
-//! fault record (cause 0 = none, 1 panic, 2 HardFault, 3 unexpected
-//! interrupt).
+//! - `now_us`, `scans`, `stack_peak`, `stack_size`, `emulator_us`;
+//! - the host and the sensor port's receive counts: `host_rx`,
+//!   `host_dropped`, `host_overrun`, `host_line_errors`, `host_peak`, and
+//!   the same with `sensor_`;
+//! - the co-processor's [`Counters`] but the boot's (also readable by the
+//!   host with request `55`), in their declaration order
+//!   (docs/reference/counters.md);
+//! - the boot's: `sysclk_hz` (SYSCLK, Hz), the counters of kind boot (the
+//!   reset flags of `RCC_CSR`, [`crate::fault::ResetCause`], 0 under QEMU;
+//!   the previous boot's fault record: cause 0 = none, 1 panic,
+//!   2 HardFault, 3 unexpected interrupt; its PC and LR), `fault_detail`.
 //!
 //! `emulator_us` is the emulator's own clock read at the same moment
 //! (semihosting `SYS_ELAPSED` / `SYS_TICKFREQ`; QEMU: the host's monotonic
 //! clock since QEMU started), printed beside `now_us` to check the time
 //! base; 0 on the board (no semihosting there).
 
-use lms_core::telegram::features::Counters;
+use lms_core::telegram::features::{CounterKind, Counters};
 
 use embedded_io::Write;
 
@@ -105,39 +107,20 @@ impl Report {
         for (side, c) in [("host", &self.host), ("sensor", &self.sensor)] {
             w.counts(side, c);
         }
-        let c = &self.counters;
-        for (name, v) in [
-            ("scans_in", c.scans_in),
-            ("feature_scans_out", c.feature_scans_out),
-            ("feature_telegrams_out", c.feature_telegrams_out),
-            ("sensor_crc_errors", c.sensor_crc_errors),
-            ("sensor_resyncs", c.sensor_resyncs),
-            ("sensor_bytes_skipped", c.sensor_bytes_skipped),
-            ("host_crc_errors", c.host_crc_errors),
-            ("scans_dropped", c.scans_dropped),
-            ("scans_rejected", c.scans_rejected),
-            ("host_scans_dropped", c.host_scans_dropped),
-            ("scans_other_setting", c.scans_other_setting),
-            ("scans_out", c.scans_out),
-            ("host_requests_dropped", c.host_requests_dropped),
-            ("relays_refused", c.relays_refused),
-            ("relays_failed", c.relays_failed),
-            ("partial_scans_unassembled", c.partial_scans_unassembled),
-        ] {
+        // The co-processor's counters, then the boot's: SYSCLK, the boot
+        // record's fields in counter order, the fault's detail.
+        let counts = self.counters.entries().filter(|e| e.1 != CounterKind::Boot);
+        for (name, _, v) in counts {
             w.field(name, v.into());
         }
-        let b = &self.boot;
-        let f = b.last_fault;
-        for (name, v) in [
-            ("sysclk_hz", b.clocks.sysclk_hz),
-            ("reset_flags", b.reset.0),
-            ("fault_cause", f.map_or(0, |f| f.cause as u32)),
-            ("fault_pc", f.map_or(0, |f| f.pc)),
-            ("fault_lr", f.map_or(0, |f| f.lr)),
-            ("fault_detail", f.map_or(0, |f| f.detail)),
-        ] {
+        w.field("sysclk_hz", self.boot.clocks.sysclk_hz.into());
+        let mut boot = Counters::ZERO;
+        boot.set_boot(self.boot.record());
+        for (name, _, v) in boot.entries().filter(|e| e.1 == CounterKind::Boot) {
             w.field(name, v.into());
         }
+        let detail = self.boot.last_fault.map_or(0, |f| f.detail);
+        w.field("fault_detail", detail.into());
         w.put(b"\n");
     }
 }

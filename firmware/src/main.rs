@@ -82,13 +82,7 @@ mod app {
 
     /// The boot's findings into the counters (`55` → `D5`).
     pub fn note_boot(app: &mut App, boot: &crate::board::Boot) {
-        let f = boot.last_fault;
-        app.note_boot(
-            boot.reset.0,
-            f.map_or(0, |f| f.cause as u32),
-            f.map_or(0, |f| f.pc),
-            f.map_or(0, |f| f.lr),
-        );
+        app.note_boot(boot.record());
     }
 }
 

@@ -45,6 +45,7 @@ use std::time::{Duration, Instant};
 use anyhow::{ensure, Context, Result};
 use clap::Args;
 use lms_core::device::coprocessor::{CoProcessor, PollError, SensorSetup};
+use lms_core::telegram::features::CounterKind;
 use lms_core::telegram::{Baud, RangeBits, Request};
 use lms_core::Unit;
 
@@ -369,28 +370,21 @@ fn stop_sensor(sensor: &mut LinkPort) {
     }
 }
 
-/// The status line.
-/// The status line; `host` is the client line (its bytes at another rate).
+/// The status line: every counter but the boot's (`name=value`, as `D5`
+/// and the firmware's console name them), the sensor link, the client's
+/// face; `host` is the client line (its bytes at another rate).
 fn status(cop: &CoProcessor, host: &PtyPort, clock: Instant) -> String {
-    let c = cop.counters();
+    let mut line = format!("[{:8.1} s]", clock.elapsed().as_secs_f64());
+    let counters = cop.counters();
+    for (name, _, value) in counters.entries().filter(|e| e.1 != CounterKind::Boot) {
+        let _ = write!(line, " {name}={value}");
+    }
     let face = cop.host_face();
-    let mut line = format!(
-        "[{:8.1} s] scans in {} out {} (features {}), dropped: host line {}, other setting {}, \
-         processing {}, rejected {}; sensor CRC errors {}",
-        clock.elapsed().as_secs_f64(),
-        c.scans_in,
-        c.scans_out,
-        c.feature_scans_out,
-        c.host_scans_dropped,
-        c.scans_other_setting,
-        c.scans_dropped,
-        c.scans_rejected,
-        c.sensor_crc_errors,
-    );
     let setup = cop.link().setup();
     let _ = write!(
         line,
-        "; sensor {:?} ({} {}); client {} Bd, mode {:02X}, {} {}, features {}",
+        "; sensor {:?} ({} {}); client {} Bd, mode {:02X}, {} {}, features {}, \
+         bytes at another rate {}",
         cop.link().step(),
         variant_name(setup.variant),
         setup.units,
@@ -399,16 +393,6 @@ fn status(cop: &CoProcessor, host: &PtyPort, clock: Instant) -> String {
         variant_name(face.variant()),
         face.units(),
         if cop.features_on() { "on" } else { "off" },
-    );
-    let _ = write!(
-        line,
-        "; client CRC errors {} (each NAKed), requests dropped {} (queue full), relayed \
-         refused {} failed {}, partial scans not joined {}, bytes at another rate {}",
-        c.host_crc_errors,
-        c.host_requests_dropped,
-        c.relays_refused,
-        c.relays_failed,
-        c.partial_scans_unassembled,
         host.bytes_at_another_rate(),
     );
     line

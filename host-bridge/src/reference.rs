@@ -1,8 +1,9 @@
 //! `host-bridge params`: every parameter with its value, unit and meaning
 //! ([`lms_core::params::FIELDS`]), the presets ([`lms_core::params::PRESETS`])
-//! and the counters of a frame's `stats` ([`lms_core::Stats::MEANINGS`]), as
-//! aligned text or as markdown. `docs/reference/parameters.md` and
-//! `docs/reference/stats.md` are its markdown output, and a test
+//! the counters of a frame's `stats` ([`lms_core::Stats::MEANINGS`]) and the
+//! co-processor's counters (`D5`, [`Counters::MEANINGS`]), as aligned text or
+//! as markdown. `docs/reference/parameters.md`, `docs/reference/stats.md`
+//! and `docs/reference/counters.md` are its markdown output, and a test
 //! (`tests/docs_current.rs`) fails when they differ from it.
 
 use std::fmt::Write as _;
@@ -11,6 +12,7 @@ use std::io::{self, Write};
 use anyhow::{anyhow, Result};
 use clap::Args;
 use lms_core::params::{Preset, FIELDS, PRESETS};
+use lms_core::telegram::features::{CounterKind, Counters};
 use lms_core::{Params, Stats};
 
 /// The command that writes `docs/reference/parameters.md`.
@@ -20,6 +22,10 @@ pub const PARAMETERS_COMMAND: &str =
 /// The command that writes `docs/reference/stats.md`.
 pub const STATS_COMMAND: &str =
     "cargo run -p host-bridge -- params --stats --markdown > docs/reference/stats.md";
+
+/// The command that writes `docs/reference/counters.md`.
+pub const COUNTERS_COMMAND: &str =
+    "cargo run -p host-bridge -- params --counters --markdown > docs/reference/counters.md";
 
 /// Options of `host-bridge params`.
 #[derive(Args, Clone, Debug)]
@@ -32,18 +38,24 @@ pub struct ParamsArgs {
     #[arg(long)]
     pub markdown: bool,
     /// The counters of a frame's `stats` record instead of the parameters
-    #[arg(long)]
+    #[arg(long, conflicts_with = "counters")]
     pub stats: bool,
+    /// The co-processor's counters (its `D5` telegram, the status lines)
+    /// instead of the parameters
+    #[arg(long)]
+    pub counters: bool,
 }
 
 /// Run `host-bridge params`.
 pub fn run(args: &ParamsArgs) -> Result<()> {
     let preset = crate::options::preset(&args.preset).map_err(|e| anyhow!("--preset: {e}"))?;
-    let text = match (args.stats, args.markdown) {
-        (true, true) => stats_markdown(),
-        (true, false) => stats_text(),
-        (false, true) => parameters_markdown(preset),
-        (false, false) => parameters_text(preset),
+    let text = match (args.stats, args.counters, args.markdown) {
+        (true, _, true) => stats_markdown(),
+        (true, _, false) => stats_text(),
+        (false, true, true) => counters_markdown(),
+        (false, true, false) => counters_text(),
+        (false, false, true) => parameters_markdown(preset),
+        (false, false, false) => parameters_text(preset),
     };
     // A closed standard output (`| head`) ends the listing, not an error.
     match io::stdout().lock().write_all(text.as_bytes()) {
@@ -216,6 +228,48 @@ pub fn stats_markdown() -> String {
     );
     for (name, meaning) in Stats::MEANINGS {
         let _ = writeln!(out, "| `{name}` | {} |", plain(meaning));
+    }
+    out
+}
+
+/// What a co-processor counter's kind says, for the tables.
+fn kind_name(kind: CounterKind) -> &'static str {
+    match kind {
+        CounterKind::Count => "count",
+        CounterKind::ScanLoss => "scan loss",
+        CounterKind::Boot => "boot",
+    }
+}
+
+/// The co-processor's counters as aligned text: name, kind, meaning.
+pub fn counters_text() -> String {
+    let mut rows = vec![vec!["COUNTER".into(), "KIND".into(), "MEANING".into()]];
+    rows.extend(Counters::NAMES.iter().zip(Counters::MEANINGS).map(
+        |(&(name, kind), (_, meaning))| {
+            let meaning = plain(meaning).replace('\n', " ");
+            vec![name.to_string(), kind_name(kind).to_string(), meaning]
+        },
+    ));
+    aligned(&rows)
+}
+
+/// The co-processor's counters in markdown.
+pub fn counters_markdown() -> String {
+    let mut out = format!(
+        "# Co-processor counters\n\n\
+         <!-- Generated from the code: `{COUNTERS_COMMAND}`. \
+         host-bridge/tests/docs_current.rs fails when this file differs. -->\n\n\
+         The co-processor's {} counters (`lms_core::telegram::features::Counters::NAMES`, in\n\
+         this order): the `u32` words of its `D5` telegram (docs/PROTOCOL.md), and, but the\n\
+         boot's, the `name=value` pairs of the firmware's console, of `host-bridge coprocessor`'s\n\
+         status line and of `host-bridge verify`'s counters line. The scan losses together\n\
+         account for every scan of the sensor's stream the client did not get.\n\n\
+         | counter | kind | meaning |\n| --- | --- | --- |\n",
+        Counters::LEN
+    );
+    for (&(name, kind), (_, meaning)) in Counters::NAMES.iter().zip(Counters::MEANINGS) {
+        let meaning = plain(meaning).replace('\n', " ");
+        let _ = writeln!(out, "| `{name}` | {} | {meaning} |", kind_name(kind));
     }
     out
 }

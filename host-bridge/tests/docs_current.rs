@@ -9,7 +9,7 @@ use std::path::PathBuf;
 mod common;
 use common::{files_under, workspace as root};
 
-use host_bridge::reference::{self, PARAMETERS_COMMAND, STATS_COMMAND};
+use host_bridge::reference::{self, COUNTERS_COMMAND, PARAMETERS_COMMAND, STATS_COMMAND};
 use lms_core::params::{self, PRESETS};
 use lms_core::Params;
 
@@ -45,6 +45,15 @@ fn the_parameter_reference_is_current() {
 #[test]
 fn the_stats_reference_is_current() {
     check_generated("stats.md", &reference::stats_markdown(), STATS_COMMAND);
+}
+
+#[test]
+fn the_counters_reference_is_current() {
+    check_generated(
+        "counters.md",
+        &reference::counters_markdown(),
+        COUNTERS_COMMAND,
+    );
 }
 
 /// Every `*.md` of the repository's root, of `docs/` and of the packages'

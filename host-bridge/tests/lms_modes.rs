@@ -325,7 +325,7 @@ fn burst_then_relay(port: &mut Port, dir: &Path, wait: Duration, status: bool) {
     assert_eq!(got.acks, want.len());
     if status {
         assert_eq!(dropped, 1, "a pty hands the burst over whole");
-        status_says(dir, "requests dropped 1 ");
+        status_says(dir, " host_requests_dropped=1 ");
     }
     // 100 bad telegrams in one write: 100 NAKs.
     let mut bad = Vec::new();
@@ -341,7 +341,7 @@ fn burst_then_relay(port: &mut Port, dir: &Path, wait: Duration, status: bool) {
     let c = counters(port, wait);
     assert_eq!(c.host_crc_errors, before.host_crc_errors + 100);
     if status {
-        status_says(dir, "client CRC errors 100 ");
+        status_says(dir, " host_crc_errors=100 ");
     }
     // The relay is not wedged: a value mode is the sensor's (A0 00), 3A too.
     let got = port.ask(&[0x20, 0x26, 0x05], wait);

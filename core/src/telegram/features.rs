@@ -64,8 +64,8 @@ pub const LINE_RECORD_LEN: usize = 46;
 pub const CORNER_RECORD_LEN: usize = 27;
 /// Bytes of the summary's data.
 pub const SUMMARY_LEN: usize = 49;
-/// Bytes of the counters' data (20 × u32).
-pub const COUNTERS_LEN: usize = 80;
+/// Bytes of the counters' data ([`Counters::LEN`] × u32).
+pub const COUNTERS_LEN: usize = 4 * Counters::LEN;
 /// Bytes of the counters' data before the request and partial-scan
 /// counters were added (16 × u32), which [`Counters::decode`] still reads
 /// (those fields 0).
@@ -74,160 +74,179 @@ pub const COUNTERS_LEN_V2: usize = 64;
 /// u32), which [`Counters::decode`] still reads (boot fields 0).
 pub const COUNTERS_LEN_V1: usize = 48;
 
-/// Counters the co-processor reports (`D5`); all wrap at `u32::MAX`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// What a counter of [`Counters`] holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Counters {
+pub enum CounterKind {
+    /// Events since boot.
+    Count,
+    /// Scans of the sensor's stream not passed on to the client: together
+    /// they account for every scan the client did not get.
+    ScanLoss,
+    /// A fact of this boot, set by the board ([`CoProcessor::note_boot`](crate::device::coprocessor::CoProcessor::note_boot)).
+    Boot,
+}
+
+macro_rules! declare_counters {
+    ($($(#[doc = $doc:literal])+ $field:ident: $kind:ident,)+) => {
+        /// Counters the co-processor reports (`D5`); all wrap at `u32::MAX`.
+        ///
+        /// Every counter is listed, in declaration order (the `D5` word
+        /// order), in [`Counters::NAMES`]; [`Counters::entries`] gives them
+        /// with their values, for every report.
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        pub struct Counters {
+            $($(#[doc = $doc])+ pub $field: u32,)+
+        }
+
+        impl Counters {
+            /// How many counters there are (the `D5` data is this many `u32`).
+            pub const LEN: usize = declare_counters!(@count $($field)+);
+
+            /// Every counter as (name, kind), in declaration order. The
+            /// names are the field names.
+            pub const NAMES: [(&'static str, CounterKind); Self::LEN] =
+                [$((stringify!($field), CounterKind::$kind),)+];
+
+            /// Every counter as (name, meaning), in [`Counters::NAMES`]
+            /// order: the meaning is the field's documentation.
+            pub const MEANINGS: [(&'static str, &'static str); Self::LEN] =
+                [$((stringify!($field), concat!($($doc),+).trim_ascii_start()),)+];
+
+            /// All counters at zero (`const`).
+            pub const ZERO: Counters = Counters { $($field: 0,)+ };
+
+            /// Every value, in [`Counters::NAMES`] order.
+            pub const fn values(&self) -> [u32; Self::LEN] {
+                [$(self.$field,)+]
+            }
+
+            /// Counters from `values` in [`Counters::NAMES`] order; missing
+            /// values are 0, extra values are ignored.
+            pub fn from_values(values: &[u32]) -> Counters {
+                let mut it = values.iter().copied();
+                Counters { $($field: it.next().unwrap_or(0),)+ }
+            }
+        }
+    };
+    (@count $($field:ident)+) => { 0 $(+ declare_counters!(@one $field))+ };
+    (@one $field:ident) => { 1 };
+}
+
+declare_counters! {
     /// `B0` scans received intact from the sensor.
-    pub scans_in: u32,
+    scans_in: Count,
     /// Scans whose features were sent to the host.
-    pub feature_scans_out: u32,
+    feature_scans_out: Count,
     /// Feature telegrams sent (`D0`–`D4`).
-    pub feature_telegrams_out: u32,
+    feature_telegrams_out: Count,
     /// Telegrams from the sensor with a bad checksum.
-    pub sensor_crc_errors: u32,
+    sensor_crc_errors: Count,
     /// Times the sensor-side framer resynchronised.
-    pub sensor_resyncs: u32,
+    sensor_resyncs: Count,
     /// Bytes from the sensor skipped while resynchronising.
-    pub sensor_bytes_skipped: u32,
+    sensor_bytes_skipped: Count,
     /// Telegrams from the host with a bad checksum (answered with NAK).
-    pub host_crc_errors: u32,
+    host_crc_errors: Count,
     /// Scans of the sensor's stream lost on the way in: damaged on the line,
     /// cut by a receive queue overflow, or missing (counted by the
     /// co-processor's sensor link from the stream's bytes between good
     /// scans).
-    pub scans_dropped: u32,
+    scans_dropped: ScanLoss,
     /// Scans that could not be processed (unsupported value count, …).
-    pub scans_rejected: u32,
+    scans_rejected: ScanLoss,
     /// Scans not sent to a streaming host because its line was still busy
     /// with an earlier scan (the host-line drop policy, docs/PROTOCOL.md).
-    pub host_scans_dropped: u32,
+    host_scans_dropped: ScanLoss,
     /// Scans of another variant or unit than the client's, not passed on
     /// (the sensor was being set up for the client's new choice).
-    pub scans_other_setting: u32,
+    scans_other_setting: ScanLoss,
     /// `B0` scans passed on to the host (stream and `30 01`).
-    pub scans_out: u32,
+    scans_out: Count,
     /// The board's reset flags at this boot (STM32 `RCC_CSR` bits 25–31
     /// shifted down: 1 brown-out, 2 pin, 4 power-on, 8 software,
     /// 16 watchdog, 32 window watchdog, 64 low-power; 0 if unknown).
-    pub reset_flags: u32,
+    reset_flags: Boot,
     /// How the previous boot ended, from its fault record: 0 no record,
     /// 1 panic, 2 hard fault, 3 unexpected interrupt.
-    pub fault_cause: u32,
+    fault_cause: Boot,
     /// Program counter of that fault (address; 0 if none).
-    pub fault_pc: u32,
+    fault_pc: Boot,
     /// Link register of that fault (0 if none).
-    pub fault_lr: u32,
+    fault_lr: Boot,
     /// Requests from the host dropped unanswered (no `ACK`, no reply)
     /// because the face's reply queue was full: a client that sends many
     /// requests without waiting for their replies (each one it resends is
     /// answered).
-    pub host_requests_dropped: u32,
+    host_requests_dropped: Count,
     /// Requests for the sensor (relayed) that came while another was in
     /// flight: answered at once by the face (`92`, or its own `BA` for
     /// `3A`).
-    pub relays_refused: u32,
+    relays_refused: Count,
     /// Relayed requests the sensor did not answer in time (the client got
     /// its `ACK` and no reply).
-    pub relays_failed: u32,
+    relays_failed: Count,
     /// Partial scans (`20 2A`) that could not be joined into a whole scan
     /// for the pipeline (one of its partial scans missing or out of order);
     /// the client still got each one.
-    pub partial_scans_unassembled: u32,
+    partial_scans_unassembled: Count,
+}
+
+/// What the board found at boot, reported with the counters (their
+/// [`CounterKind::Boot`] fields).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BootRecord {
+    /// The board's reset flags ([`Counters::reset_flags`]).
+    pub reset_flags: u32,
+    /// How the previous boot ended ([`Counters::fault_cause`]).
+    pub fault_cause: u32,
+    /// Program counter of that fault ([`Counters::fault_pc`]).
+    pub fault_pc: u32,
+    /// Link register of that fault ([`Counters::fault_lr`]).
+    pub fault_lr: u32,
 }
 
 impl Counters {
-    /// All counters at zero (`const`).
-    pub const ZERO: Counters = Counters {
-        scans_in: 0,
-        feature_scans_out: 0,
-        feature_telegrams_out: 0,
-        sensor_crc_errors: 0,
-        sensor_resyncs: 0,
-        sensor_bytes_skipped: 0,
-        host_crc_errors: 0,
-        scans_dropped: 0,
-        scans_rejected: 0,
-        host_scans_dropped: 0,
-        scans_other_setting: 0,
-        scans_out: 0,
-        reset_flags: 0,
-        fault_cause: 0,
-        fault_pc: 0,
-        fault_lr: 0,
-        host_requests_dropped: 0,
-        relays_refused: 0,
-        relays_failed: 0,
-        partial_scans_unassembled: 0,
-    };
-
-    fn fields(&self) -> [u32; 20] {
-        [
-            self.scans_in,
-            self.feature_scans_out,
-            self.feature_telegrams_out,
-            self.sensor_crc_errors,
-            self.sensor_resyncs,
-            self.sensor_bytes_skipped,
-            self.host_crc_errors,
-            self.scans_dropped,
-            self.scans_rejected,
-            self.host_scans_dropped,
-            self.scans_other_setting,
-            self.scans_out,
-            self.reset_flags,
-            self.fault_cause,
-            self.fault_pc,
-            self.fault_lr,
-            self.host_requests_dropped,
-            self.relays_refused,
-            self.relays_failed,
-            self.partial_scans_unassembled,
-        ]
+    /// Set the boot fields from `boot`.
+    pub fn set_boot(&mut self, boot: BootRecord) {
+        self.reset_flags = boot.reset_flags;
+        self.fault_cause = boot.fault_cause;
+        self.fault_pc = boot.fault_pc;
+        self.fault_lr = boot.fault_lr;
     }
 
-    /// Write the `D5` data (20 × u32 LE, in field order) into `out`.
+    /// Every counter as (name, kind, value), in [`Counters::NAMES`] order.
+    pub fn entries(&self) -> impl Iterator<Item = (&'static str, CounterKind, u32)> {
+        Self::NAMES
+            .into_iter()
+            .zip(self.values())
+            .map(|((name, kind), value)| (name, kind, value))
+    }
+
+    /// Write the `D5` data ([`Counters::LEN`] × u32 LE, in field order)
+    /// into `out`.
     pub fn encode(&self, out: &mut [u8]) {
         let mut w = Writer::new(out);
-        for v in self.fields() {
+        for v in self.values() {
             w.u32(v);
         }
     }
 
     /// Read the `D5` data; `None` if it is none of [`COUNTERS_LEN`],
-    /// [`COUNTERS_LEN_V2`] and [`COUNTERS_LEN_V1`] bytes (the fields a
-    /// shorter record lacks read 0).
+    /// [`COUNTERS_LEN_V2`] and [`COUNTERS_LEN_V1`] bytes (each shorter
+    /// record is a prefix of the longer: the fields it lacks read 0).
     pub fn decode(data: &[u8]) -> Option<Counters> {
         if ![COUNTERS_LEN, COUNTERS_LEN_V2, COUNTERS_LEN_V1].contains(&data.len()) {
             return None;
         }
         let mut r = Reader::new(data);
-        let boot = data.len() >= COUNTERS_LEN_V2;
-        let boot_field = |r: &mut Reader<'_>| if boot { r.u32() } else { Some(0) };
-        let full = data.len() == COUNTERS_LEN;
-        let new_field = |r: &mut Reader<'_>| if full { r.u32() } else { Some(0) };
-        Some(Counters {
-            scans_in: r.u32()?,
-            feature_scans_out: r.u32()?,
-            feature_telegrams_out: r.u32()?,
-            sensor_crc_errors: r.u32()?,
-            sensor_resyncs: r.u32()?,
-            sensor_bytes_skipped: r.u32()?,
-            host_crc_errors: r.u32()?,
-            scans_dropped: r.u32()?,
-            scans_rejected: r.u32()?,
-            host_scans_dropped: r.u32()?,
-            scans_other_setting: r.u32()?,
-            scans_out: r.u32()?,
-            reset_flags: boot_field(&mut r)?,
-            fault_cause: boot_field(&mut r)?,
-            fault_pc: boot_field(&mut r)?,
-            fault_lr: boot_field(&mut r)?,
-            host_requests_dropped: new_field(&mut r)?,
-            relays_refused: new_field(&mut r)?,
-            relays_failed: new_field(&mut r)?,
-            partial_scans_unassembled: new_field(&mut r)?,
-        })
+        let mut values = [0u32; Counters::LEN];
+        for v in values.iter_mut().take(data.len() / 4) {
+            *v = r.u32()?;
+        }
+        Some(Counters::from_values(&values))
     }
 
     /// Emit the complete `D5` telegram into `buf`; returns its length.

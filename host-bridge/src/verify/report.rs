@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use anyhow::{bail, Result};
-use lms_core::telegram::features::Counters;
+use lms_core::telegram::features::{CounterKind, Counters};
 
 use super::checker::Tally;
 use super::session::Recovery;
@@ -82,7 +82,7 @@ impl Outcome {
     /// known: no scan still late): what they say.
     fn dropped_miscounted(&self) -> Option<String> {
         let c = self.counters.as_ref()?;
-        let counted: u64 = drop_counters(c).iter().map(|&(_, n)| u64::from(n)).sum();
+        let counted: u64 = drop_counters(c).map(|(_, n)| u64::from(n)).sum();
         (self.late == 0 && counted != self.not_back() as u64).then(|| counted_drops(c))
     }
 
@@ -178,29 +178,28 @@ impl Outcome {
 }
 
 /// The co-processor's counters of the scans of the sensor's stream it did
-/// not pass on, by name: lost on the way in, dropped by the host-line
-/// budget, rejected, of another setting.
-fn drop_counters(c: &Counters) -> [(&'static str, u32); 4] {
-    [
-        ("scans_dropped", c.scans_dropped),
-        ("host_scans_dropped", c.host_scans_dropped),
-        ("scans_rejected", c.scans_rejected),
-        ("scans_other_setting", c.scans_other_setting),
-    ]
+/// not pass on ([`CounterKind::ScanLoss`]), by name: lost on the way in,
+/// rejected, dropped by the host-line budget, of another setting.
+fn drop_counters(c: &Counters) -> impl Iterator<Item = (&'static str, u32)> {
+    c.entries()
+        .filter(|e| e.1 == CounterKind::ScanLoss)
+        .map(|(name, _, n)| (name, n))
 }
 
 /// The drop counters that are not 0, as the counters line names them
 /// (`host_scans_dropped=3`), or that all are 0.
 fn counted_drops(c: &Counters) -> String {
     let named: Vec<String> = drop_counters(c)
-        .iter()
-        .filter(|&&(_, n)| n > 0)
+        .filter(|&(_, n)| n > 0)
         .map(|(name, n)| format!("{name}={n}"))
         .collect();
-    if named.is_empty() {
-        "scans_dropped, host_scans_dropped, scans_rejected and scans_other_setting all 0".into()
-    } else {
-        named.join(", ")
+    if !named.is_empty() {
+        return named.join(", ");
+    }
+    let names: Vec<&str> = drop_counters(c).map(|(name, _)| name).collect();
+    match names.split_last() {
+        Some((last, rest)) => format!("{} and {last} all 0", rest.join(", ")),
+        None => "no drop counters".into(),
     }
 }
 
@@ -301,23 +300,17 @@ pub(super) fn report(o: &Outcome) {
         o.tally.lines, o.tally.corners, o.tally.problems
     );
     match (&o.counters, &o.counters_error) {
-        (Some(c), _) => println!(
-            "host-bridge verify: co-processor counters: scans_in={} feature_scans_out={} \
-             feature_telegrams_out={} sensor_crc_errors={} sensor_resyncs={} \
-             sensor_bytes_skipped={} host_crc_errors={} scans_dropped={} scans_rejected={} \
-             host_scans_dropped={} scans_other_setting={}",
-            c.scans_in,
-            c.feature_scans_out,
-            c.feature_telegrams_out,
-            c.sensor_crc_errors,
-            c.sensor_resyncs,
-            c.sensor_bytes_skipped,
-            c.host_crc_errors,
-            c.scans_dropped,
-            c.scans_rejected,
-            c.host_scans_dropped,
-            c.scans_other_setting
-        ),
+        (Some(c), _) => {
+            let named: Vec<String> = c
+                .entries()
+                .filter(|e| e.1 != CounterKind::Boot)
+                .map(|(name, _, n)| format!("{name}={n}"))
+                .collect();
+            println!(
+                "host-bridge verify: co-processor counters: {}",
+                named.join(" ")
+            );
+        }
         (None, Some(e)) => println!("host-bridge verify: no counters at the end: {e}"),
         (None, None) => {}
     }
@@ -408,7 +401,7 @@ mod tests {
         assert!(why.contains("2 scans lost"), "{why}");
         assert!(
             why.contains(
-                "drop counters (scans_dropped, host_scans_dropped, scans_rejected and \
+                "drop counters (scans_dropped, scans_rejected, host_scans_dropped and \
                  scans_other_setting all 0) do not add up to the 2 scans not back"
             ),
             "{why}"

@@ -67,7 +67,8 @@ use crate::features::Features;
 use crate::params::ValidParams;
 use crate::pipeline::extractor::Extractor;
 use crate::telegram::features::{
-    emit_features_from, Counters, EchoedParams, CMD_FEATURES, REQ_COUNTERS, REQ_FEATURES,
+    emit_features_from, BootRecord, Counters, EchoedParams, CMD_FEATURES, REQ_COUNTERS,
+    REQ_FEATURES,
 };
 use crate::telegram::{
     Baud, Config, Direction, MeasuredView, RangeBits, Telegram, MAX_TELEGRAM_LEN, MAX_VALUES,
@@ -507,11 +508,8 @@ impl CoProcessor {
 
     /// Record what the board found at boot (reset flags, the previous boot's
     /// fault record), reported with the counters (`55` → `D5`).
-    pub fn note_boot(&mut self, reset_flags: u32, fault_cause: u32, fault_pc: u32, fault_lr: u32) {
-        self.counters.reset_flags = reset_flags;
-        self.counters.fault_cause = fault_cause;
-        self.counters.fault_pc = fault_pc;
-        self.counters.fault_lr = fault_lr;
+    pub fn note_boot(&mut self, boot: BootRecord) {
+        self.counters.set_boot(boot);
         self.host.source_mut().counters = self.counters;
     }
 
