@@ -67,36 +67,11 @@ fn coprocessor_parts_sizes() {
     let request_framer = size_of::<Framer<REQUEST_CAPACITY>>();
     assert!(size_of::<Face>() < size_of::<LatestScan>() + request_framer + 161 + 1_400);
     // The whole co-processor (x86-64 layout; on the MCU a little smaller):
-    // 22 704 B before the copy went, 21 896 B after; 21 944 B with the
-    // drop-in host face (three more D5 counters, twice; the host line's
-    // clock; the feature opt-in; a pending reconfiguration); 21 976 B with
-    // the boot's four D5 fields (reset flags, fault cause, PC, LR; twice);
-    // 21 992 B with ALGORITHM.md v2's parameters (max_range,
-    // merge_collinear, max_alpha_sd_deg: 12 B) and two more counters in
-    // Stats (4 B); 20 392 B with two-byte beam statuses and no staging copy
-    // in the host face.
-    // 20 504 B with requests relayed to the sensor (a 48-byte reply, the
-    // forwarded request) and a client's whole 77 kept for the sensor.
-    // 19 848 B with the face's `30 01` streamed from the latest scan (a
-    // 161-byte transmit buffer instead of 819 B), + 16 B for the sensor
-    // link's wait behind the stream (two u64), + 8 B of Params for the
-    // ALGORITHM.md §10 proposals (grazing_noise, same_turn_windows,
-    // fit_sigma); 16 656 B with the extractor's two-level bearing table
-    // and window bitset (3 216 B less); 15 056 B without the extractor's
-    // `D` buffer (segmented as the last pass computes it); 14 296 B with
-    // the edge points as a bitset (760 B less); 13 584 B with the face's
-    // request framer at 64 B (744 B less; +16 B in each framer for a long
-    // request's CRC, +16 B for the host line's feature pump).
-    // 13 592 B with §10 (e) and (f) in Params (bridge_merge, footprint);
-    // 13 608 B with the merges' anchor gate (4 B in each of two Params);
-    // 13 616 B with the arcs' pairs and the merges' F test (a flag and an
-    // f32, padded, in each of two Params).
-    // 13 680 B with four more D5 counters (twice, and 16 B more of the
-    // face's reply buffer), the relay's deadline and owner, the partial
-    // scans' join and the real-time index (the latest scan's and the
-    // face's).
+    // its extractor, the face with the latest scan, the sensor link's
+    // framer, two copies of the parameters and counters, and its typed
+    // state. docs/DESIGN.md (memory) gives how each part was made small.
     assert!(
-        size_of::<CoProcessor>() <= 13_680,
+        size_of::<CoProcessor>() <= 13_696,
         "{}",
         size_of::<CoProcessor>()
     );

@@ -47,7 +47,7 @@ use clap::Args;
 use lms_core::device::coprocessor::{CoProcessor, PollError, SensorSetup};
 use lms_core::telegram::features::CounterKind;
 use lms_core::telegram::{Baud, RangeBits, Request};
-use lms_core::Unit;
+use lms_core::{Unit, ValidParams};
 
 use crate::live_view::{ScanTap, StreamView};
 use crate::options::{ParamArgs, UnitArg};
@@ -250,8 +250,9 @@ fn check_args(args: &CoprocessorArgs) -> Result<()> {
     Ok(())
 }
 
-/// Run `host-bridge coprocessor`.
-pub fn run(args: &CoprocessorArgs) -> Result<()> {
+/// The parameters the co-processor runs, validated, and the sensor set-up
+/// it brings the LMS up with (500 kBd).
+fn params_and_setup(args: &CoprocessorArgs) -> Result<(ValidParams, SensorSetup)> {
     check_args(args)?;
     args.params.ensure_coprocessor_runs_them()?;
     let params = args
@@ -264,6 +265,12 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
         units: args.units.unit().unwrap_or(Unit::Millimetre),
         baud: Baud::B500000,
     };
+    Ok((params, setup))
+}
+
+/// Run `host-bridge coprocessor`.
+pub fn run(args: &CoprocessorArgs) -> Result<()> {
+    let (params, setup) = params_and_setup(args)?;
     let link = SerialLink::open(&args.sensor, Baud::B9600)
         .with_context(|| "--sensor: cannot open the sensor's port".to_string())?;
     if let Some(elf) = &args.qemu {

@@ -13,7 +13,7 @@
 //! direction, is dropped and counted (`Stats::rejected_arc`). Two lines
 //! alone are no chain: an obtuse corner looks the same.
 //!
-//! Such a pair is dropped too when [`curve_not_corner`] tells it from a
+//! Such a pair is dropped too when `curve_not_corner` tells it from a
 //! corner with its beams (`Params::arc_pairs`, docs/DESIGN.md, pairs of
 //! lines on a curve): a circle through the union
 //! explains a curved wall within the noise and better than its two chords
@@ -30,7 +30,7 @@ use crate::pipeline::split::{chi2_quantile_999, circle_residuals};
 
 /// Mark in `on_arc` (entry `k`: line `k`) the lines of `lines` (scan
 /// order, fitted on `scan`) that belong to an arc; returns how many. A run
-/// of exactly two linked lines is marked if [`curve_not_corner`] says so
+/// of exactly two linked lines is marked if `curve_not_corner` says so
 /// (`Params::arc_pairs`).
 #[inline(never)]
 pub fn mark_arcs<B: BearingTable>(

@@ -24,6 +24,59 @@
 //! [`MeasuredView`] reads the values in place (zero-copy, for a client);
 //! [`MeasuredValues`] owns up to [`MAX_VALUES`] words (for a simulator, or
 //! to keep a scan after the receive buffer moves on).
+//!
+//! # Example: from `B0` bytes to features
+//!
+//! The bytes of a sensor's line go through a [`Framer`](crate::telegram::Framer),
+//! which hands out each whole telegram; its [`MeasuredView`] decodes the
+//! values in place into a [`Frame`] in metres, and the
+//! [`Extractor`](crate::Extractor) turns that into features.
+//!
+//! ```
+//! use lms_core::telegram::{Direction, Event, Framer, Handshake};
+//! use lms_core::telegram::{MeasuredValues, MeasuredView, RangeBits};
+//! use lms_core::{Extractor, Frame, Unit, ValidParams, Variant};
+//!
+//! // What an LMS sends: a 180°/0.5° scan in mm of a wall 2 m ahead.
+//! let variant = Variant::Fov180Res50;
+//! let mm: Vec<u16> = (0..variant.beams())
+//!     .map(|j| {
+//!         let phi = variant.geometry().bearing(j); // rad, 0 to the right
+//!         (2000.0 / libm::sinf(phi).max(0.25)) as u16
+//!     })
+//!     .collect();
+//! let mut wire = [0u8; 1024];
+//! let n = MeasuredValues::from_raw(&mm, Unit::Millimetre, 0x10)
+//!     .unwrap()
+//!     .emit(0, &mut wire)
+//!     .unwrap();
+//!
+//! // The receiving side: bytes in as they come, a frame out per `B0`.
+//! let mut framer: Framer = Framer::new(Direction::SensorToHost, Handshake::Expected);
+//! let mut frame = Frame::for_variant(variant);
+//! let mut extractor = Box::new(Extractor::new()); // ~7 KiB; a `static` on a board
+//! let mut input = &wire[..n];
+//! let mut scans = 0;
+//! loop {
+//!     let fed = framer.feed(input);
+//!     input = fed.remaining;
+//!     match fed.event {
+//!         Some(Event::Telegram(t)) => {
+//!             // The sensor's measuring mode gives the range bits (13 by default).
+//!             let view = MeasuredView::parse(&t).unwrap();
+//!             view.to_frame_into(RangeBits::Bits13, &mut frame).unwrap();
+//!             let features = extractor.run(&frame, &ValidParams::DEFAULT);
+//!             assert_eq!(features.lines().len(), 1); // the wall
+//!             let wall = features.lines()[0];
+//!             assert!((wall.r - 2.0).abs() < 0.01); // 2 m away (m)
+//!             scans += 1;
+//!         }
+//!         Some(_) => {}    // ACK, NAK, a telegram too long to keep
+//!         None => break, // everything fed
+//!     }
+//! }
+//! assert_eq!(scans, 1);
+//! ```
 
 use core::fmt;
 

@@ -249,22 +249,11 @@ fn ensure_firmware_runs(params: &Params) -> Result<()> {
     if *params == echoed_only {
         return Ok(());
     }
-    // The fields that differ, by name, from the two structs' `Debug` text.
-    let fields = |p: &Params| {
-        let text = format!("{p:?}");
-        let inner = text
-            .split_once('{')
-            .map_or("", |(_, rest)| rest.trim_end_matches('}'));
-        inner
-            .split(", ")
-            .map(|f| f.trim().to_string())
-            .collect::<Vec<_>>()
-    };
-    let differing: Vec<String> = fields(params)
-        .into_iter()
-        .zip(fields(&echoed_only))
-        .filter(|(a, b)| a != b)
-        .map(|(a, _)| a)
+    // The fields that differ, by name, with the value asked for.
+    let differing: Vec<String> = lms_core::params::FIELDS
+        .iter()
+        .filter(|f| (f.get)(params) != (f.get)(&echoed_only))
+        .map(|f| format!("{}={}", f.name, (f.get)(params)))
         .collect();
     anyhow::bail!(
         "with --qemu or --ports the co-processor is the firmware, which runs the default \
@@ -328,4 +317,29 @@ pub fn run(args: &VerifyArgs) -> Result<()> {
     report::report(&outcome);
     drop(session);
     outcome.verdict()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_firmware_refuses_parameters_it_does_not_echo_by_name() {
+        let echoed = Params {
+            sigma: 0.02,
+            iterations: 12,
+            ..Params::DEFAULT
+        };
+        assert!(ensure_firmware_runs(&echoed).is_ok());
+        let other = Params {
+            split_depth: 3,
+            merge: !Params::DEFAULT.merge,
+            ..echoed
+        };
+        let message = ensure_firmware_runs(&other).unwrap_err().to_string();
+        let merge = format!("merge={}", other.merge);
+        assert!(message.contains("split_depth=3"), "{message}");
+        assert!(message.contains(&merge), "{message}");
+        assert!(!message.contains("sigma="), "{message}");
+    }
 }

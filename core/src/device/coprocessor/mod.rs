@@ -51,6 +51,60 @@
 //! [`CoProcessor::poll`] is generic over `embedded-io` serial ports, so the
 //! firmware (UARTs) and the host build (pseudo-terminals) run the same code;
 //! time comes in as an argument.
+//!
+//! # Example: a board's main loop
+//!
+//! On a board, the UARTs' receive interrupts fill a queue per line and the
+//! main loop polls the co-processor with both ports and the time (µs); a
+//! poll moves what has arrived both ways, runs the pipeline on each whole
+//! scan and says when to switch a UART's rate. Here the sensor is the
+//! crate's LMS 2xx emulator and both lines are in memory (`Port` of
+//! `lms_core::test_support`, feature `test-support`): the co-processor
+//! brings the sensor up, then takes its scans.
+//!
+//! ```
+//! use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
+//! use lms_core::device::emulator::{Emulator, FnSource, Settings};
+//! use lms_core::test_support::Port;
+//! use lms_core::{Unit, ValidParams, Variant};
+//!
+//! // A `static` on a board (about 14 KiB, all in `.bss`); boxed here.
+//! let mut cop = Box::new(CoProcessor::new(ValidParams::DEFAULT, SensorSetup::DEFAULT));
+//! // The LMS: a wall 2 m ahead.
+//! let wall = FnSource::new(|variant: Variant, unit: Unit, out: &mut [u16]| {
+//!     let per_metre = if unit == Unit::Millimetre { 1000.0 } else { 100.0 };
+//!     for (j, v) in out.iter_mut().enumerate() {
+//!         let phi = variant.geometry().bearing(j);
+//!         *v = (2.0 / libm::sinf(phi).max(0.25) * per_metre) as u16;
+//!     }
+//!     out.len()
+//! });
+//! let mut lms = Emulator::new(wall, Settings::default(), 0);
+//! let (mut sensor_line, mut host_line) = (Port::default(), Port::default());
+//! let mut buf = [0u8; 1024];
+//! cop.start(0);
+//! let mut scans = 0;
+//! for tick in 1..=15_000u64 {
+//!     let now_us = tick * 200;
+//!     // The sensor's end of the line (on a board: the LMS and the sensor
+//!     // UART's receive interrupt, which queues its bytes).
+//!     lms.receive(now_us, &std::mem::take(&mut sensor_line.tx));
+//!     while let n @ 1.. = lms.transmit(now_us, &mut buf) {
+//!         sensor_line.rx.extend(&buf[..n]);
+//!     }
+//!     while lms.next_event().is_some() {}
+//!     // The main loop.
+//!     let outcome = cop.poll(&mut sensor_line, &mut host_line, now_us).unwrap();
+//!     if let Some(_rate) = outcome.sensor_baud {
+//!         // On a board: switch the sensor UART to `_rate` now.
+//!     }
+//!     scans += outcome.scans;
+//! }
+//! assert_eq!(cop.link().step(), Step::Streaming);
+//! assert!(scans > 10, "{scans} scans");
+//! assert_eq!(cop.counters().scans_in, scans);
+//! assert_eq!(cop.features().lines().len(), 1); // the wall
+//! ```
 
 pub mod host_line;
 pub mod sensor_link;
@@ -70,8 +124,11 @@ use crate::telegram::features::{
     emit_features_from, BootRecord, Counters, EchoedParams, CMD_FEATURES, REQ_COUNTERS,
     REQ_FEATURES,
 };
+use crate::telegram::reply::{self, ModeResult};
+use crate::telegram::request;
 use crate::telegram::{
-    Baud, Config, Direction, MeasuredView, RangeBits, Telegram, MAX_TELEGRAM_LEN, MAX_VALUES,
+    Baud, Config, Direction, MeasuredView, RangeBits, Telegram, HEADER_LEN, MAX_TELEGRAM_LEN,
+    MAX_VALUES,
 };
 use crate::Unit;
 use crate::{Frame, Variant};
@@ -91,13 +148,54 @@ enum Relay {
     /// None (first: all zero).
     Idle,
     /// Taken from the client, not yet handed to the sensor link.
-    Asked,
+    Asked(RelayedRequest),
     /// Forwarded; the sensor's reply awaited.
-    Sent,
-    /// The sensor's reply is in `relay_reply`.
-    Ready,
+    Sent(RelayedRequest),
+    /// The sensor's reply, for the face to pass on.
+    Ready(RelayedReply),
     /// No reply came: the client gets none either.
     Failed,
+}
+
+/// A client's request for the sensor: its command and data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct RelayedRequest {
+    command: u8,
+    data: [u8; sensor_link::FORWARD_DATA_CAPACITY],
+    len: u8,
+}
+
+impl RelayedRequest {
+    /// The request's data bytes.
+    fn data(&self) -> &[u8] {
+        self.data.get(..usize::from(self.len)).unwrap_or_default()
+    }
+}
+
+/// The sensor's reply to a relayed request, byte for byte.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct RelayedReply {
+    bytes: [u8; RELAY_REPLY_CAPACITY],
+    len: u8,
+}
+
+/// Whether the client gets each scan's feature telegrams (`56 01`/`56 00`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum FeatureTelegrams {
+    /// Exactly what an LMS sends (the default, and after the client's
+    /// session ends).
+    Off,
+    /// Each scan's feature telegrams after its `B0`.
+    On,
+}
+
+/// Whether the sensor link streams.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SensorLine {
+    /// The sensor is being brought up (or again).
+    BringingUp,
+    /// Its bring-up is done: it streams.
+    Streaming,
 }
 
 /// The sensor's latest scan, served to the host for `30 01` and `31`, and
@@ -109,20 +207,15 @@ pub struct LatestScan {
     /// The latest scan's real-time index, if the sensor sent one.
     index: Option<u8>,
     counters: Counters,
-    /// The client has switched the feature telegrams on (`56 01`).
-    features_on: bool,
-    /// A request the sensor answers (`3A`, `20 26`/`27`/`28`): its
-    /// command, data and state, and the sensor's reply.
+    /// Whether the client has switched the feature telegrams on (`56 01`).
+    features: FeatureTelegrams,
+    /// A request the sensor answers (`3A`, `20 26`/`27`/`28`, …), where it
+    /// is, and the sensor's reply.
     relay: Relay,
-    relay_command: u8,
-    relay_data: [u8; sensor_link::FORWARD_DATA_CAPACITY],
-    relay_data_len: u8,
-    relay_reply: [u8; RELAY_REPLY_CAPACITY],
-    relay_len: u8,
-    /// The sensor link streams (its bring-up is done): `3A` is relayed
-    /// only then (before, the face answers it, as the sensor may take
-    /// seconds to come up).
-    sensor_up: bool,
+    /// Whether the sensor link streams (its bring-up is done): `3A` is
+    /// relayed only then (before, the face answers it, as the sensor may
+    /// take seconds to come up).
+    sensor: SensorLine,
     /// Relayed requests answered by the face instead because another
     /// one was in flight ([`Counters::relays_refused`]).
     relays_refused: u32,
@@ -138,14 +231,9 @@ impl LatestScan {
             variant: Variant::Fov180Res100,
             index: None,
             counters: Counters::ZERO,
-            features_on: false,
+            features: FeatureTelegrams::Off,
             relay: Relay::Idle,
-            relay_command: 0,
-            relay_data: [0; sensor_link::FORWARD_DATA_CAPACITY],
-            relay_data_len: 0,
-            relay_reply: [0; RELAY_REPLY_CAPACITY],
-            relay_len: 0,
-            sensor_up: false,
+            sensor: SensorLine::BringingUp,
             relays_refused: 0,
         }
     }
@@ -196,7 +284,10 @@ impl ScanSource for LatestScan {
             }
             (REQ_FEATURES, &[state @ (0 | 1)]) => {
                 *reply.first_mut()? = state;
-                self.features_on = state == 1;
+                self.features = match state {
+                    1 => FeatureTelegrams::On,
+                    _ => FeatureTelegrams::Off,
+                };
                 Some((CMD_FEATURES, 1))
             }
             _ => None,
@@ -210,11 +301,16 @@ impl ScanSource for LatestScan {
     /// [`sensor_link::FORWARD_DATA_CAPACITY`] data bytes), one at a time.
     fn relay(&mut self, command: u8, data: &[u8]) -> bool {
         let wanted = match command {
-            0x3A => data.is_empty() && self.sensor_up,
+            request::code::SENSOR_TYPE => data.is_empty() && self.sensor == SensorLine::Streaming,
             _ if face_interprets(command) => relayed_mode(command, data),
-            _ => self.sensor_up,
+            _ => self.sensor == SensorLine::Streaming,
         };
-        let Some(slot) = self.relay_data.get_mut(..data.len()) else {
+        let mut request = RelayedRequest {
+            command,
+            data: [0; sensor_link::FORWARD_DATA_CAPACITY],
+            len: data.len() as u8,
+        };
+        let Some(slot) = request.data.get_mut(..data.len()) else {
             return false;
         };
         if !wanted {
@@ -227,17 +323,15 @@ impl ScanSource for LatestScan {
             return false;
         }
         slot.copy_from_slice(data);
-        self.relay_command = command;
-        self.relay_data_len = data.len() as u8;
-        self.relay = Relay::Asked;
+        self.relay = Relay::Asked(request);
         true
     }
 
     fn relayed_reply(&mut self, out: &mut [u8]) -> Option<usize> {
         match self.relay {
-            Relay::Ready => {
+            Relay::Ready(reply) => {
                 self.relay = Relay::Idle;
-                let reply = self.relay_reply.get(..usize::from(self.relay_len))?;
+                let reply = reply.bytes.get(..usize::from(reply.len))?;
                 let slot = out.get_mut(..reply.len())?;
                 slot.copy_from_slice(reply);
                 Some(reply.len())
@@ -246,7 +340,7 @@ impl ScanSource for LatestScan {
                 self.relay = Relay::Idle;
                 Some(0)
             }
-            Relay::Idle | Relay::Asked | Relay::Sent => None,
+            Relay::Idle | Relay::Asked(_) | Relay::Sent(_) => None,
         }
     }
 
@@ -256,7 +350,7 @@ impl ScanSource for LatestScan {
 
     /// The feature opt-in (`56 01`) belongs to the client that sent it.
     fn new_session(&mut self) {
-        self.features_on = false;
+        self.features = FeatureTelegrams::Off;
     }
 }
 
@@ -268,7 +362,7 @@ fn relayed_mode(command: u8, data: &[u8]) -> bool {
 
 /// `true` for `20 2A` (continuous output of partial scans).
 fn is_partial_mode(command: u8, data: &[u8]) -> bool {
-    (command, data) == (crate::telegram::request::code::MODE, &[MODE_PARTIAL][..])
+    (command, data) == (request::code::MODE, &[MODE_PARTIAL][..])
 }
 
 /// `true` for the commands the face answers itself: those of an LMS 2xx it
@@ -338,33 +432,22 @@ pub struct CoProcessor {
     /// The host line's time budget.
     host_line: HostLine,
     counters: Counters,
-    scan_counter: u32,
-    /// Features of the latest scan, ready for a `30 01`.
-    have_features: bool,
-    beams: u16,
+    /// Which scan the extractor's features are of, if they are of the
+    /// latest scan (ready for a `30 01`).
+    latest_features: Option<FeaturesOf>,
     /// The latest scan in metres, decoded in place.
     frame: Frame,
-    /// [`CoProcessor::configure`] has run.
-    configured: bool,
-    /// The face has taken the sensor's configuration since the last bring-up.
-    face_synced: bool,
-    /// The sensor streams a value mode the client asked for (`B6`/`B7`/`BF`
-    /// passed on, no features), averaging this many scans (1: none).
-    values_samples: u8,
-    values_stream: bool,
-    /// The relayed stream is the sensor's partial scans (`20 2A`): each
-    /// passed on; joined into whole scans for the pipeline.
-    partial_stream: bool,
-    /// The partial scan expected next of the scan being joined (0: none
-    /// begun).
-    partial_next: u8,
-    /// The sensor is to go back to `B0`s (`20 24`, forwarded by itself).
-    restore_stream: bool,
+    /// Whether [`CoProcessor::configure`] has run.
+    setup: Setup,
+    /// Whether the face reports the sensor's configuration of its latest
+    /// bring-up.
+    face: FaceConfig,
+    /// What the sensor streams for the client.
+    stream: SensorStream,
     /// Feature telegrams of the latest scan still to go to the host.
-    pump: Pump,
-    /// The link's forward under way is the client's relayed request (not
-    /// the co-processor's own `20 24`).
-    client_forward: bool,
+    pump: Option<Pump>,
+    /// Whose request the sensor link's forward under way is.
+    forward: ForwardOwner,
     /// A relayed request not answered by then (µs) fails: the client gets
     /// no reply, as from a sensor that does not answer (0: none waits).
     relay_deadline_us: u64,
@@ -376,12 +459,21 @@ pub struct CoProcessor {
 /// being brought up again may take longer).
 pub const RELAY_TIMEOUT_US: u64 = 2_000_000;
 
-/// The feature telegrams of the latest scan still to go to the host: from
-/// index `next` on (of [`emit_features_from`]), each when the host port
-/// has room for it whole. All zero: none.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// The scan whose features the extractor holds: its number (the
+/// `scans_in` count when it came) and its beams, as the feature telegrams
+/// carry them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct FeaturesOf {
+    scan: u32,
+    beams: u16,
+}
+
+/// The feature telegrams of a scan still to go to the host: from index
+/// `next` on (of [`emit_features_from`]), each when the host port has room
+/// for it whole.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Pump {
-    active: bool,
+    of: FeaturesOf,
     next: u32,
     /// When its `B0` was written (µs): the host-line budget counts the
     /// features right behind it, as one group (on the line they follow the
@@ -391,14 +483,66 @@ struct Pump {
 }
 
 impl Pump {
-    /// Every telegram from the first, behind a `B0` written at `at_us`.
-    const fn start(at_us: u64) -> Self {
-        Pump {
-            active: true,
-            next: 0,
-            at_us,
-        }
+    /// Every telegram of `of` from the first, behind a `B0` written at
+    /// `at_us`.
+    const fn start(of: FeaturesOf, at_us: u64) -> Self {
+        Pump { of, next: 0, at_us }
     }
+}
+
+/// Whether a co-processor has its parameters and sensor set-up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Setup {
+    /// [`CoProcessor::unconfigured`]: polls touch no port.
+    Unconfigured,
+    /// [`CoProcessor::configure`] has run.
+    Configured,
+}
+
+/// Whether the face reports the sensor's configuration (`F4`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum FaceConfig {
+    /// The sensor is being brought up: the face takes its configuration
+    /// once it streams.
+    AwaitingSensor,
+    /// The face has the configuration of the sensor's latest bring-up.
+    Synced,
+}
+
+/// What the sensor streams for the client.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SensorStream {
+    /// Whole scans (`B0`): the pipeline runs on each.
+    Scans,
+    /// A value mode the client asked for (`B6`/`B7`/`BF` passed on, no
+    /// features), averaging `samples` scans (1: none).
+    Values { samples: u8 },
+    /// Partial scans (`20 2A`), each passed on, joined into whole scans for
+    /// the pipeline; `next` is the partial scan expected next of the scan
+    /// being joined (0: none begun).
+    Partial { next: u8 },
+    /// The client has left its value mode: the sensor is to go back to
+    /// `B0`s (`20 24`, forwarded by the co-processor itself).
+    Restoring,
+}
+
+impl SensorStream {
+    /// The sensor streams telegrams of a mode the client asked for.
+    const fn is_relayed(self) -> bool {
+        matches!(
+            self,
+            SensorStream::Values { .. } | SensorStream::Partial { .. }
+        )
+    }
+}
+
+/// Whose request the sensor link's forward under way is, if one is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ForwardOwner {
+    /// The co-processor's own `20 24`, or none.
+    CoProcessor,
+    /// The client's relayed request.
+    Client,
 }
 
 impl CoProcessor {
@@ -425,23 +569,13 @@ impl CoProcessor {
             host: Emulator::unpowered(LatestScan::new()),
             host_line: HostLine::new(),
             counters: Counters::ZERO,
-            scan_counter: 0,
-            have_features: false,
-            beams: 0,
+            latest_features: None,
             frame: Frame::zeroed(),
-            configured: false,
-            face_synced: false,
-            values_samples: 0,
-            values_stream: false,
-            partial_stream: false,
-            partial_next: 0,
-            restore_stream: false,
-            pump: Pump {
-                active: false,
-                next: 0,
-                at_us: 0,
-            },
-            client_forward: false,
+            setup: Setup::Unconfigured,
+            face: FaceConfig::AwaitingSensor,
+            stream: SensorStream::Scans,
+            pump: None,
+            forward: ForwardOwner::CoProcessor,
             relay_deadline_us: 0,
         }
     }
@@ -459,7 +593,7 @@ impl CoProcessor {
         self.link.configure(setup);
         self.host.set_settings(settings);
         self.host.source_mut().variant = setup.variant;
-        self.configured = true;
+        self.setup = Setup::Configured;
     }
 
     /// Switch the host-side face on at `now_us`: like an LMS at power-on it
@@ -490,13 +624,13 @@ impl CoProcessor {
 
     /// `true` while the client has the feature telegrams on (`56 01`).
     pub fn features_on(&self) -> bool {
-        self.host.source().features_on
+        self.host.source().features == FeatureTelegrams::On
     }
 
     /// `true` while feature telegrams of the latest scan wait for room on
     /// the host port (the face's replies and the next scan wait too).
     pub fn features_pending(&self) -> bool {
-        self.pump.active
+        self.pump.is_some()
     }
 
     /// Count bytes the board lost before they reached [`CoProcessor::poll`]
@@ -538,7 +672,7 @@ impl CoProcessor {
         H: Read + ReadReady + WriteRoom,
     {
         let mut outcome = PollOutcome::default();
-        if !self.configured {
+        if self.setup == Setup::Unconfigured {
             return Ok(outcome);
         }
         let mut buf = [0u8; MAX_TELEGRAM_LEN];
@@ -634,7 +768,7 @@ impl CoProcessor {
     ) -> Result<(), PollError<E, H::Error>> {
         self.pump(host)?;
         let mut buf = [0u8; CHUNK];
-        while !self.pump.active {
+        while self.pump.is_none() {
             // `transmit` stops after the last byte before a baud switch,
             // and when `out` is full (the rest of a frame waits in the face).
             let room = host.write_room().map_err(PollError::Host)?;
@@ -661,8 +795,8 @@ impl CoProcessor {
             // The B0 of a `30 01` has gone out whole: its features follow.
             HostEvent::ScanSent {
                 continuous: false, ..
-            } if self.have_features && self.features_on() => {
-                self.pump = Pump::start(now_us);
+            } if self.features_on() && self.latest_features.is_some() => {
+                self.pump = self.latest_features.map(|of| Pump::start(of, now_us));
             }
             HostEvent::Request(Handled::SetVariant { accepted: true, .. }) => {
                 self.leave_values();
@@ -676,14 +810,14 @@ impl CoProcessor {
             HostEvent::Request(Handled::Reset) => {
                 self.leave_values();
                 // Nothing of the last session goes on: its features either.
-                self.pump = Pump::default();
-                self.have_features = false;
+                self.pump = None;
+                self.latest_features = None;
             }
             // A new client session (docs/PROTOCOL.md §2a): the rest of the
             // last client's feature group is not sent (the reply goes next).
             HostEvent::Request(Handled::SetBaud(_)) => {
-                self.pump = Pump::default();
-                self.have_features = false;
+                self.pump = None;
+                self.latest_features = None;
             }
             HostEvent::Request(
                 Handled::Continuous | Handled::OnRequest | Handled::InstallationMode { .. },
@@ -694,11 +828,12 @@ impl CoProcessor {
 
     /// The sensor streams: the face reports its configuration (F4).
     fn sync_face(&mut self) {
-        if self.link.step() == sensor_link::Step::Streaming && !self.face_synced {
+        let streaming = self.link.step() == sensor_link::Step::Streaming;
+        if streaming && self.face == FaceConfig::AwaitingSensor {
             if let Some(c) = self.link.config() {
                 self.host.set_config(c);
             }
-            self.face_synced = true;
+            self.face = FaceConfig::Synced;
         }
     }
 
@@ -708,15 +843,20 @@ impl CoProcessor {
     /// and a forward of a relayed request the face let go (a reset) is
     /// withdrawn: nothing stays claimed.
     fn hand_to_sensor(&mut self, now_us: u64) {
-        if self.client_forward && self.host.source().relay == Relay::Idle {
+        if self.forward == ForwardOwner::Client && self.host.source().relay == Relay::Idle {
             // The face let the request go (power-on): not to be sent.
-            self.client_forward = !self.link.cancel_forward();
+            self.cancel_client_forward();
         }
-        if self.restore_stream && !self.client_forward && self.link.forward(0x20, &[0x24]) {
-            self.restore_stream = false;
+        let restore = self.stream == SensorStream::Restoring;
+        let back_to_scans = [request::code::MODE_CONTINUOUS];
+        if restore
+            && self.forward == ForwardOwner::CoProcessor
+            && self.link.forward(request::code::MODE, &back_to_scans)
+        {
+            self.stream = SensorStream::Scans;
         }
         let latest = &mut self.host.source_mut();
-        let waiting = matches!(latest.relay, Relay::Asked | Relay::Sent);
+        let waiting = matches!(latest.relay, Relay::Asked(_) | Relay::Sent(_));
         self.relay_deadline_us = match (waiting, self.relay_deadline_us) {
             (false, _) => 0,
             (true, 0) => now_us.saturating_add(RELAY_TIMEOUT_US).max(1),
@@ -725,27 +865,21 @@ impl CoProcessor {
         let late = waiting && now_us >= self.relay_deadline_us;
         match latest.relay {
             // A forward on the line ends by the link's own time-out.
-            Relay::Asked | Relay::Sent if late && !self.link.forward_sent() => {
-                if self.client_forward {
-                    self.client_forward = !self.link.cancel_forward();
+            Relay::Asked(_) | Relay::Sent(_) if late && !self.link.forward_sent() => {
+                if self.forward == ForwardOwner::Client && self.link.cancel_forward() {
+                    self.forward = ForwardOwner::CoProcessor;
                 }
                 latest.relay = Relay::Failed;
                 self.counters.relays_failed = self.counters.relays_failed.wrapping_add(1);
             }
-            Relay::Asked => {
-                let data = latest.relay_data;
-                let data = data.get(..usize::from(latest.relay_data_len));
-                if self
-                    .link
-                    .forward(latest.relay_command, data.unwrap_or_default())
-                {
-                    latest.relay = Relay::Sent;
-                    self.client_forward = true;
-                }
+            // Handed to the link if it takes it now (else tried next poll).
+            Relay::Asked(request) if self.link.forward(request.command, request.data()) => {
+                latest.relay = Relay::Sent(request);
+                self.forward = ForwardOwner::Client;
             }
-            Relay::Sent if !self.link.forwarding() => {
+            Relay::Sent(_) if !self.link.forwarding() => {
                 latest.relay = Relay::Failed;
-                self.client_forward = false;
+                self.forward = ForwardOwner::CoProcessor;
                 self.counters.relays_failed = self.counters.relays_failed.wrapping_add(1);
             }
             _ => {}
@@ -757,51 +891,51 @@ impl CoProcessor {
     /// until answered).
     fn forwarded(&mut self, answered: bool) {
         let latest = self.host.source_mut();
-        let client = core::mem::take(&mut self.client_forward);
-        if client && latest.relay != Relay::Sent {
+        let owner = core::mem::replace(&mut self.forward, ForwardOwner::CoProcessor);
+        let request = match (owner, latest.relay) {
+            (ForwardOwner::Client, Relay::Sent(request)) => request,
             // The client's, let go meanwhile (a reset): its reply is dropped.
-            return;
-        }
-        if !client {
+            (ForwardOwner::Client, _) => return,
             // Ours (`20 24`): done when the sensor took it (`A0`).
-            let reply = self.link.scan_bytes().get(4).copied();
-            let accepted = answered && reply == Some(crate::telegram::reply::code::MODE_CHANGED);
-            self.restore_stream |= !accepted;
-            if accepted {
-                self.link.set_stream_samples(1);
+            (ForwardOwner::CoProcessor, _) => {
+                let taken = mode_change_result(self.link.scan_bytes()).is_some();
+                if answered && taken {
+                    self.link.set_stream_samples(1);
+                } else {
+                    self.stream = SensorStream::Restoring;
+                }
+                return;
             }
-            return;
-        }
+        };
         let reply = self.link.scan_bytes();
-        let Some(slot) = latest
-            .relay_reply
-            .get_mut(..reply.len())
-            .filter(|_| answered)
-        else {
+        let mut ready = RelayedReply {
+            bytes: [0; RELAY_REPLY_CAPACITY],
+            len: reply.len() as u8,
+        };
+        let Some(slot) = ready.bytes.get_mut(..reply.len()).filter(|_| answered) else {
             latest.relay = Relay::Failed;
             self.counters.relays_failed = self.counters.relays_failed.wrapping_add(1);
             return;
         };
         slot.copy_from_slice(reply);
-        latest.relay_len = reply.len() as u8;
-        latest.relay = Relay::Ready;
-        let data = latest.relay_data;
-        let data = data
-            .get(..usize::from(latest.relay_data_len))
-            .unwrap_or_default();
-        let mode = ValueMode::parse(latest.relay_command, data);
-        let partial = is_partial_mode(latest.relay_command, data);
-        let ok = matches!(reply.get(5), Some(0x00)) && reply.get(4) == Some(&0xA0);
+        latest.relay = Relay::Ready(ready);
+        let mode = ValueMode::parse(request.command, request.data());
+        let partial = is_partial_mode(request.command, request.data());
+        let ok = mode_change_result(reply) == Some(ModeResult::Ok);
         let samples = match (mode, partial) {
             (Some(mode), _) => Some(mode.samples().max(1)),
             (None, true) => Some(1),
             (None, false) => None,
         };
         if let (Some(samples), true) = (samples, ok) {
-            self.values_stream = true;
-            self.partial_stream = partial;
-            self.partial_next = 0;
-            self.values_samples = samples;
+            // A client that left the mode while its request was on the line
+            // (`20 24`, `20 25`, …) has the sensor brought back to `B0`s.
+            if self.stream != SensorStream::Restoring {
+                self.stream = match partial {
+                    true => SensorStream::Partial { next: 0 },
+                    false => SensorStream::Values { samples },
+                };
+            }
             self.link.set_stream_samples(samples);
         }
     }
@@ -809,11 +943,17 @@ impl CoProcessor {
     /// The client left the value mode (any mode change, a reset, a new
     /// variant or configuration): the sensor goes back to `B0`s.
     fn leave_values(&mut self) {
-        if core::mem::take(&mut self.values_stream) {
-            self.restore_stream = true;
+        if self.stream.is_relayed() {
+            self.stream = SensorStream::Restoring;
         }
-        self.partial_stream = false;
-        self.partial_next = 0;
+    }
+
+    /// Withdraw the client's relayed request from the sensor link, if it is
+    /// not on the line yet (else its reply is dropped when it comes).
+    fn cancel_client_forward(&mut self) {
+        if self.link.cancel_forward() {
+            self.forward = ForwardOwner::CoProcessor;
+        }
     }
 
     /// The client changed the face's variant, units or configuration:
@@ -828,7 +968,7 @@ impl CoProcessor {
         };
         if wanted != current || config_differs {
             self.link.reconfigure(wanted);
-            self.face_synced = false;
+            self.face = FaceConfig::AwaitingSensor;
         }
     }
 
@@ -843,7 +983,8 @@ impl CoProcessor {
         // What of the last scan's features fits now goes first (the line
         // has been sending since the last poll): then this scan may be taken.
         self.pump(host)?;
-        if self.link.scan_bytes().get(4) != Some(&crate::telegram::measured::MEASURED_COMMAND) {
+        let command = self.link.scan_bytes().get(HEADER_LEN);
+        if command != Some(&crate::telegram::measured::MEASURED_COMMAND) {
             return self.pass_values(host, now_us);
         }
         // The sensor's measuring mode decides the range bits (13/14/15).
@@ -866,7 +1007,7 @@ impl CoProcessor {
             .filter(|m| m.to_frame_into(bits, frame).is_ok());
         let Some(measured) = measured else {
             self.counters.scans_rejected = self.counters.scans_rejected.wrapping_add(1);
-            self.have_features = false;
+            self.latest_features = None;
             return Ok(());
         };
         let variant = Variant::from_beams(measured.count());
@@ -877,12 +1018,11 @@ impl CoProcessor {
         if self.host_busy() {
             // The last scan's features or the face's `B0` of it are still
             // going out: they stay that scan's (this one is not taken).
-            if self.host.streaming() && !self.values_stream {
+            if self.host.streaming() && !self.stream.is_relayed() {
                 self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
             }
             return Ok(());
         }
-        self.scan_counter = self.counters.scans_in;
         // The host's `30 01` and `31` see this scan.
         let face_variant = self.host.variant();
         let index = measured.real_time_index();
@@ -894,17 +1034,10 @@ impl CoProcessor {
             *slot = word;
             latest.count += 1;
         }
-        self.beams = self.frame.len() as u16;
         // The `B0` first: it leaves while the pipeline runs.
         let passed =
-            self.host.streaming() && !self.values_stream && self.pass_scan(host, now_us)?;
-        self.extractor.run(&self.frame, &self.params);
-        self.have_features = true;
-        if passed && self.features_on() {
-            self.pump = Pump::start(now_us);
-            self.pump(host)?;
-        }
-        Ok(())
+            self.host.streaming() && !self.stream.is_relayed() && self.pass_scan(host, now_us)?;
+        self.run_pipeline(host, now_us, passed)
     }
 
     /// A partial scan (`20 2A`) at `offset` × 0.25° from the sensor: to the
@@ -927,9 +1060,9 @@ impl CoProcessor {
         let sent_before = self.counters.scans_out;
         self.pass_values(host, now_us)?;
         let passed = self.counters.scans_out != sent_before;
-        if !self.partial_stream {
+        let SensorStream::Partial { next } = self.stream else {
             return Ok(());
-        }
+        };
         let turns = turns_per_scan(variant) as u8;
         let step = (variant.resolution_centideg() / 25) as u8;
         let part = offset / step.max(1);
@@ -940,12 +1073,11 @@ impl CoProcessor {
             .and_then(|t| MeasuredView::parse(&t).ok())
             .filter(|m| m.count() == count && m.units() == self.host.units())
             .filter(|_| offset % step.max(1) == 0 && part < turns);
-        let fits = measured.is_some() && part == self.partial_next && !self.host_busy();
+        let fits = measured.is_some() && part == next && !self.host_busy();
         let Some(measured) = measured.filter(|_| fits) else {
             // This one and those of its scan taken so far.
-            let lost = u32::from(self.partial_next) + 1;
-            self.count_unassembled(lost);
-            self.partial_next = 0;
+            self.count_unassembled(u32::from(next) + 1);
+            self.stream = SensorStream::Partial { next: 0 };
             return Ok(());
         };
         let latest = self.host.source_mut();
@@ -954,11 +1086,11 @@ impl CoProcessor {
             *slot = word;
         }
         latest.index = measured.real_time_index();
-        self.partial_next = part + 1;
-        if self.partial_next < turns {
+        if part + 1 < turns {
+            self.stream = SensorStream::Partial { next: part + 1 };
             return Ok(());
         }
-        self.partial_next = 0;
+        self.stream = SensorStream::Partial { next: 0 };
         let units = self.host.units();
         let latest = self.host.source_mut();
         latest.variant = variant;
@@ -969,12 +1101,25 @@ impl CoProcessor {
             self.counters.scans_rejected = self.counters.scans_rejected.wrapping_add(1);
             return Ok(());
         }
-        self.scan_counter = self.counters.scans_in;
-        self.beams = self.frame.len() as u16;
+        self.run_pipeline(host, now_us, passed)
+    }
+
+    /// The pipeline on the latest scan (in `frame`); its features to an
+    /// opted-in client behind its `B0` if that was `passed` on.
+    fn run_pipeline<H: WriteRoom, E>(
+        &mut self,
+        host: &mut H,
+        now_us: u64,
+        passed: bool,
+    ) -> Result<(), PollError<E, H::Error>> {
+        let of = FeaturesOf {
+            scan: self.counters.scans_in,
+            beams: self.frame.len() as u16,
+        };
         self.extractor.run(&self.frame, &self.params);
-        self.have_features = true;
+        self.latest_features = Some(of);
         if passed && self.features_on() {
-            self.pump = Pump::start(now_us);
+            self.pump = Some(Pump::start(of, now_us));
             self.pump(host)?;
         }
         Ok(())
@@ -989,7 +1134,7 @@ impl CoProcessor {
     /// feature telegrams wait for room, or the face has handed out part of
     /// a frame (its `30 01` `B0` reads the latest scan word by word).
     fn host_busy(&self) -> bool {
-        self.pump.active || self.host.frame_in_progress()
+        self.pump.is_some() || self.host.frame_in_progress()
     }
 
     /// A value mode's telegram (`B6`/`B7`/`BF`) from the sensor: to the
@@ -1001,20 +1146,22 @@ impl CoProcessor {
         host: &mut H,
         now_us: u64,
     ) -> Result<(), PollError<E, H::Error>> {
-        self.have_features = false;
-        if !self.values_stream {
-            self.counters.scans_other_setting = self.counters.scans_other_setting.wrapping_add(1);
-            return Ok(());
-        }
+        self.latest_features = None;
         let variant = self.host.variant();
-        let period = match self.partial_stream {
+        let scan_period = crate::device::emulator::scan_period_us(variant);
+        let period = match self.stream {
             // One partial scan per mirror turn.
-            true => crate::maths::div_u64(
-                crate::device::emulator::scan_period_us(variant),
-                turns_per_scan(variant),
-            ),
-            false => crate::device::emulator::scan_period_us(variant)
-                .saturating_mul(u64::from(self.values_samples.max(1))),
+            SensorStream::Partial { .. } => {
+                crate::maths::div_u64(scan_period, turns_per_scan(variant))
+            }
+            SensorStream::Values { samples } => {
+                scan_period.saturating_mul(u64::from(samples.max(1)))
+            }
+            SensorStream::Scans | SensorStream::Restoring => {
+                self.counters.scans_other_setting =
+                    self.counters.scans_other_setting.wrapping_add(1);
+                return Ok(());
+            }
         };
         let fits = self.fits_now(host, now_us, period, self.link.scan_bytes().len())?;
         if !fits {
@@ -1072,16 +1219,16 @@ impl CoProcessor {
     /// host, each if the port has room for it whole (none while the face
     /// has a frame half out: its `B0` comes first).
     fn pump<H: WriteRoom, E>(&mut self, host: &mut H) -> Result<(), PollError<E, H::Error>> {
-        if !self.pump.active || self.host.frame_in_progress() {
+        let Some(pump) = self.pump.filter(|_| !self.host.frame_in_progress()) else {
             return Ok(());
-        }
+        };
         let mut room = host.write_room().map_err(PollError::Host)?;
         let echoed = EchoedParams::from(self.params.get());
-        let (first, mut sent, mut bytes) = (self.pump.next, 0u32, 0usize);
+        let (first, mut sent, mut bytes) = (pump.next, 0u32, 0usize);
         let result = emit_features_from(
             first,
-            self.scan_counter,
-            self.beams,
+            pump.of.scan,
+            pump.of.beams,
             &echoed,
             self.extractor.features(),
             0,
@@ -1096,16 +1243,20 @@ impl CoProcessor {
                 Ok(())
             },
         );
-        self.host_line
-            .occupy(self.pump.at_us, bytes, self.host.baud());
+        self.host_line.occupy(pump.at_us, bytes, self.host.baud());
         self.counters.feature_telegrams_out =
             self.counters.feature_telegrams_out.wrapping_add(sent);
         match result {
             Ok(_) => {
-                self.pump = Pump::default();
+                self.pump = None;
                 self.counters.feature_scans_out = self.counters.feature_scans_out.wrapping_add(1);
             }
-            Err(None) => self.pump.next = first.wrapping_add(sent),
+            Err(None) => {
+                self.pump = Some(Pump {
+                    next: first.wrapping_add(sent),
+                    ..pump
+                });
+            }
             Err(Some(e)) => return Err(PollError::Host(e)),
         }
         Ok(())
@@ -1126,7 +1277,20 @@ impl CoProcessor {
         self.counters.host_requests_dropped = face.dropped_requests;
         self.counters.relays_refused = self.host.source().relays_refused;
         self.host.source_mut().counters = self.counters;
-        self.host.source_mut().sensor_up = self.link.step() == sensor_link::Step::Streaming;
+        self.host.source_mut().sensor = match self.link.step() {
+            sensor_link::Step::Streaming => SensorLine::Streaming,
+            _ => SensorLine::BringingUp,
+        };
+    }
+}
+
+/// The result of the mode change (`A0`) that the framed `telegram` is, if
+/// it is one: its command follows the [`HEADER_LEN`] header bytes, the
+/// result byte comes next.
+fn mode_change_result(telegram: &[u8]) -> Option<ModeResult> {
+    match telegram.get(HEADER_LEN..) {
+        Some(&[reply::code::MODE_CHANGED, result, ..]) => Some(ModeResult::from_byte(result)),
+        _ => None,
     }
 }
 

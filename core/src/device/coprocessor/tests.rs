@@ -518,3 +518,23 @@ proptest! {
         prop_assert!(bench.cop.host_face().source().relay == Relay::Idle);
     }
 }
+
+/// The co-processor's state is typed: no field of `CoProcessor`,
+/// `LatestScan` or `Pump` is a bare `bool` (each state is an enum that
+/// names what it describes).
+#[test]
+fn no_state_is_a_bare_bool() {
+    let source = include_str!("mod.rs");
+    for name in [
+        "pub struct CoProcessor {",
+        "pub struct LatestScan {",
+        "struct Pump {",
+    ] {
+        let start = source.find(name).expect(name);
+        let body = &source[start..];
+        let body = &body[..body.find("\n}").expect("the struct's end")];
+        let fields = body.lines().filter(|l| !l.trim_start().starts_with("//"));
+        let bools: Vec<&str> = fields.filter(|l| l.contains(": bool")).collect();
+        assert!(bools.is_empty(), "{name} {bools:?}");
+    }
+}
