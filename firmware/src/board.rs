@@ -69,8 +69,7 @@ const _: () = assert!(HOST_TX_SLOTS > lms_core::device::coprocessor::HOST_TX_MIN
 /// near CPI 1), 26.8 ms at CPI 1.5. Less than a scan period (26.7 ms at
 /// 0.5°), so at most one `B0` and a little arrive meanwhile: 732 B at
 /// 0.5°, 744–750 B at 1° (two 372-byte `B0`s 13.3 ms apart), 813 B for
-/// 401 beams (53.3 ms apart); 1023 leaves 210 B (4.2 ms) to spare. Until
-/// 2026-12 it was 2048: the blocking host write (≤ 1150 B more) had to fit.
+/// 401 beams (53.3 ms apart); 1023 leaves 210 B (4.2 ms) to spare.
 /// A full queue holds the line (backpressure, [`crate::serial`]): under
 /// QEMU nothing is lost; on a board the overrun is counted (`ORE`, the
 /// `D5` counters' lost sensor bytes). A console report (~0.7 KB at

@@ -44,7 +44,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{ensure, Context, Result};
 use clap::Args;
-use lms_core::device::coprocessor::{CoProcessor, PollError, SensorSetup};
+use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
 use lms_core::telegram::features::CounterKind;
 use lms_core::telegram::{Baud, RangeBits, Request};
 use lms_core::{Unit, ValidParams};
@@ -54,10 +54,13 @@ use crate::options::{ParamArgs, UnitArg};
 use crate::pty::Pty;
 use crate::ros2::mcap_out::Recording;
 use crate::scan::{variant_name, VariantChoice};
-use crate::serial::{Arrivals, Link, PtyPort, SerialLink, TICK};
+use crate::serial::{Link, PtyPort, SerialLink, TICK};
 use crate::simulate::symlink::Symlink;
 
+mod pc;
 mod qemu_bridge;
+
+pub use pc::PcCoProcessor;
 
 /// Options of `host-bridge coprocessor`.
 #[derive(Args, Debug, Clone)]
@@ -276,13 +279,13 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
     if let Some(elf) = &args.qemu {
         return run_qemu(args, link, elf.as_deref());
     }
-    let mut sensor = Arrivals::new(LinkPort {
+    let sensor = LinkPort {
         link,
         buf: Vec::new(),
         live: StreamView::from_args(&args.live, "host-bridge coprocessor", params)?,
         bits: RangeBits::Bits13,
         record: Recorder::from_args(args, params)?,
-    });
+    };
     let pty = Pty::open(Baud::B9600.bits_per_second())?;
     let symlink = Symlink::create(&args.link, pty.slave_path())?;
     let mut host = PtyPort::new(pty);
@@ -295,10 +298,7 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
         symlink.path.display(),
         host.slave_path().display()
     );
-    let clock = Instant::now();
-    let now_us = || u64::try_from(clock.elapsed().as_micros()).unwrap_or(u64::MAX);
-    let mut cop = Box::new(CoProcessor::new(params, setup));
-    cop.start(now_us());
+    let mut pc = PcCoProcessor::start(params, setup, sensor);
     let status_every = Duration::from_secs_f64(args.status_every);
     let quit_after = args.quit_after.map(Duration::from_secs_f64);
     let mut next_status = Instant::now() + status_every;
@@ -306,38 +306,33 @@ pub fn run(args: &CoprocessorArgs) -> Result<()> {
         if stop.load(Ordering::Relaxed) {
             break "signal";
         }
-        if quit_after.is_some_and(|q| clock.elapsed() >= q) {
+        if quit_after.is_some_and(|q| pc.elapsed() >= q) {
             break "--quit-after";
         }
         // The client line is the face's UART: a client at another rate
         // (a driver's power-on search) is noise to it, as on a real line.
-        host.set_line_rate(cop.host_face().baud().bits_per_second());
-        let outcome = sensor
-            .poll(&mut cop, &mut host, now_us)
-            .map_err(|e| match e {
-                PollError::Sensor(e) => anyhow::anyhow!("sensor port: {e}"),
-                PollError::Host(e) => anyhow::anyhow!("client line: {e}"),
-            })?;
+        host.set_line_rate(pc.cop().host_face().baud().bits_per_second());
+        let outcome = pc.poll(&mut host)?;
         if let Some(b) = outcome.sensor_baud {
-            sensor
-                .port_mut()
+            pc.sensor_mut()
                 .link
                 .set_baud(b)
                 .context("sensor port: cannot switch the rate")?;
         }
-        sensor.port_mut().follow(&cop);
+        let (cop, sensor) = pc.parts();
+        sensor.follow(cop);
         if args.status_every > 0.0 && Instant::now() >= next_status {
-            eprintln!("{}", status(&cop, &host, clock));
+            eprintln!("{}", status(pc.cop(), &host, pc.elapsed()));
             next_status += status_every;
         }
-        sensor.port_mut().fill(TICK)?;
+        pc.sensor_mut().fill(TICK)?;
     };
-    stop_sensor(sensor.port_mut());
+    stop_sensor(pc.sensor_mut());
     eprintln!(
         "host-bridge coprocessor: stopped ({reason}); {}",
-        status(&cop, &host, clock)
+        status(pc.cop(), &host, pc.elapsed())
     );
-    close_outputs(sensor.port_mut())?;
+    close_outputs(pc.sensor_mut())?;
     drop(symlink);
     Ok(())
 }
@@ -350,7 +345,7 @@ fn run_qemu(args: &CoprocessorArgs, mut sensor: SerialLink, elf: Option<&Path>) 
     let stop = crate::stop::stop_flag()?;
     let quit_after = args.quit_after.map(Duration::from_secs_f64);
     let bound = quit_after.unwrap_or(Duration::from_secs(24 * 3600)) + Duration::from_secs(10);
-    let mut qemu = crate::verify::qemu_lines(elf, bound, &stop)?;
+    let mut qemu = crate::qemu::qemu_lines(elf, bound, &stop)?;
     eprintln!(
         "host-bridge coprocessor: the firmware under QEMU between sensor {} and client line {} -> {}",
         args.sensor.display(),
@@ -380,8 +375,8 @@ fn stop_sensor(sensor: &mut LinkPort) {
 /// The status line: every counter but the boot's (`name=value`, as `D5`
 /// and the firmware's console name them), the sensor link, the client's
 /// face; `host` is the client line (its bytes at another rate).
-fn status(cop: &CoProcessor, host: &PtyPort, clock: Instant) -> String {
-    let mut line = format!("[{:8.1} s]", clock.elapsed().as_secs_f64());
+fn status(cop: &CoProcessor, host: &PtyPort, elapsed: Duration) -> String {
+    let mut line = format!("[{:8.1} s]", elapsed.as_secs_f64());
     let counters = cop.counters();
     for (name, _, value) in counters.entries().filter(|e| e.1 != CounterKind::Boot) {
         let _ = write!(line, " {name}={value}");

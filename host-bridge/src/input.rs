@@ -55,6 +55,18 @@ pub struct ReadOptions {
     pub keep_damaged: bool,
 }
 
+/// One frame to extract: the pipeline's input, with what the record
+/// reports of its source.
+#[derive(Clone, Debug)]
+pub struct InputFrame {
+    /// Index reported in the record.
+    pub index: usize,
+    /// The frame.
+    pub frame: Frame,
+    /// Pose to report, if the source has one.
+    pub pose: Option<[f64; 3]>,
+}
+
 /// One scan of a file.
 #[derive(Clone, Debug)]
 pub struct InputScan {

@@ -8,8 +8,9 @@
 //! 2. Sources of frames: [`carmen`] (recorded CARMEN logs) and
 //!    [`synthetic`] (seeded scenes from `lms-scene`, the no-hardware demo);
 //!    [`input`] streams the scans of a log or a capture alike.
-//! 3. [`extract`] — run `lms_core::Extractor` per frame and build the JSON
-//!    Lines record ([`extract::FrameRecord`]).
+//! 3. [`extract`] — the `extract` subcommand: run `lms_core::Extractor` per
+//!    frame ([`input::InputFrame`]) and write the JSON Lines record
+//!    ([`extract::FrameRecord`]) or ROS 2 messages.
 //! 4. [`plot`] — figures of one frame (scan with features, `D` per window).
 //! 5. The sensor side: [`serial`] (the one serial-line trait
 //!    [`serial::Link`], the real port [`serial::SerialLink`], a pty master as
@@ -22,7 +23,8 @@
 //!    verify), [`stop`] ends either cleanly on a signal, [`warning`] says
 //!    what a command worked around.
 //! 6. [`verify`] — a co-processor (in a thread, under QEMU, or on serial
-//!    ports) checked bit for bit against the std build.
+//!    ports) checked bit for bit against the std build; [`qemu`] runs the
+//!    firmware under QEMU for it and for `coprocessor --qemu`.
 //! 7. [`live_view`] — `--foxglove`: the scans and features live in
 //!    Foxglove, over its WebSocket protocol.
 //!
@@ -44,7 +46,7 @@ pub mod live_view;
 pub mod options;
 pub mod plot;
 pub mod pty;
-mod qemu_intake;
+pub mod qemu;
 pub mod reference;
 pub mod resample;
 pub mod ros2;

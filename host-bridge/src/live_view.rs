@@ -45,7 +45,7 @@ use foxglove::{
 use lms_core::telegram::{Direction, Event, Framer, Handshake, MeasuredView, RangeBits};
 use lms_core::{Extractor, Features, Frame, ValidParams};
 
-use crate::extract::InputFrame;
+use crate::input::InputFrame;
 use crate::input::InputScan;
 use crate::ros2::messages::{self, Channel, Stamp};
 use crate::ros2::rosbag2_out::stamp_for;

@@ -12,7 +12,7 @@ use clap::{Args, ValueEnum};
 use lms_core::{Frame, Invalid, Variant};
 use lms_scene::{seeded_rng, Bearings, ChaCha8Rng, NoiseModel, Pose, Reading, Scene};
 
-use crate::extract::InputFrame;
+use crate::input::InputFrame;
 
 /// The built-in scenes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -193,7 +193,7 @@ fn no_argument_panics() {
         // refused by name, not reported as mismatches scan after scan.
         (
             &["verify", "--qemu", "--set", "merge_anchor_gate=inf"][..],
-            "merge_anchor_gate: inf would be checked",
+            "merge_anchor_gate=inf would be checked",
         ),
         (
             &[
@@ -204,7 +204,7 @@ fn no_argument_panics() {
                 "--set",
                 "turn_offsets=false",
             ][..],
-            "turn_offsets: false would be checked",
+            "turn_offsets=false would be checked",
         ),
         // The merges' F test is a host-only option; its threshold is checked.
         (

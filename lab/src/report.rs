@@ -17,7 +17,7 @@ use crate::scenes::Family;
 use crate::{
     EvaluateArgs, Synthetic, GAUSSIAN, NO_SHARED, PROPOSAL, PROPOSAL_INFO, SPEC, SPLIT_MERGE,
 };
-use host_bridge::extract::InputFrame;
+use host_bridge::input::InputFrame;
 use host_bridge::plot::{self, FramePlot};
 
 /// Wall-clock time of each part (s).

@@ -18,9 +18,8 @@
 //! each Gauss–Newton step rotates it by `Δα` with a short Taylor series of
 //! `cos Δα`, `sin Δα` (exact to f32 for `|Δα| ≤ 0.25`; a larger step falls
 //! back to [`crate::maths::cos_sin`]), and `α = atan2(sin α, cos α)` once at the end.
-//! So a fit needs no libm `sinf`/`cosf`, which on the M4F run in software f64
-//! (measured: they were about a fifth of the pipeline's instructions on
-//! noisy scans with split before reject).
+//! So a fit needs no libm `sinf`/`cosf`, which on the M4F run in software
+//! f64 (docs/DESIGN.md, "Sine, cosine and `atan2` of the core's own").
 
 use crate::features::Line;
 use crate::frame::Beam;

@@ -17,7 +17,7 @@
 //! A real 500 kBd line never queues: so [`SensorFeed`] passes the sensor's
 //! stream telegrams (`B0`, `B6`/`B7`/`BF`) only while its estimate of what
 //! QEMU has not yet taken is under
-//! [`QEMU_QUEUE_BYTES`](crate::qemu_intake::QEMU_QUEUE_BYTES), dropping the
+//! [`QEMU_QUEUE_BYTES`](crate::qemu::intake::QEMU_QUEUE_BYTES), dropping the
 //! others whole (counted, said at exit: the firmware sees a slower sensor),
 //! and every reply, `ACK` and `NAK` at once.
 
@@ -29,9 +29,9 @@ use embedded_io::{Read as _, ReadReady as _, Write as _};
 use lms_core::telegram::reply::code as reply_code;
 use lms_core::telegram::{Baud, Direction, Event, Framer, Handshake, Request};
 
-use crate::qemu_intake::QemuIntake;
+use crate::qemu::QemuIntake;
+use crate::qemu::QemuLines;
 use crate::serial::{Link, PtyPort, SerialLink, TICK};
-use crate::verify::QemuLines;
 
 /// The sensor's bytes on their way to QEMU (see the module docs).
 pub(super) struct SensorFeed {

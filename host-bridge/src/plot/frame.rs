@@ -4,7 +4,8 @@
 use anyhow::{anyhow, bail, ensure, Result};
 use lms_core::{Extractor, Params, Trace};
 
-use crate::extract::{FrameRecord, InputFrame};
+use crate::extract::FrameRecord;
+use crate::input::InputFrame;
 
 /// `D` of every window after one pass.
 #[derive(Clone, Debug, PartialEq)]

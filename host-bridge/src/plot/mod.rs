@@ -67,7 +67,7 @@ pub use style::{
 };
 
 use crate::defaults;
-use crate::extract::InputFrame;
+use crate::input::InputFrame;
 use crate::synthetic;
 
 /// Render one figure to `path`.

@@ -5,11 +5,8 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::options::{FrameRange, ParamArgs};
+use crate::qemu::DEFAULT_ELF;
 use crate::synthetic::SceneArgs;
-
-/// Default firmware ELF (relative to the working directory, then to the
-/// source tree).
-pub const DEFAULT_ELF: &str = "firmware/target/thumbv7em-none-eabihf/release/lms-firmware";
 
 /// ELF `e_machine` of 32-bit ARM (the firmware's thumbv7em).
 pub const EM_ARM: u16 = 40;

@@ -10,7 +10,7 @@ use std::time::Duration;
 use anyhow::{anyhow, bail, Result};
 use lms_core::telegram::features::Counters;
 
-use super::qemu::{Connected, Qemu};
+use crate::qemu::{Connected, Qemu};
 use crate::serial::Link;
 
 /// The lines to the co-processor and what it is.

@@ -3,46 +3,38 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Instant;
 
 use anyhow::{Context, Result};
-use lms_core::device::coprocessor::{CoProcessor, PollError, SensorSetup};
+use lms_core::device::coprocessor::SensorSetup;
 use lms_core::telegram::features::Counters;
 use lms_core::telegram::Baud;
 use lms_core::{Params, ValidParams};
 
 use super::dut::{Dut, Lines};
+use crate::coprocessor::PcCoProcessor;
 use crate::pty::Pty;
 use crate::serial::TICK;
-use crate::serial::{Arrivals, PtyPort, SerialLink};
+use crate::serial::{PtyPort, SerialLink};
 
-/// Run a [`CoProcessor`] on two ports until `stop`: poll (the sensor's
-/// bytes at their arrival times, [`Arrivals`]), then wait up to 1 ms for
-/// sensor bytes. Returns its counters.
+/// Run a [`CoProcessor`](lms_core::device::coprocessor::CoProcessor) on
+/// two ports until `stop` ([`PcCoProcessor`]: the sensor's bytes at their
+/// arrival times), waiting up to [`TICK`] for sensor bytes between polls.
+/// Returns its counters.
 pub fn run_coprocessor(
     params: ValidParams,
     sensor: PtyPort,
     mut host: PtyPort,
     stop: &AtomicBool,
 ) -> Result<Counters, String> {
-    let clock = Instant::now();
-    let now_us = || u64::try_from(clock.elapsed().as_micros()).unwrap_or(u64::MAX);
-    let mut cop = Box::new(CoProcessor::new(params, SensorSetup::default()));
-    let mut sensor = Arrivals::new(sensor);
-    cop.start(now_us());
+    let mut pc = PcCoProcessor::start(params, SensorSetup::default(), sensor);
+    let failed = |e: anyhow::Error| format!("co-processor thread: {e}");
     while !stop.load(Ordering::Relaxed) {
-        sensor
-            .poll(&mut cop, &mut host, now_us)
-            .map_err(|e| match e {
-                PollError::Sensor(e) => format!("co-processor thread: sensor port: {e}"),
-                PollError::Host(e) => format!("co-processor thread: host port: {e}"),
-            })?;
-        sensor
-            .port_mut()
+        pc.poll(&mut host).map_err(failed)?;
+        pc.sensor_mut()
             .wait_readable(TICK)
             .map_err(|e| format!("co-processor thread: {e}"))?;
     }
-    Ok(cop.counters())
+    Ok(pc.cop().counters())
 }
 
 /// Two pseudo-terminals, the co-processor in a thread on their masters and

@@ -133,7 +133,7 @@
 //!   it drew ([`play_source`] builds it from the options).
 //! * `dut` — the co-processor under test and the two lines to it, per mode:
 //!   `host` (the [`CoProcessor`](lms_core::device::coprocessor::CoProcessor)
-//!   in a thread, [`run_coprocessor`]), `qemu` (the firmware under QEMU, on
+//!   in a thread, [`run_coprocessor`]), [`crate::qemu`] (the firmware under QEMU, on
 //!   TCP), or two serial ports. Every line is a [`crate::serial::Link`].
 //! * `line_rate` — the sensor line's rate model under QEMU.
 //! * `session` — both lines, the emulator, the client side and its
@@ -150,7 +150,6 @@ mod exchange;
 mod host;
 mod line_rate;
 mod phases;
-mod qemu;
 mod report;
 mod session;
 mod source;
@@ -165,37 +164,8 @@ use lms_core::Params;
 
 use crate::serial::SerialLink;
 
-pub use args::{VerifyArgs, DEFAULT_ELF};
+pub use args::VerifyArgs;
 
-/// The firmware under QEMU with its host, sensor and console UARTs as
-/// [`crate::serial::Link`]s; QEMU is stopped when this is dropped (for
-/// `host-bridge coprocessor --qemu`).
-pub struct QemuLines {
-    /// USART1, the host line.
-    pub host: Box<dyn crate::serial::Link>,
-    /// USART2, the sensor line.
-    pub sensor: Box<dyn crate::serial::Link>,
-    /// USART3, the console.
-    pub console: Option<Box<dyn crate::serial::Link>>,
-    /// Last, so that QEMU goes after its lines.
-    _dut: dut::Dut,
-}
-
-/// Start the firmware `elf` (default [`DEFAULT_ELF`]) under QEMU, bounded
-/// by `bound`, and connect to its UARTs.
-pub fn qemu_lines(
-    elf: Option<&std::path::Path>,
-    bound: Duration,
-    stop: &Arc<AtomicBool>,
-) -> Result<QemuLines> {
-    let lines = dut::Lines::from(qemu::connect(elf, bound, stop)?);
-    Ok(QemuLines {
-        host: lines.host,
-        sensor: lines.sensor,
-        console: lines.console,
-        _dut: lines.dut,
-    })
-}
 pub use compare::{differences, Difference, Value};
 pub use host::run_coprocessor;
 pub use source::{play_source, Drawn, PlaySource, Tag};
@@ -272,7 +242,7 @@ fn connect(
     stop: &Arc<AtomicBool>,
 ) -> Result<dut::Lines> {
     if let Some(elf) = &args.qemu {
-        qemu::connect(elf.as_deref(), timeout, stop).map(dut::Lines::from)
+        crate::qemu::connect(elf.as_deref(), timeout, stop).map(dut::Lines::from)
     } else if let Some(ports) = &args.ports {
         let [host, sensor] = ports.as_slice() else {
             bail!("--ports takes two paths: HOST SENSOR");

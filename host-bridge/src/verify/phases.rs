@@ -184,7 +184,7 @@ impl Session {
         self.quiesce_all(deadline)?;
         self.emu.source_mut().disarm();
         self.recovering = true;
-        self.qemu_intake = crate::qemu_intake::QemuIntake::new();
+        self.qemu_intake = crate::qemu::QemuIntake::new();
         let at = self.clock.now_us();
         let held_before = self.clock.held();
         self.log("co-processor: MCU reset");

@@ -21,7 +21,7 @@ use super::dut::{Dut, Lines};
 use super::line_rate::{LineRate, Toward};
 use super::source::{PlaySource, Tag};
 use super::VerifyArgs;
-use crate::qemu_intake::QemuIntake;
+use crate::qemu::QemuIntake;
 use crate::serial::Link;
 
 /// A reply seen on the host line (not a scan, not a feature telegram).
@@ -116,12 +116,9 @@ pub(super) const FIRMWARE_SENSOR_QUEUE: usize = 1023;
 
 /// Scans out at once with `--qemu` (the default of `--max-in-flight`): as
 /// many whole 361-value `B0`s (732 bytes) as fit the firmware's sensor
-/// receive queue, 1023 / 742 = 1 (2 until the queue was halved to 1024
-/// slots, 2026-12). QEMU drains a UART at about
-/// 10 KB/s, a third of the line rate, so the scans not back yet may all be
-/// waiting in that queue; 8 in flight (5856 bytes) overflowed the 4095-byte
-/// queue before it held the line (receive backpressure) and lost 2–6 of 100
-/// scans.
+/// receive queue, 1023 / 742 = 1. QEMU drains a UART at about 10 KB/s, a
+/// third of the line rate, so the scans not back yet may all be waiting in
+/// that queue: more in flight than it holds are lost.
 pub(super) fn qemu_max_in_flight() -> usize {
     // The count word and 361 value words (the played variant, 180°/0.5°).
     let data = 2 + 2 * lms_core::Variant::Fov180Res50.beams();
@@ -162,12 +159,11 @@ pub(super) fn host_framer() -> Framer {
 pub(super) const SETTLE: Duration = Duration::from_millis(500);
 
 /// Both ends of the co-processor and everything verify keeps.
-/// The sensor runs while the host line's backlog is below this: none. (It
-/// was half a 0.5° scan period. Now that the co-processor sends a scan's
-/// `B0` before its pipeline runs, verify's model of the line no longer
-/// trails the co-processor's by the pipeline's time, and under QEMU, whose
-/// guest clock lags the wall clock by up to a fifth, the next scan then
-/// reached the co-processor's budget too early in about 1 of 5 noisy runs.)
+/// The sensor runs while the host line's backlog is below this: none. The
+/// co-processor sends a scan's `B0` before its pipeline runs, so verify's
+/// model of the line matches the co-processor's; any slack lets the next
+/// scan reach the co-processor's budget early under QEMU, whose guest clock
+/// lags the wall clock by up to a fifth.
 const HOST_LINE_SLACK: Duration = Duration::ZERO;
 
 pub(super) struct Session {

@@ -1,4 +1,5 @@
-//! Run the extractor on frames and turn each result into a JSON record.
+//! Run the extractor on frames and turn each result into a record: JSON
+//! Lines, or ROS 2 messages.
 //!
 //! One [`FrameRecord`] per frame, written as one line of JSON (JSON Lines).
 //! Every `f32` of the library is serialized as `f32`: serde_json prints the
@@ -17,6 +18,7 @@ use lms_core::Stats;
 use lms_core::{Extractor, Frame, Params, Trace};
 use serde::{Deserialize, Serialize};
 
+use crate::input::InputFrame;
 use crate::ros2::messages::Stamp;
 use crate::ros2::rosbag2_out::RosOut;
 
@@ -204,17 +206,6 @@ impl FrameRecord {
             pose: None,
         }
     }
-}
-
-/// One frame to extract.
-#[derive(Clone, Debug)]
-pub struct InputFrame {
-    /// Index reported in the record.
-    pub index: usize,
-    /// The frame.
-    pub frame: Frame,
-    /// Pose to report, if the source has one.
-    pub pose: Option<[f64; 3]>,
 }
 
 /// Totals of an extraction run.

@@ -17,7 +17,7 @@ use super::DEFAULT_ELF;
 use crate::serial::{is_quiet, Link, WRITE_TIMEOUT};
 
 /// A TCP connection to one of QEMU's serial ports.
-pub(super) struct TcpLink {
+pub(crate) struct TcpLink {
     stream: TcpStream,
     name: String,
     /// When the connection was made (the origin of [`Link::now`]).
@@ -111,13 +111,13 @@ impl Link for TcpLink {
 }
 
 /// QEMU running the firmware; killed (its whole process group) when dropped.
-pub(super) struct Qemu {
-    pub(super) child: Child,
+pub(crate) struct Qemu {
+    pub(crate) child: Child,
     elf: PathBuf,
     /// Holds the raw defmt log, QEMU's stderr and its QMP socket.
     dir: PathBuf,
     /// Keep `dir` when dropped (the run failed).
-    pub(super) keep: bool,
+    pub(crate) keep: bool,
     /// The QEMU Machine Protocol connection, made on first use.
     qmp: Option<Qmp>,
 }
@@ -245,7 +245,7 @@ impl Qemu {
     /// Start `qemu-system-arm -M netduinoplus2` with the firmware and its
     /// serial ports on TCP `ports` (host, sensor, console), bounded by
     /// `bound` (with `timeout`, if installed).
-    pub(super) fn start(elf: &Path, ports: [u16; 3], bound: Duration) -> Result<Qemu> {
+    pub(crate) fn start(elf: &Path, ports: [u16; 3], bound: Duration) -> Result<Qemu> {
         let qemu = on_path("qemu-system-arm")
             .context("qemu-system-arm not found on PATH (apt-get install qemu-system-arm)")?;
         let dir = std::env::temp_dir().join(format!("host-bridge-verify-{}", std::process::id()));
@@ -320,7 +320,7 @@ impl Qemu {
 
     /// Reset the MCU (QMP `system_reset`: the core restarts from its reset
     /// vector; the UARTs' TCP connections stay up, as wires would).
-    pub(super) fn reset(&mut self) -> Result<()> {
+    pub(crate) fn reset(&mut self) -> Result<()> {
         self.qmp()?
             .execute(serde_json::json!({ "execute": "system_reset" }))
             .context("QMP system_reset")?;
@@ -330,7 +330,7 @@ impl Qemu {
     /// The sensor line's rate as the firmware has programmed it (from
     /// USART2's `BRR`, read through the monitor), `None` while unset.
     /// QEMU itself ignores the register; verify models the line with it.
-    pub(super) fn sensor_baud(&mut self) -> Result<Option<u32>> {
+    pub(crate) fn sensor_baud(&mut self) -> Result<Option<u32>> {
         let text = self.qmp()?.monitor(&format!("xp /1wx {USART2_BRR:#x}"))?;
         let brr = text
             .rsplit(':')
@@ -342,7 +342,7 @@ impl Qemu {
 
     /// An error if QEMU has exited (with the first lines of what it said;
     /// all of it stays in the temporary directory).
-    pub(super) fn check(&mut self) -> Result<()> {
+    pub(crate) fn check(&mut self) -> Result<()> {
         if let Some(status) = self.child.try_wait()? {
             self.keep = true;
             let path = self.dir.join("qemu.stderr");
@@ -368,7 +368,7 @@ impl Qemu {
     }
 
     /// Wait up to `limit` for QEMU to exit; its status if it did.
-    pub(super) fn wait_exit(&mut self, limit: Duration) -> Option<std::process::ExitStatus> {
+    pub(crate) fn wait_exit(&mut self, limit: Duration) -> Option<std::process::ExitStatus> {
         let until = Instant::now() + limit;
         loop {
             if let Ok(Some(s)) = self.child.try_wait() {
@@ -383,7 +383,7 @@ impl Qemu {
 
     /// The end of the firmware's log, decoded with `defmt-print` if it is
     /// installed.
-    pub(super) fn log_tail(&self) -> String {
+    pub(crate) fn log_tail(&self) -> String {
         let raw = self.dir.join("defmt.raw");
         let decoded = on_path("defmt-print").and_then(|tool| {
             let input = std::fs::File::open(&raw).ok()?;
@@ -431,7 +431,7 @@ impl Drop for Qemu {
 }
 
 /// The firmware under QEMU and verify's ends of its three UARTs.
-pub(super) struct Connected {
+pub(crate) struct Connected {
     /// USART2, the sensor line.
     pub sensor: Box<dyn Link>,
     /// USART1, the host line.
@@ -446,7 +446,7 @@ pub(super) struct Connected {
 
 /// Start QEMU (bounded by `timeout` + 30 s) and connect to its three
 /// UARTs: USART1 = host line, USART2 = sensor line, USART3 = console.
-pub(super) fn connect(
+pub(crate) fn connect(
     elf: Option<&Path>,
     timeout: Duration,
     stop: &Arc<AtomicBool>,
