@@ -3,8 +3,7 @@
 #   flash = .vector_table + .text + .rodata + the .data image (copied to RAM
 #   at boot, so it is in flash too), static RAM = .data + .bss + .uninit,
 #   peak stack (painted stack, read back by the console report),
-#   guest instructions per scan at 1 and 30 passes, default, fast-math and
-#   split before reject (proposal A of docs/evaluation),
+#   guest instructions per scan at 1 and 30 passes, default and fast-math,
 #   counted exactly by tools/qemu-icount between `scan_begin` and `scan_end`.
 # Usage: firmware/budgets.sh   (needs qemu-system-arm, gcc, python3, binutils)
 set -euo pipefail

@@ -40,6 +40,21 @@ fn main() {
             .expect("LMS_ITERATIONS must be a whole number 1..=1000"),
         Err(_) => 30,
     };
+    // The scan variant the co-processor brings the LMS up with until its
+    // client sets one (`3B`): 180°/0.5° unless `LMS_VARIANT` (FOV/RES in
+    // degrees) says otherwise (the cycle estimates per LMS mode build with
+    // each).
+    println!("cargo:rerun-if-env-changed=LMS_VARIANT");
+    let variant = match env::var("LMS_VARIANT").as_deref().map(str::trim) {
+        Ok("180/1") => "Fov180Res100",
+        Ok("180/0.5") | Err(_) => "Fov180Res50",
+        Ok("100/1") => "Fov100Res100",
+        Ok("100/0.5") => "Fov100Res50",
+        Ok("100/0.25") => "Fov100Res25",
+        Ok(other) => {
+            panic!("LMS_VARIANT must be 180/1, 180/0.5, 100/1, 100/0.5 or 100/0.25, not {other}")
+        }
+    };
     // The board's crystal (Hz): 8 MHz on the STM32F4-Discovery, 25 MHz on
     // a Netduino Plus 2; rcc.rs checks at compile time that the PLL gets
     // exactly 168 MHz from it.
@@ -59,7 +74,9 @@ fn main() {
              /// Smoothing passes (`LMS_ITERATIONS` at build time, default 30).\n\
              pub const ITERATIONS: u16 = {iterations};\n\
              /// The board's crystal (`LMS_HSE_HZ` at build time, default 8 MHz).\n\
-             pub const HSE_HZ: u32 = {hse_hz};\n"
+             pub const HSE_HZ: u32 = {hse_hz};\n\
+             /// The scan variant the LMS is brought up with (`LMS_VARIANT` at build time, default 180/0.5).\n\
+             pub const VARIANT: lms_core::Variant = lms_core::Variant::{variant};\n"
         ),
     )
     .expect("write build_config.rs");

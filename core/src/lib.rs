@@ -54,11 +54,14 @@ pub mod telegram;
 pub mod test_support;
 pub mod units;
 
-/// Pipeline internals for the evaluation package (`lab/`): no stability
-/// promise, may change in any release. Off unless feature `unstable-lab`.
+/// Pipeline internals for the evaluation package (`lab/`) and the
+/// workspace tests: no stability promise, may change in any release. Off
+/// unless feature `unstable-lab`.
 #[cfg(feature = "unstable-lab")]
 pub mod unstable {
+    pub use crate::pipeline::line_fit::fit_line;
     pub use crate::pipeline::merge::{fit_span, try_merge};
+    pub use crate::pipeline::segmentation::segment;
 }
 
 pub use features::Line;

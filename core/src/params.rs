@@ -89,7 +89,7 @@ pub struct Params {
     /// beams `i, i+k, i+2k` of one turn (`k` turns, the filter's angle
     /// `k·γ`), so the offset between turns (platform motion in 13.3 ms) is
     /// no break; a run of windows covers every beam of its windows up to
-    /// its neighbours ([`crate::pipeline::segmentation::segment_strided`]).
+    /// its neighbours ([`crate::pipeline::segmentation::Segmenter`]).
     /// Default on; `false` is §2–6 (v1, v2); 1° modes are the same either
     /// way.
     pub same_turn_windows: bool,

@@ -68,11 +68,17 @@ mod app {
         }
     };
 
+    /// The sensor set-up: the build's variant (`LMS_VARIANT`, default
+    /// 180°/0.5°), mm, 500 kBd.
+    const SETUP: SensorSetup = SensorSetup {
+        variant: crate::VARIANT,
+        ..SensorSetup::DEFAULT
+    };
+
     /// Configure it in place with the default parameters and sensor set-up
-    /// (180°/0.5°, mm, 500 kBd) and switch it on: its host side sends the
-    /// LMS power-on telegram.
+    /// and switch it on: its host side sends the LMS power-on telegram.
     pub fn start(app: &mut App, now_us: u64) {
-        app.configure(PARAMS, SensorSetup::DEFAULT);
+        app.configure(PARAMS, SETUP);
         app.start(now_us);
     }
 

@@ -36,6 +36,8 @@ use crate::capture::{self, CaptureReader, CaptureScans, MAGIC};
 use crate::carmen::{LogText, READ_BUFFER};
 use crate::options::UnitArg;
 use crate::ros2::bag_in::{self, BagScans};
+use crate::ros2::messages::Stamp;
+use crate::ros2::rosbag2_out::stamp_for;
 pub use crate::warning::warn;
 use crate::warning::Limited;
 
@@ -84,6 +86,29 @@ pub struct InputScan {
     pub stamp_ns: Option<i64>,
     /// The frame id of a ROS 2 message's header.
     pub frame_id: Option<String>,
+}
+
+impl InputScan {
+    /// Its stamp for the ROS 2 outputs and the live view: its own, a
+    /// capture's time, or its index at the scan period ([`stamp_for`]).
+    pub fn stamp(&self) -> Stamp {
+        stamp_for(
+            self.index,
+            &self.frame,
+            self.stamp_ns,
+            self.time_us,
+            self.frame_id.as_deref(),
+        )
+    }
+
+    /// The pipeline's input of this scan.
+    pub fn into_frame(self) -> InputFrame {
+        InputFrame {
+            index: self.index,
+            frame: self.frame,
+            pose: self.pose,
+        }
+    }
 }
 
 /// What the file is.

@@ -653,20 +653,8 @@ pub type Timed = (InputFrame, Stamp, Clock);
 
 /// A scan of a file as a [`Timed`] frame.
 pub fn timed(scan: InputScan) -> Timed {
-    let clock = Clock::of(&scan);
-    let stamp = stamp_for(
-        scan.index,
-        &scan.frame,
-        scan.stamp_ns,
-        scan.time_us,
-        scan.frame_id.as_deref(),
-    );
-    let frame = InputFrame {
-        index: scan.index,
-        frame: scan.frame,
-        pose: scan.pose,
-    };
-    (frame, stamp, clock)
+    let (clock, stamp) = (Clock::of(&scan), scan.stamp());
+    (scan.into_frame(), stamp, clock)
 }
 
 /// `extract --realtime [--foxglove]`: the frames played at their own times

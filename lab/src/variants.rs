@@ -16,7 +16,7 @@ use lms_core::pipeline::ekf::WindowFilter;
 use lms_core::pipeline::smoothing::weight;
 use lms_core::{Frame, Params};
 
-use lms_core::pipeline::line_fit::fit_line;
+use lms_core::unstable::fit_line;
 use lms_core::Segment;
 
 use crate::baselines::{features_from_segments, segments_of, Extraction, Tables};

@@ -4,7 +4,7 @@
 //! of a built-in scene, and the baselines on a noise-free corner.
 
 use lms_core::maths::Sym2;
-use lms_core::pipeline::line_fit::fit_line;
+use lms_core::unstable::fit_line;
 use lms_core::Corner;
 use lms_core::Line;
 use lms_core::{Beam, Frame, Params, Variant};

@@ -4,7 +4,8 @@
 
 use lms_core::frame::{Frame, Variant};
 use lms_core::pipeline::corners::intersect;
-use lms_core::pipeline::line_fit::{fit_line, Bearings};
+use lms_core::pipeline::line_fit::Bearings;
+use lms_core::unstable::fit_line;
 use lms_core::{Extractor, Params};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

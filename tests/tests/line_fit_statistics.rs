@@ -6,7 +6,7 @@
 //! The wall `x·cos α + y·sin α = r` with α = 0.4 rad, r = 2.5 m is seen by
 //! the 101 beams 200..=300 of a 361-beam scan (bearings 10°…60°, incidence
 //! −13°…37°) with Gaussian range noise sigma = 5 mm, fitted by
-//! `lms_core::pipeline::line_fit::fit_line` on the raw ranges.
+//! `lms_core::unstable::fit_line` on the raw ranges.
 //!
 //! * **NEES** `eᵀ Σ⁻¹ e` with `e = (α̂ − α, r̂ − r)` and Σ the covariance the
 //!   fit reports is χ²₂ if Σ is right: mean 2, variance 4. The mean of
@@ -27,7 +27,8 @@
 //! chi2 1.001. The arc: one segment over its ~120 beams, chi2 ≈ 370.
 
 use lms_core::frame::{Frame, Variant};
-use lms_core::pipeline::line_fit::{fit_line, Bearings};
+use lms_core::pipeline::line_fit::Bearings;
+use lms_core::unstable::fit_line;
 use lms_core::{Extractor, Params};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -361,7 +361,8 @@ fn gaussian_smooth(ranges: &[f32], valid: &[bool], s: f64) -> Vec<f32> {
 ///   ranges still intersect within 3 mm of the vertex (RMS; measured 1.3 mm).
 #[test]
 fn the_line_model_keeps_a_corner_that_a_gaussian_mask_moves() {
-    use lms_core::pipeline::line_fit::{fit_line, Bearings as CoreBearings};
+    use lms_core::pipeline::line_fit::Bearings as CoreBearings;
+    use lms_core::unstable::fit_line;
     let variant = Variant::Fov180Res50;
     let scene = Scene::two_walls_corner(90.0);
     let truth = scene.cast(&Bearings::lms_180_half_deg(), Pose::IDENTITY);

@@ -16,8 +16,8 @@
 #   tools/qemu-icount/pipeline.sh [verify arguments]
 # e.g. the noisy-scan budget of README:
 #   tools/qemu-icount/pipeline.sh --scene random --seed 7 --count 50 --noise-sigma 0.01 --scans 50
-# ICOUNT_MODEL=m4 adds the Cortex-M4F cycle estimate (cycles.h); see
-# tools/qemu-icount/cycles.sh for it per LMS mode.
+# ICOUNT_MODEL=m4 adds the Cortex-M4F cycle estimate (cycles.h; the figures
+# and the model's assumptions are in docs/DESIGN.md, Firmware).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 cd "$root"

@@ -133,7 +133,9 @@ pub(crate) fn offset_turns(points: u16, turns: u8) -> u8 {
 /// range noise `sigma` (m). Beams outside the slices are ignored. With the
 /// extractor's own table (`&TwoLevelBearings`) the result is the
 /// extractor's bit for bit; with full tables (`Bearings`) it may differ in
-/// the last bits (another order of the angle sums).
+/// the last bits (another order of the angle sums). For the evaluation and
+/// the workspace tests: `lms_core::unstable::fit_line`.
+#[cfg(any(test, feature = "unstable-lab"))]
 pub fn fit_line<B: BearingTable>(
     bearings: B,
     ranges: &[f32],
@@ -153,8 +155,8 @@ pub fn fit_line<B: BearingTable>(
     fit_piece(&scan, first, last, sigma)
 }
 
-/// [`fit_line`] on the beams of `scan` that are valid and below its
-/// `max_range`.
+/// Fit a line to the beams `first..=last` of `scan` that are valid and
+/// below its `max_range`, with range noise `sigma` (m).
 pub fn fit_piece<B: BearingTable>(
     scan: &RawScan<'_, B>,
     first: u16,

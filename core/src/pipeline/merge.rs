@@ -33,7 +33,7 @@ pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16
 /// `merge_gap_beams` valid ones) lie between them, their parameters agree
 /// within `merge_gate`, and the refit of the union passes `max_chi2` (and,
 /// beyond §7.6, stays within `merge_anchor_gate` of the larger line's own
-/// parameters: [`anchored`]). The union is refitted on `scan`, the scan
+/// parameters: `anchored`). The union is refitted on `scan`, the scan
 /// the two lines were fitted on (its range limit, footprint term and
 /// turns).
 pub fn try_merge<B: BearingTable>(

@@ -52,6 +52,10 @@ pub struct SegmentationCounts {
 ///
 /// `mahalanobis[i]` is `D` of window `i` (`+inf` if invalid; NaN is treated
 /// as breaking). Outputs are cleared first; overflow is counted, never a panic.
+/// The extractor segments as the last pass runs ([`Segmenter`]); this whole-
+/// array form is for the evaluation and the workspace tests
+/// (`lms_core::unstable::segment`).
+#[cfg(any(test, feature = "unstable-lab"))]
 pub fn segment<const S: usize, L: EdgeList>(
     mahalanobis: &[f32],
     tau: f32,
@@ -76,6 +80,7 @@ pub fn segment<const S: usize, L: EdgeList>(
 /// `stride = 1` is §6.
 // Never inlined: the slice form is for tools and tests; the extractor feeds
 // a `Segmenter` window by window.
+#[cfg(any(test, feature = "unstable-lab"))]
 #[inline(never)]
 pub fn segment_strided<const S: usize, L: EdgeList>(
     mahalanobis: &[f32],
@@ -95,7 +100,7 @@ pub fn segment_strided<const S: usize, L: EdgeList>(
 
 /// §6 fed window by window, in order (the extractor feeds it the last
 /// pass's `D` as the pass computes it, so no `D` of the whole scan is
-/// kept): [`segment_strided`] is this over a slice.
+/// kept): `segment_strided` is this over a slice.
 pub struct Segmenter<'a, const S: usize, L: EdgeList> {
     stride: usize,
     tau: f32,

@@ -83,13 +83,17 @@ fn file_inputs<'a>(
     file: &'a mut input::ScanFile,
     range: &'a FrameRange,
 ) -> impl Iterator<Item = Result<InputFrame>> + 'a {
-    selected_scans(file, range).map(|s| {
-        s.map(|s| InputFrame {
-            index: s.index,
-            frame: s.frame,
-            pose: s.pose,
-        })
-    })
+    selected_scans(file, range).map(|s| s.map(input::InputScan::into_frame))
+}
+
+/// The input file in a summary line: its path, what it is, the scans read.
+fn file_about(f: &input::ScanFile) -> String {
+    format!(
+        "{} ({}, {} scans read)",
+        f.path().display(),
+        f.describe(),
+        f.read()
+    )
 }
 
 /// The synthetic scene in a summary line.
@@ -180,13 +184,7 @@ pub fn run(args: &ExtractArgs) -> Result<()> {
                 None => record::extract_named(file_inputs(f, &range), &params, out, &out_name)?,
             };
             f.warn_if_cut();
-            let about = format!(
-                "{} ({}, {} scans read)",
-                f.path().display(),
-                f.describe(),
-                f.read()
-            );
-            (s, about)
+            (s, file_about(f))
         }
         None => {
             let scene = scene_inputs(&args.scene, &range)?;
@@ -299,13 +297,7 @@ fn run_extract_ros(
         Some(f) => {
             let s = record::extract_to_ros(file_ros_inputs(f, &range), params, ros)?;
             f.warn_if_cut();
-            let about = format!(
-                "{} ({}, {} scans read)",
-                f.path().display(),
-                f.describe(),
-                f.read()
-            );
-            (s, about, f.read())
+            (s, file_about(f), f.read())
         }
         None => {
             let frames = scene_inputs(&args.scene, &range)?.map(|f| {
@@ -335,19 +327,8 @@ fn file_ros_inputs<'a>(
 ) -> impl Iterator<Item = Result<(InputFrame, Stamp)>> + 'a {
     selected_scans(file, range).map(|s| {
         s.map(|s| {
-            let stamp = stamp_for(
-                s.index,
-                &s.frame,
-                s.stamp_ns,
-                s.time_us,
-                s.frame_id.as_deref(),
-            );
-            let frame = InputFrame {
-                index: s.index,
-                frame: s.frame,
-                pose: s.pose,
-            };
-            (frame, stamp)
+            let stamp = s.stamp();
+            (s.into_frame(), stamp)
         })
     })
 }
