@@ -109,14 +109,13 @@ impl Report {
         }
         // The co-processor's counters, then the boot's: SYSCLK, the boot
         // record's fields in counter order, the fault's detail.
-        let counts = self.counters.entries().filter(|e| e.1 != CounterKind::Boot);
-        for (name, _, v) in counts {
+        let mut counters = self.counters;
+        counters.set_boot(self.boot.record());
+        for (name, _, v) in counters.entries().filter(|e| e.1 != CounterKind::Boot) {
             w.field(name, v.into());
         }
         w.field("sysclk_hz", self.boot.clocks.sysclk_hz.into());
-        let mut boot = Counters::ZERO;
-        boot.set_boot(self.boot.record());
-        for (name, _, v) in boot.entries().filter(|e| e.1 == CounterKind::Boot) {
+        for (name, _, v) in counters.entries().filter(|e| e.1 == CounterKind::Boot) {
             w.field(name, v.into());
         }
         let detail = self.boot.last_fault.map_or(0, |f| f.detail);

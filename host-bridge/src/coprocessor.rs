@@ -345,7 +345,7 @@ fn run_qemu(args: &CoprocessorArgs, mut sensor: SerialLink, elf: Option<&Path>) 
     let stop = crate::stop::stop_flag()?;
     let quit_after = args.quit_after.map(Duration::from_secs_f64);
     let bound = quit_after.unwrap_or(Duration::from_secs(24 * 3600)) + Duration::from_secs(10);
-    let mut qemu = crate::qemu::qemu_lines(elf, bound, &stop)?;
+    let mut qemu = crate::qemu::connect(elf, bound, &stop)?;
     eprintln!(
         "host-bridge coprocessor: the firmware under QEMU between sensor {} and client line {} -> {}",
         args.sensor.display(),

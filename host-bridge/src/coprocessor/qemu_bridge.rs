@@ -29,8 +29,8 @@ use embedded_io::{Read as _, ReadReady as _, Write as _};
 use lms_core::telegram::reply::code as reply_code;
 use lms_core::telegram::{Baud, Direction, Event, Framer, Handshake, Request};
 
+use crate::qemu::Connected;
 use crate::qemu::QemuIntake;
-use crate::qemu::QemuLines;
 use crate::serial::{Link, PtyPort, SerialLink, TICK};
 
 /// The sensor's bytes on their way to QEMU (see the module docs).
@@ -146,7 +146,7 @@ impl BaudWatch {
 pub(super) fn bridge(
     sensor: &mut SerialLink,
     client: &mut PtyPort,
-    qemu: &mut QemuLines,
+    qemu: &mut Connected,
     stop: &AtomicBool,
     quit_after: Option<Duration>,
 ) -> Result<&'static str> {
@@ -165,7 +165,7 @@ pub(super) fn bridge(
 fn pass_bytes(
     sensor: &mut SerialLink,
     client: &mut PtyPort,
-    qemu: &mut QemuLines,
+    qemu: &mut Connected,
     stop: &AtomicBool,
     quit_after: Option<Duration>,
     feed: &mut SensorFeed,

@@ -430,7 +430,9 @@ impl Drop for Qemu {
     }
 }
 
-/// The firmware under QEMU and verify's ends of its three UARTs.
+/// The firmware under QEMU and our ends of its three UARTs as
+/// [`Link`]s (for `verify --qemu` and `coprocessor --qemu`); QEMU is
+/// stopped when this is dropped, after its lines.
 pub(crate) struct Connected {
     /// USART2, the sensor line.
     pub sensor: Box<dyn Link>,

@@ -545,6 +545,17 @@ enum ForwardOwner {
     Client,
 }
 
+impl ForwardOwner {
+    /// Withdraw the client's relayed request from `link`, if the forward
+    /// under way is the client's and not on the line yet (else its reply is
+    /// dropped when it comes).
+    fn cancel_client(&mut self, link: &mut SensorLink) {
+        if *self == ForwardOwner::Client && link.cancel_forward() {
+            *self = ForwardOwner::CoProcessor;
+        }
+    }
+}
+
 impl CoProcessor {
     /// A co-processor with validated `params` that will bring the sensor up
     /// with `setup`. `const`, so it can be placed in a `static` without
@@ -843,9 +854,9 @@ impl CoProcessor {
     /// and a forward of a relayed request the face let go (a reset) is
     /// withdrawn: nothing stays claimed.
     fn hand_to_sensor(&mut self, now_us: u64) {
-        if self.forward == ForwardOwner::Client && self.host.source().relay == Relay::Idle {
+        if self.host.source().relay == Relay::Idle {
             // The face let the request go (power-on): not to be sent.
-            self.cancel_client_forward();
+            self.forward.cancel_client(&mut self.link);
         }
         let restore = self.stream == SensorStream::Restoring;
         let back_to_scans = [request::code::MODE_CONTINUOUS];
@@ -866,9 +877,7 @@ impl CoProcessor {
         match latest.relay {
             // A forward on the line ends by the link's own time-out.
             Relay::Asked(_) | Relay::Sent(_) if late && !self.link.forward_sent() => {
-                if self.forward == ForwardOwner::Client && self.link.cancel_forward() {
-                    self.forward = ForwardOwner::CoProcessor;
-                }
+                self.forward.cancel_client(&mut self.link);
                 latest.relay = Relay::Failed;
                 self.counters.relays_failed = self.counters.relays_failed.wrapping_add(1);
             }
@@ -945,14 +954,6 @@ impl CoProcessor {
     fn leave_values(&mut self) {
         if self.stream.is_relayed() {
             self.stream = SensorStream::Restoring;
-        }
-    }
-
-    /// Withdraw the client's relayed request from the sensor link, if it is
-    /// not on the line yet (else its reply is dropped when it comes).
-    fn cancel_client_forward(&mut self) {
-        if self.link.cancel_forward() {
-            self.forward = ForwardOwner::CoProcessor;
         }
     }
 
