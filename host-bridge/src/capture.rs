@@ -22,7 +22,7 @@
 //! A record is 10 + `length` bytes; a 361-value `B0` telegram is 732 bytes,
 //! its record 742. Records normally hold `B0` measured values; a reader may
 //! find other sensor → host telegrams (e.g. an `A0`) and skips them when it
-//! wants scans ([`read_frames`], [`read_values`]). Every telegram is checked
+//! wants scans ([`read_values`]). Every telegram is checked
 //! when read: `STX` first, `LEN` consistent with `length`, a sensor → host
 //! address (bit 7 set), and a correct CRC.
 //!

@@ -32,7 +32,7 @@
 //! check fails, or whose deflate data are corrupt, is damaged: scans read
 //! before the failure may carry altered ranges, so reading fails, unless
 //! the caller keeps them ([`LogText::open`]'s `keep_damaged`): then the
-//! scans end there as at a cut, and [`LogText::damage`] says why.
+//! scans end there as at a cut, and [`LogText::damage_handle`] says why.
 
 use std::cell::RefCell;
 use std::fs::File;

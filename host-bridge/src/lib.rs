@@ -3,7 +3,7 @@
 //! Modules in the order the data flows:
 //!
 //! 1. [`options`] — command-line pipeline parameters, frame selections and
-//!    the range-unit value ([`options::UnitArg`]); [`reference`] lists the
+//!    the range-unit value ([`options::UnitArg`]); [`reference`](mod@reference) lists the
 //!    parameters, presets and stats counters (`host-bridge params`).
 //! 2. Sources of frames: [`carmen`] (recorded CARMEN logs) and
 //!    [`synthetic`] (seeded scenes from `lms-scene`, the no-hardware demo);

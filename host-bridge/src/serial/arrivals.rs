@@ -35,8 +35,8 @@ use lms_core::device::coprocessor::{CoProcessor, PollError, PollOutcome, WriteRo
 /// 500 kBd; a 361-value `B0` takes six steps).
 pub const STEP: usize = 128;
 
-/// A sensor port whose bytes carry their estimated arrival time (see the
-/// [module docs](self)). It is itself the port the co-processor reads:
+/// A sensor port whose bytes carry their estimated arrival time (from when
+/// they were read and the line rate). It is itself the port the co-processor reads:
 /// [`Arrivals::poll`] runs the co-processor on it.
 pub struct Arrivals<P> {
     port: P,

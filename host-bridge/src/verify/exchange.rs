@@ -27,24 +27,30 @@ impl Session {
             if Instant::now() >= deadline {
                 bail!(
                     "no answer to {what} on the host line {} ({attempts} attempts)",
-                    self.host.name()
+                    self.client.link.name()
                 );
             }
-            self.replies.clear();
-            self.naks = 0;
-            self.host
+            self.client.replies.clear();
+            self.client.naks = 0;
+            self.client
+                .link
                 .send(request)
-                .with_context(|| format!("host line {}", self.host.name()))?;
+                .with_context(|| format!("host line {}", self.client.link.name()))?;
             attempts += 1;
             self.log(format!("client: {what} (attempt {attempts})"));
             let sent = Instant::now();
-            while sent.elapsed() < RETRY && Instant::now() < deadline && self.naks == 0 {
+            while sent.elapsed() < RETRY && Instant::now() < deadline && self.client.naks == 0 {
                 self.pump(TICK)?;
-                if let Some(i) = self.replies.iter().position(|r| r.command == reply) {
-                    let data = self.replies.remove(i).map(|r| r.data).unwrap_or_default();
+                if let Some(i) = self.client.replies.iter().position(|r| r.command == reply) {
+                    let data = self
+                        .client
+                        .replies
+                        .remove(i)
+                        .map(|r| r.data)
+                        .unwrap_or_default();
                     return Ok(data);
                 }
-                if self.replies.iter().any(|r| r.command == 0x92) {
+                if self.client.replies.iter().any(|r| r.command == 0x92) {
                     bail!(
                         "{what}: the host line answered 92 (unknown command){}",
                         if matches!(request.get(4), Some(&(REQ_COUNTERS | REQ_FEATURES))) {

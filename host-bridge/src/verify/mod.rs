@@ -2,16 +2,7 @@
 //! and check, bit for bit, that the features it sends are the ones the std
 //! build computes from the very scans it passed through.
 //!
-//! ```text
-//! host-bridge verify [--host | --qemu [ELF] | --ports HOST SENSOR]
-//!                    [--scene room|corridor|random] [--seed N] [--count N]
-//!                    [--noise-sigma S] [--dropout P]
-//!                    [--replay LOG] [--frames A..B]
-//!                    [--scans N] [--timeout S] [--host-baud BAUD]
-//!                    [--max-in-flight N] [-v]
-//!                    [--iterations N] [--q Q] [--sigma S] [--tau T]
-//!                    [--max-range M] [--preset NAME] [--set NAME=VALUE]...
-//! ```
+//! Its options are those of `host-bridge verify --help` ([`VerifyArgs`]).
 //!
 //! # What it plays
 //!
@@ -144,13 +135,17 @@
 
 mod args;
 mod checker;
+mod client_side;
 mod compare;
+mod disrupt;
 mod dut;
 mod exchange;
 mod host;
 mod line_rate;
 mod phases;
+mod recovery;
 mod report;
+mod sensor_side;
 mod session;
 mod source;
 

@@ -6,7 +6,7 @@ use anyhow::{bail, Result};
 use lms_core::telegram::features::{CounterKind, Counters};
 
 use super::checker::Tally;
-use super::session::Recovery;
+use super::recovery::Recovery;
 use super::QUIET;
 
 /// The run's outcome.
