@@ -43,19 +43,24 @@ pub trait BearingTable: Copy {
     fn beams(&self) -> usize;
     /// `(cos phi_j, sin phi_j)` for `j < beams()` (`(0, 0)` beyond).
     fn cos_sin(&self, j: usize) -> (f32, f32);
-    /// For each beam `j = lo + i` of the span whose ranges and statuses
-    /// are `ranges[i]`, `beams[i]` (cut to the shorter slice and to
-    /// `beams()`), in order, `f(i, d_j, beam_j, cos(phi_j − α),
-    /// sin(phi_j − α))` for the unit normal `(ca, sa) = (cos α, sin α)`;
-    /// `(1, 0)` gives `cos_sin(j)` exactly.
-    fn for_each_relative(
-        &self,
-        lo: usize,
-        ranges: &[f32],
-        beams: &[Beam],
-        normal: (f32, f32),
-        f: impl FnMut(usize, f32, Beam, f32, f32),
-    );
+    /// For each beam `j = lo + i` of the sweep (cut to the shorter slice
+    /// and to `beams()`), in order, `f(i, d_j, beam_j, cos(phi_j − α),
+    /// sin(phi_j − α))`; a normal of `(1, 0)` gives `cos_sin(j)` exactly.
+    fn sweep(&self, sweep: Sweep<'_>, f: impl FnMut(usize, f32, Beam, f32, f32));
+}
+
+/// A run of beams seen against a line's unit normal: beam `j = lo + i` has
+/// the range `ranges[i]` and the status `beams[i]`.
+#[derive(Clone, Copy, Debug)]
+pub struct Sweep<'a> {
+    /// The first beam's index.
+    pub lo: usize,
+    /// The beams' ranges (m).
+    pub ranges: &'a [f32],
+    /// The beams' statuses.
+    pub beams: &'a [Beam],
+    /// `(cos α, sin α)`: the unit normal the bearings are taken against.
+    pub normal: (f32, f32),
 }
 
 /// `(cos(phi − α), sin(phi − α))` from `(cos phi, sin phi)` and
@@ -89,19 +94,13 @@ impl BearingTable for Bearings<'_> {
     }
 
     #[inline]
-    fn for_each_relative(
-        &self,
-        lo: usize,
-        ranges: &[f32],
-        beams: &[Beam],
-        (ca, sa): (f32, f32),
-        mut f: impl FnMut(usize, f32, Beam, f32, f32),
-    ) {
+    fn sweep(&self, sweep: Sweep<'_>, mut f: impl FnMut(usize, f32, Beam, f32, f32)) {
+        let (ca, sa) = sweep.normal;
         let (cos, sin) = (
-            self.cos.get(lo..).unwrap_or_default(),
-            self.sin.get(lo..).unwrap_or_default(),
+            self.cos.get(sweep.lo..).unwrap_or_default(),
+            self.sin.get(sweep.lo..).unwrap_or_default(),
         );
-        let beams_and_ranges = ranges.iter().zip(beams);
+        let beams_and_ranges = sweep.ranges.iter().zip(sweep.beams);
         for (i, ((&d, &b), (&c, &s))) in beams_and_ranges.zip(cos.iter().zip(sin)).enumerate() {
             let (cd, sd) = relative(c, s, ca, sa);
             f(i, d, b, cd, sd);
@@ -178,14 +177,13 @@ impl BearingTable for &TwoLevelBearings {
     /// then per beam the angle sum with the fine entry: four products a
     /// beam, as many as the full tables needed for `phi_j − α`.
     #[inline]
-    fn for_each_relative(
-        &self,
-        lo: usize,
-        ranges: &[f32],
-        beams: &[Beam],
-        (ca, sa): (f32, f32),
-        mut f: impl FnMut(usize, f32, Beam, f32, f32),
-    ) {
+    fn sweep(&self, sweep: Sweep<'_>, mut f: impl FnMut(usize, f32, Beam, f32, f32)) {
+        let Sweep {
+            lo,
+            ranges,
+            beams,
+            normal: (ca, sa),
+        } = sweep;
         let n = ranges
             .len()
             .min(beams.len())
@@ -286,38 +284,32 @@ mod tests {
         // The relative angles: α = 0 is the table itself, bit for bit, and
         // every beam of a span is visited once, in order.
         let (ranges, beams) = ([1.0f32; MAX_BEAMS], [Beam::Valid; MAX_BEAMS]);
+        let span = |lo: usize, hi: usize, normal| Sweep {
+            lo,
+            ranges: &ranges[lo..hi],
+            beams: &beams[lo..hi],
+            normal,
+        };
         for (lo, hi) in [(0, 181), (5, 6), (15, 33), (170, 400), (3, 3), (390, 401)] {
             let mut seen = 0;
-            (&t).for_each_relative(
-                lo,
-                &ranges[lo..hi],
-                &beams[lo..hi],
-                (1.0, 0.0),
-                |i, _, _, c, s| {
-                    assert_eq!(i, seen);
-                    assert_eq!((c, s), t.cos_sin(lo + i));
-                    seen += 1;
-                },
-            );
+            (&t).sweep(span(lo, hi, (1.0, 0.0)), |i, _, _, c, s| {
+                assert_eq!(i, seen);
+                assert_eq!((c, s), t.cos_sin(lo + i));
+                seen += 1;
+            });
             assert_eq!(seen, hi - lo);
             let mut seen = 0;
-            b.for_each_relative(
-                lo,
-                &ranges[lo..hi],
-                &beams[lo..hi],
-                (1.0, 0.0),
-                |i, _, _, c, s| {
-                    assert_eq!((c, s), BearingTable::cos_sin(&b, lo + i));
-                    seen += 1;
-                },
-            );
+            b.sweep(span(lo, hi, (1.0, 0.0)), |i, _, _, c, s| {
+                assert_eq!((c, s), BearingTable::cos_sin(&b, lo + i));
+                seen += 1;
+            });
             assert_eq!(seen, hi.min(frame.len()).saturating_sub(lo));
         }
         // A rotated normal: cos(phi − α) within the tolerance of f64.
         let alpha = 0.3f64;
         let g = frame.geometry();
         let normal = (alpha.cos() as f32, alpha.sin() as f32);
-        (&t).for_each_relative(0, &ranges[..181], &beams[..181], normal, |j, _, _, c, s| {
+        (&t).sweep(span(0, 181, normal), |j, _, _, c, s| {
             let d = g.first_bearing as f64 + j as f64 * g.step as f64 - alpha;
             assert!((c as f64 - d.cos()).abs() <= 2.0 * TWO_LEVEL_TOLERANCE);
             assert!((s as f64 - d.sin()).abs() <= 2.0 * TWO_LEVEL_TOLERANCE);

@@ -24,7 +24,7 @@
 use crate::features::Line;
 use crate::frame::Beam;
 use crate::maths::{atan2, cos_sin, wrap_angle, Sym2};
-pub use crate::pipeline::bearings::{BearingTable, Bearings};
+pub use crate::pipeline::bearings::{BearingTable, Bearings, Sweep};
 
 /// Most Gauss–Newton steps per fit (§7.2).
 pub const MAX_GN_STEPS: usize = 5;
@@ -259,12 +259,19 @@ impl<'a, B: BearingTable> Span<'a, B> {
     fn each_valid_beam(&self, ca: f32, sa: f32, mut f: impl FnMut(usize, f32, f32, f32)) {
         let (max_range, lo) = (self.max_range, self.lo);
         let (ranges, beams) = (self.ranges, self.beams);
-        self.bearings
-            .for_each_relative(lo, ranges, beams, (ca, sa), |i, d, b, c, s| {
+        self.bearings.sweep(
+            Sweep {
+                lo,
+                ranges,
+                beams,
+                normal: (ca, sa),
+            },
+            |i, d, b, c, s| {
                 if b.is_valid() && d < max_range {
                     f(lo + i, d, c, s);
                 }
-            });
+            },
+        );
     }
 
     /// §7.1: the total-least-squares line through the valid points

@@ -32,7 +32,7 @@ use heapless::Vec;
 use crate::features::{Segment, Stats, MAX_SEGMENTS};
 use crate::params::{Params, MAX_SPLIT_DEPTH};
 use crate::pipeline::line_fit::{
-    fit_piece, offset_turns, residual_dof, BearingTable, RawScan, TurnSums,
+    fit_piece, offset_turns, residual_dof, BearingTable, RawScan, Sweep, TurnSums,
 };
 
 /// Upper 0.1 % quantile of χ² with `nu` degrees of freedom (Wilson–Hilferty:
@@ -187,12 +187,19 @@ impl<B: BearingTable> RawScan<'_, B> {
         let ranges = self.ranges.get(lo..hi).unwrap_or_default();
         let beams = self.beams.get(lo..hi).unwrap_or_default();
         let max_range = self.max_range;
-        self.bearings
-            .for_each_relative(lo, ranges, beams, (ca, sa), |i, d, b, c, s| {
+        self.bearings.sweep(
+            Sweep {
+                lo,
+                ranges,
+                beams,
+                normal: (ca, sa),
+            },
+            |i, d, b, c, s| {
                 if b.is_valid() && d < max_range {
                     f(lo + i, d, c, s);
                 }
-            });
+            },
+        );
     }
 
     /// `f(j, x_j, y_j)` for the valid points of `piece` (m), in beam order.

@@ -12,44 +12,20 @@
 //! [`Config::as_bytes`].
 
 use super::{le_u16, put_le_u16};
-use crate::units::Unit;
 
 /// Availability byte bit 1: real-time scan indices.
 pub const REAL_TIME_INDICES_BIT: u8 = 0x02;
 /// Bytes in a configuration block.
 pub const CONFIG_LEN: usize = 34;
 
-/// A configuration block (the data of `F4`, and of `77`/`F7` after the
-/// first byte of `F7`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Config {
-    bytes: [u8; CONFIG_LEN],
-}
-
-byte_block!(Config, CONFIG_LEN, "34");
-
-impl Default for Config {
-    /// All bytes 0: no blanking, no real-time indices, mode 0, cm.
-    fn default() -> Self {
-        Config::ZERO
-    }
-}
+byte_block!(
+    Config,
+    CONFIG_LEN,
+    "34",
+    "A configuration block (the data of `F4`, and of `77`/`F7` after the first byte of `F7`); all bytes 0, the default, is no blanking, no real-time indices, mode 0, cm."
+);
 
 impl Config {
-    /// All bytes 0 (`const` form of the default).
-    pub const ZERO: Config = Config {
-        bytes: [0; CONFIG_LEN],
-    };
-    /// Byte offset of the blanking word.
-    pub const BLANKING: usize = 0;
-    /// Byte offset of the availability byte.
-    pub const AVAILABILITY: usize = 4;
-    /// Byte offset of the measuring-mode byte.
-    pub const MEASURING_MODE: usize = 5;
-    /// Byte offset of the units byte.
-    pub const UNITS: usize = 6;
-
     /// Blanking, `[0..=1]` (u16 LE, raw sensor units).
     #[inline]
     pub fn blanking(&self) -> u16 {
@@ -92,18 +68,6 @@ impl Config {
         self.bytes[Self::MEASURING_MODE] = value;
     }
 
-    /// Unit code, `[6]` (0 cm, 1 mm).
-    #[inline]
-    pub const fn units_code(&self) -> u8 {
-        self.bytes[Self::UNITS]
-    }
-
-    /// Unit, if the code is 0 (cm) or 1 (mm).
-    #[inline]
-    pub const fn units(&self) -> Option<Unit> {
-        Unit::from_code(self.units_code())
-    }
-
     /// Set the units code (0 cm, 1 mm).
     #[inline]
     pub fn set_units_code(&mut self, code: u8) {
@@ -117,11 +81,21 @@ impl Config {
         bytes[Self::UNITS] = code;
         Config { bytes }
     }
+
+    /// Byte offset of the blanking word.
+    pub const BLANKING: usize = 0;
+    /// Byte offset of the availability byte.
+    pub const AVAILABILITY: usize = 4;
+    /// Byte offset of the measuring-mode byte.
+    pub const MEASURING_MODE: usize = 5;
+    /// Byte offset of the units byte.
+    pub const UNITS: usize = 6;
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::units::Unit;
 
     #[test]
     fn telegram_config_fields() {

@@ -69,11 +69,42 @@
 //! assert_eq!(seen, 2);
 //! ```
 
-/// The byte-array constructors and accessors of a fixed-size block of
-/// telegram data ([`Config`], [`StatusBlock`]): one definition for both.
+/// A fixed-size block of telegram data ([`Config`], [`StatusBlock`]): the
+/// type, all bytes 0 as its default, its byte-array constructors and
+/// accessors, and its units code (at the block's `UNITS` offset); one
+/// definition for both.
 macro_rules! byte_block {
-    ($block:ident, $len:expr, $what:literal) => {
+    ($block:ident, $len:expr, $what:literal, $doc:literal) => {
+        #[doc = $doc]
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        pub struct $block {
+            bytes: [u8; $len],
+        }
+
+        impl Default for $block {
+            /// All bytes 0.
+            fn default() -> Self {
+                $block::ZERO
+            }
+        }
+
         impl $block {
+            /// All bytes 0 (`const` form of the default).
+            pub const ZERO: $block = $block { bytes: [0; $len] };
+
+            /// The units code at [`Self::UNITS`] (0 cm, 1 mm).
+            #[inline]
+            pub const fn units_code(&self) -> u8 {
+                self.bytes[Self::UNITS]
+            }
+
+            /// The unit, if the code is 0 (cm) or 1 (mm).
+            #[inline]
+            pub const fn units(&self) -> Option<$crate::units::Unit> {
+                $crate::units::Unit::from_code(self.units_code())
+            }
+
             #[doc = concat!("A block from its ", $what, " bytes.")]
             #[inline]
             pub const fn from_bytes(bytes: [u8; $len]) -> Self {

@@ -17,7 +17,6 @@
 use super::request::Baud;
 use super::{le_u16, put_le_u16};
 use crate::frame::Variant;
-use crate::units::Unit;
 
 /// Bytes of `B1` data (without the command and the status byte).
 pub const STATUS_BLOCK_LEN: usize = 152;
@@ -103,23 +102,12 @@ impl Default for StatusFields {
     }
 }
 
-/// The 152 data bytes of a `B1` status reply.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct StatusBlock {
-    bytes: [u8; STATUS_BLOCK_LEN],
-}
-
-byte_block!(StatusBlock, STATUS_BLOCK_LEN, "152");
-
-impl Default for StatusBlock {
-    /// All bytes 0.
-    fn default() -> Self {
-        StatusBlock {
-            bytes: [0; STATUS_BLOCK_LEN],
-        }
-    }
-}
+byte_block!(
+    StatusBlock,
+    STATUS_BLOCK_LEN,
+    "152",
+    "The 152 data bytes of a `B1` status reply."
+);
 
 impl StatusBlock {
     /// Data offset of the operating mode (payload index 8).
@@ -205,23 +193,12 @@ impl StatusBlock {
     pub const fn address(&self) -> u8 {
         self.bytes[Self::ADDRESS]
     }
-
-    /// Unit code (payload `[122]`: 0 cm, 1 mm).
-    #[inline]
-    pub const fn units_code(&self) -> u8 {
-        self.bytes[Self::UNITS]
-    }
-
-    /// Unit, if the code is 0 (cm) or 1 (mm).
-    #[inline]
-    pub const fn units(&self) -> Option<Unit> {
-        Unit::from_code(self.units_code())
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::units::Unit;
 
     #[test]
     fn telegram_status_byte() {

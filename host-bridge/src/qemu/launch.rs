@@ -14,7 +14,7 @@ use anyhow::{bail, ensure, Context, Result};
 use lms_core::telegram::Baud;
 
 use super::DEFAULT_ELF;
-use crate::serial::{is_quiet, Link, WRITE_TIMEOUT};
+use crate::serial::{is_quiet, CoLines, Link, WRITE_TIMEOUT};
 
 /// A TCP connection to one of QEMU's serial ports.
 pub(crate) struct TcpLink {
@@ -433,18 +433,7 @@ impl Drop for Qemu {
 /// The firmware under QEMU and our ends of its three UARTs as
 /// [`Link`]s (for `verify --qemu` and `coprocessor --qemu`); QEMU is
 /// stopped when this is dropped, after its lines.
-pub(crate) struct Connected {
-    /// USART2, the sensor line.
-    pub sensor: Box<dyn Link>,
-    /// USART1, the host line.
-    pub host: Box<dyn Link>,
-    /// USART3, the console.
-    pub console: Option<Box<dyn Link>>,
-    /// QEMU itself.
-    pub qemu: Qemu,
-    /// How it is connected, for the log.
-    pub how: String,
-}
+pub(crate) type Connected = CoLines<Qemu>;
 
 /// Start QEMU (bounded by `timeout` + 30 s) and connect to its three
 /// UARTs: USART1 = host line, USART2 = sensor line, USART3 = console.
@@ -484,7 +473,7 @@ pub(crate) fn connect(
         sensor: Box::new(sensor),
         host: Box::new(host),
         console,
-        qemu,
+        runner: qemu,
         how,
     })
 }

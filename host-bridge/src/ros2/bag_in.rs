@@ -172,6 +172,11 @@ fn listed(topics: &[&Topic]) -> String {
 fn choose(path: &Path, topics: &[Topic], want: Option<&str>) -> Result<Topic> {
     let scans: Vec<&Topic> = topics.iter().filter(|t| t.schema == SCHEMA_NAME).collect();
     let all: Vec<&Topic> = topics.iter().collect();
+    let known = if all.is_empty() {
+        "none".to_string()
+    } else {
+        listed(&all)
+    };
     let topic = match want {
         Some(name) => match topics.iter().find(|t| t.name == name) {
             Some(t) if t.schema == SCHEMA_NAME => t,
@@ -180,26 +185,14 @@ fn choose(path: &Path, topics: &[Topic], want: Option<&str>) -> Result<Topic> {
                 path.display(),
                 t.schema
             ),
-            None => bail!(
-                "{}: no topic {name}; its topics: {}",
-                path.display(),
-                if all.is_empty() {
-                    "none".into()
-                } else {
-                    listed(&all)
-                }
-            ),
+            None => bail!("{}: no topic {name}; its topics: {}", path.display(), known),
         },
         None => match scans[..] {
             [only] => only,
             [] => bail!(
                 "{}: no {SCHEMA_NAME} topic; its topics: {}",
                 path.display(),
-                if all.is_empty() {
-                    "none".into()
-                } else {
-                    listed(&all)
-                }
+                known
             ),
             _ => bail!(
                 "{}: {} {SCHEMA_NAME} topics: {}; choose one with --topic",

@@ -550,50 +550,8 @@ pub const FEATURES_SCHEMA: &str = concat!(
     dependency!("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n"),
 );
 
-/// `visualization_msgs/msg/MarkerArray` with its dependencies.
-pub const MARKER_ARRAY_SCHEMA: &str = concat!(
-    "Marker[] markers\n",
-    dependency!(
-        "visualization_msgs/Marker",
-        "int32 ARROW=0\nint32 CUBE=1\nint32 SPHERE=2\nint32 CYLINDER=3\nint32 LINE_STRIP=4\n\
-         int32 LINE_LIST=5\nint32 CUBE_LIST=6\nint32 SPHERE_LIST=7\nint32 POINTS=8\n\
-         int32 TEXT_VIEW_FACING=9\nint32 MESH_RESOURCE=10\nint32 TRIANGLE_LIST=11\n\
-         int32 ADD=0\nint32 MODIFY=0\nint32 DELETE=2\nint32 DELETEALL=3\n\
-         std_msgs/Header header\nstring ns\nint32 id\nint32 type\nint32 action\n\
-         geometry_msgs/Pose pose\ngeometry_msgs/Vector3 scale\nstd_msgs/ColorRGBA color\n\
-         builtin_interfaces/Duration lifetime\nbool frame_locked\n\
-         geometry_msgs/Point[] points\nstd_msgs/ColorRGBA[] colors\n\
-         string texture_resource\nsensor_msgs/CompressedImage texture\n\
-         UVCoordinate[] uv_coordinates\nstring text\nstring mesh_resource\n\
-         MeshFile mesh_file\nbool mesh_use_embedded_materials\n"
-    ),
-    dependency!(
-        "std_msgs/Header",
-        "builtin_interfaces/Time stamp\nstring frame_id\n"
-    ),
-    dependency!("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n"),
-    dependency!(
-        "geometry_msgs/Pose",
-        "Point position\nQuaternion orientation\n"
-    ),
-    dependency!("geometry_msgs/Point", "float64 x\nfloat64 y\nfloat64 z\n"),
-    dependency!(
-        "geometry_msgs/Quaternion",
-        "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"
-    ),
-    dependency!("geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"),
-    dependency!(
-        "std_msgs/ColorRGBA",
-        "float32 r\nfloat32 g\nfloat32 b\nfloat32 a\n"
-    ),
-    dependency!("builtin_interfaces/Duration", "int32 sec\nuint32 nanosec\n"),
-    dependency!(
-        "sensor_msgs/CompressedImage",
-        "std_msgs/Header header\nstring format\nuint8[] data\n"
-    ),
-    dependency!("visualization_msgs/UVCoordinate", "float32 u\nfloat32 v\n"),
-    dependency!(
-        "visualization_msgs/MeshFile",
-        "string filename\nuint8[] data\n"
-    ),
-);
+/// `visualization_msgs/msg/MarkerArray` with its dependencies, as MCAP's
+/// `ros2msg` encoding and a rosbag2's `type_description` want them: the
+/// message's definition, then each dependency after a line of 80 `=` and
+/// its `MSG:` line.
+pub const MARKER_ARRAY_SCHEMA: &str = include_str!("visualization_msgs_MarkerArray.msg");

@@ -129,16 +129,6 @@ impl Rosbag2Out {
         })
     }
 
-    /// Write one frame (see [`McapOut::write_frame`]).
-    pub fn write_frame(
-        &mut self,
-        stamp: &Stamp,
-        frame: &Frame,
-        features: &lms_core::Features,
-    ) -> Result<()> {
-        self.mcap.write_frame(stamp, frame, features)
-    }
-
     /// Finish the MCAP file and write `metadata.yaml`.
     pub fn finish(mut self) -> Result<Written> {
         let yaml = metadata_yaml(&self.file_name, self.mcap.written());
@@ -215,10 +205,11 @@ impl RosOut {
         frame: &Frame,
         features: &lms_core::Features,
     ) -> Result<()> {
-        match self {
-            RosOut::Mcap(m) => m.write_frame(stamp, frame, features),
-            RosOut::Rosbag2(b) => b.write_frame(stamp, frame, features),
-        }
+        let mcap = match self {
+            RosOut::Mcap(m) => m,
+            RosOut::Rosbag2(b) => &mut b.mcap,
+        };
+        mcap.write_frame(stamp, frame, features)
     }
 
     /// Finish the file (summary, indexes; `metadata.yaml` for a folder).

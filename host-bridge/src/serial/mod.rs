@@ -33,6 +33,35 @@ pub use arrivals::{Arrivals, STEP};
 pub use port::{OpenError, SerialLink};
 pub use pty_port::PtyPort;
 
+/// A co-processor's serial lines, from its peers' ends, and what runs it
+/// (`R`: the firmware under QEMU, a thread, a board on serial ports).
+/// Dropped in field order: the lines first, then what runs it.
+pub struct CoLines<R> {
+    /// Its sensor line (the LMS's end).
+    pub sensor: Box<dyn Link>,
+    /// Its host line (the client's end).
+    pub host: Box<dyn Link>,
+    /// The firmware's console, if it has one here.
+    pub console: Option<Box<dyn Link>>,
+    /// What runs the co-processor.
+    pub runner: R,
+    /// How it is connected, for the log.
+    pub how: String,
+}
+
+impl<R> CoLines<R> {
+    /// The same lines, with what runs the co-processor seen through `f`.
+    pub fn map_runner<S>(self, f: impl FnOnce(R) -> S) -> CoLines<S> {
+        CoLines {
+            sensor: self.sensor,
+            host: self.host,
+            console: self.console,
+            runner: f(self.runner),
+            how: self.how,
+        }
+    }
+}
+
 /// Bits on the line per byte: start bit, 8 data bits, stop bit (8N1).
 pub const BITS_PER_BYTE: u64 = 10;
 

@@ -129,7 +129,6 @@ use lms_core::ValidParams;
 
 use crate::live_view::StreamView;
 use crate::pty::Pty;
-use crate::synthetic::SceneArgs;
 use line::PtyLine;
 pub use replay::ReplaySource;
 pub use scene_source::SceneSource;
@@ -151,16 +150,10 @@ pub struct SimulateArgs {
     /// existing symlink is replaced; it is removed on exit)
     #[arg(long, value_name = "PATH")]
     pub link: Option<PathBuf>,
-    /// The synthetic scene (when no `--replay` log is given).
+    /// The synthetic scene, or a log replayed (looping, resampled to the
+    /// variant the client asks for).
     #[command(flatten)]
-    pub scene: SceneArgs,
-    /// Replay the scans of a CARMEN log (gzip or plain) instead of the
-    /// synthetic scene, looping; resampled to the variant asked for
-    #[arg(long = "replay", value_name = "LOG")]
-    pub log: Option<PathBuf>,
-    /// The topic of a ROS 2 bag replayed.
-    #[command(flatten)]
-    pub topic: crate::options::TopicArg,
+    pub play: crate::options::PlayArgs,
     /// Exit after this many scans (B0 telegrams) have been sent
     #[arg(long, value_name = "N")]
     pub scans: Option<u64>,

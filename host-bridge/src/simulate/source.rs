@@ -18,16 +18,16 @@ pub enum Source {
 impl Source {
     /// The source the options ask for.
     pub fn open(args: &SimulateArgs) -> Result<Self> {
-        match &args.log {
+        match &args.play.log {
             Some(path) => Ok(Source::Replay(ReplaySource::open_topic(
                 path,
-                args.topic.name(),
+                args.play.topic.name(),
             )?)),
             None => {
                 let bits =
                     lms_core::telegram::RangeBits::from_measuring_mode(args.measuring_mode());
                 Ok(Source::Scene(
-                    SceneSource::new(&args.scene)?.with_range_bits(bits),
+                    SceneSource::new(&args.play.scene)?.with_range_bits(bits),
                 ))
             }
         }

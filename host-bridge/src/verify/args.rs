@@ -6,7 +6,6 @@ use clap::Args;
 
 use crate::options::{FrameRange, ParamArgs};
 use crate::qemu::DEFAULT_ELF;
-use crate::synthetic::SceneArgs;
 
 /// ELF `e_machine` of 32-bit ARM (the firmware's thumbv7em).
 pub const EM_ARM: u16 = 40;
@@ -53,16 +52,9 @@ pub struct VerifyArgs {
     /// Two serial ports wired to a co-processor: its host line, its sensor line
     #[arg(long, num_args = 2, value_names = ["HOST", "SENSOR"])]
     pub ports: Option<Vec<PathBuf>>,
-    /// The synthetic scene (when no `--replay` log is given).
+    /// The synthetic scene, or a log replayed.
     #[command(flatten)]
-    pub scene: SceneArgs,
-    /// Play the scans of a CARMEN log (gzip or plain) or of a capture from
-    /// `scan` instead of the synthetic scene
-    #[arg(long = "replay", value_name = "LOG")]
-    pub log: Option<PathBuf>,
-    /// The topic of a ROS 2 bag replayed.
-    #[command(flatten)]
-    pub topic: crate::options::TopicArg,
+    pub play: crate::options::PlayArgs,
     /// Frames of the log to play: A..B (B exclusive), A..=B, A.., ..B or A
     #[arg(long, value_name = "A..B", requires = "log")]
     pub frames: Option<FrameRange>,

@@ -10,34 +10,13 @@ use std::time::Duration;
 use anyhow::{anyhow, bail, Result};
 use lms_core::telegram::features::Counters;
 
-use crate::qemu::{Connected, Qemu};
-use crate::serial::Link;
+use crate::qemu::Qemu;
+use crate::serial::CoLines;
 
-/// The lines to the co-processor and what it is.
-pub(super) struct Lines {
-    /// Its sensor line (verify plays the sensor here).
-    pub sensor: Box<dyn Link>,
-    /// Its host line (verify is the client here).
-    pub host: Box<dyn Link>,
-    /// The firmware's console (`--qemu` only).
-    pub console: Option<Box<dyn Link>>,
-    /// The co-processor.
-    pub dut: Dut,
-    /// How it is connected, for the log.
-    pub how: String,
-}
-
-impl From<Connected> for Lines {
-    fn from(c: Connected) -> Self {
-        Lines {
-            sensor: c.sensor,
-            host: c.host,
-            console: c.console,
-            dut: Dut::Qemu(c.qemu),
-            how: c.how,
-        }
-    }
-}
+/// The lines to the co-processor and what it is: its sensor line (verify
+/// plays the sensor there), its host line (verify is the client there),
+/// the firmware's console (`--qemu` only).
+pub(super) type Lines = CoLines<Dut>;
 
 /// What the co-processor under test is.
 pub(super) enum Dut {

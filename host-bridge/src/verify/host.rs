@@ -67,7 +67,7 @@ pub(super) fn connect(params: Params) -> Result<Lines> {
         sensor: Box::new(sensor),
         host: Box::new(host),
         console: None,
-        dut,
+        runner: dut,
         how,
     })
 }

@@ -237,7 +237,7 @@ fn connect(
     stop: &Arc<AtomicBool>,
 ) -> Result<dut::Lines> {
     if let Some(elf) = &args.qemu {
-        crate::qemu::connect(elf.as_deref(), timeout, stop).map(dut::Lines::from)
+        crate::qemu::connect(elf.as_deref(), timeout, stop).map(|c| c.map_runner(dut::Dut::Qemu))
     } else if let Some(ports) = &args.ports {
         let [host, sensor] = ports.as_slice() else {
             bail!("--ports takes two paths: HOST SENSOR");
@@ -251,7 +251,7 @@ fn connect(
             sensor: Box::new(SerialLink::open(sensor, Baud::B9600)?),
             host: Box::new(SerialLink::open(host, Baud::B9600)?),
             console: None,
-            dut: dut::Dut::Ports,
+            runner: dut::Dut::Ports,
             how,
         })
     } else {

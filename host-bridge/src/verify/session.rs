@@ -61,7 +61,7 @@ impl Session {
         started: Instant,
     ) -> Self {
         Session {
-            dut: lines.dut,
+            dut: lines.runner,
             sensor: SensorSide::new(lines.sensor, source, args),
             client: ClientSide::new(lines.host),
             recovery: Recoveries::new(args),

@@ -146,14 +146,14 @@ impl ScanSource for PlaySource {
 
 /// The scans the options ask for, and a description for the log.
 pub fn play_source(args: &VerifyArgs) -> Result<(PlaySource, String)> {
-    let (mut source, about) = match &args.log {
+    let (mut source, about) = match &args.play.log {
         Some(path) => {
             // A log or a capture, streamed: only the selection is kept.
             let options = crate::input::ReadOptions {
                 unit: crate::options::UnitArg::Auto,
                 keep_damaged: false,
             };
-            let mut file = crate::input::open_topic(path, options, args.topic.name())?;
+            let mut file = crate::input::open_topic(path, options, args.play.topic.name())?;
             let range = args.frames.unwrap_or_default();
             let mut labels = Vec::new();
             let mut frames = Vec::new();
@@ -190,16 +190,16 @@ pub fn play_source(args: &VerifyArgs) -> Result<(PlaySource, String)> {
             (source, about)
         }
         None => {
-            let frames = synthetic::frames(&args.scene)?;
+            let frames = synthetic::frames(&args.play.scene)?;
             let labels = frames.iter().map(|f| f.index).collect();
             let frames = frames.into_iter().map(|f| f.frame).collect();
             let about = format!(
                 "synthetic scene {:?} (seed {}, {} frames, noise {} m, dropout {})",
-                args.scene.scene,
-                args.scene.seed,
-                args.scene.count,
-                args.scene.noise_sigma,
-                args.scene.dropout
+                args.play.scene.scene,
+                args.play.scene.seed,
+                args.play.scene.count,
+                args.play.scene.noise_sigma,
+                args.play.scene.dropout
             )
             .to_lowercase();
             (PlaySource::new(frames, labels)?, about)
