@@ -70,22 +70,6 @@ impl TopicArg {
     }
 }
 
-/// What a simulated sensor plays (`simulate`, `verify`): the synthetic
-/// scene, or the scans of a recorded log.
-#[derive(Args, Clone, Debug)]
-pub struct PlayArgs {
-    /// The synthetic scene (when no `--replay` log is given).
-    #[command(flatten)]
-    pub scene: crate::synthetic::SceneArgs,
-    /// Play the scans of a CARMEN log (gzip or plain), a capture from
-    /// `scan` or a ROS 2 bag instead of the synthetic scene
-    #[arg(long = "replay", value_name = "LOG")]
-    pub log: Option<PathBuf>,
-    /// The topic of a ROS 2 bag replayed.
-    #[command(flatten)]
-    pub topic: TopicArg,
-}
-
 /// One `--set NAME=VALUE`: a parameter (a field of [`Params`]) and its
 /// value as text, read as the field's type when given.
 #[derive(Clone, Debug, PartialEq)]

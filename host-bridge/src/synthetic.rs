@@ -7,6 +7,8 @@
 //! sporadic no-echo dropouts; a beam without a return is
 //! [`Invalid::NoEcho`].
 
+use std::path::PathBuf;
+
 use anyhow::{ensure, Result};
 use clap::{Args, ValueEnum};
 use lms_core::{Frame, Invalid, Variant};
@@ -137,6 +139,22 @@ pub fn frames_iter(args: &SceneArgs) -> Result<impl Iterator<Item = Result<Input
             pose: None,
         })
     }))
+}
+
+/// What a simulated sensor plays (`simulate`, `verify`): the synthetic
+/// scene, or the scans of a recorded log.
+#[derive(Args, Clone, Debug)]
+pub struct PlayArgs {
+    /// The synthetic scene (when no `--replay` log is given).
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Play the scans of a CARMEN log (gzip or plain), a capture from
+    /// `scan` or a ROS 2 bag instead of the synthetic scene
+    #[arg(long = "replay", value_name = "LOG")]
+    pub log: Option<PathBuf>,
+    /// The topic of a ROS 2 bag replayed.
+    #[command(flatten)]
+    pub topic: crate::options::TopicArg,
 }
 
 #[cfg(test)]

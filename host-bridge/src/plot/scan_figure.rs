@@ -9,6 +9,7 @@ use plotters::prelude::*;
 use super::frame::{FramePlot, ScanDrawn};
 use super::geometry::{clip_polygon, ellipse, equal_scale, nice_scale, semi_major};
 use super::style::*;
+use crate::extract::StatsRecord;
 
 fn scan_builder<'a, 'b, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
@@ -318,7 +319,7 @@ where
 {
     let mut lg = Legend { area, y: 40 };
     legend_markers(&mut lg, fp, drawn)?;
-    legend_notes(&mut lg, fp, drawn)
+    legend_notes(&mut lg, &fp.record.stats, drawn)
 }
 
 /// The legend's marker samples.
@@ -402,15 +403,13 @@ where
 /// The legend's notes: the view, then what the pipeline dropped.
 fn legend_notes<DB: DrawingBackend>(
     lg: &mut Legend<'_, DB>,
-    fp: &FramePlot,
+    stats: &StatsRecord,
     drawn: &ScanDrawn,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
-    let rec = &fp.record;
     let mpp = drawn.metres_per_pixel;
-    let (scale_well, scale_ill) = (drawn.ellipse_scale_well, drawn.ellipse_scale_ill);
     lg.y += 10;
     lg.heading("View")?;
     lg.note("x forward is up, y left is left;")?;
@@ -418,7 +417,11 @@ where
         "equal scale: 1 m = {:.1} px on both axes",
         1.0 / mpp
     ))?;
-    for (k, what) in [(scale_well, "well"), (scale_ill, "ill")] {
+    let scales = [
+        (drawn.ellipse_scale_well, "well"),
+        (drawn.ellipse_scale_ill, "ill"),
+    ];
+    for (k, what) in scales {
         if k != 1.0 {
             lg.note(&format!("{what}-conditioned ellipses ×{k} (enlarged)"))?;
         }
@@ -431,7 +434,7 @@ where
     }
     lg.y += 10;
     lg.heading("Dropped by the pipeline")?;
-    let s = &rec.stats;
+    let s = stats;
     lg.note(&format!(
         "short segments {}, χ² rejects {}",
         s.short_segments, s.rejected_chi2

@@ -22,10 +22,12 @@ pub const EDGE: RGBColor = RGBColor(0xE4, 0x1A, 0x1C);
 pub const WELL_CONDITIONED: RGBColor = RGBColor(0x1B, 0x9E, 0x3A);
 /// Ill-conditioned corners and their ellipses.
 pub const ILL_CONDITIONED: RGBColor = RGBColor(0xD0, 0x00, 0xD0);
-/// Fitted lines, one colour each, cycling (no red, green, magenta or grey).
-pub const LINE_COLOURS: [RGBColor; 8] = [
+/// The colours of lines and curves: the "tab10" palette's blue, orange,
+/// green, purple, brown, cyan and olive, then a dark blue and a pink.
+const PALETTE: [RGBColor; 9] = [
     RGBColor(0x1F, 0x77, 0xB4),
     RGBColor(0xFF, 0x7F, 0x0E),
+    RGBColor(0x2C, 0xA0, 0x2C),
     RGBColor(0x94, 0x67, 0xBD),
     RGBColor(0x8C, 0x56, 0x4B),
     RGBColor(0x17, 0xBE, 0xCF),
@@ -33,14 +35,13 @@ pub const LINE_COLOURS: [RGBColor; 8] = [
     RGBColor(0x39, 0x3B, 0x79),
     RGBColor(0xE7, 0x96, 0x9C),
 ];
+/// Fitted lines, one colour each, cycling (no red, green, magenta or grey).
+pub const LINE_COLOURS: [RGBColor; 8] = [
+    PALETTE[0], PALETTE[1], PALETTE[3], PALETTE[4], PALETTE[5], PALETTE[6], PALETTE[7], PALETTE[8],
+];
 /// `D` curves, one colour per selected pass, cycling.
 pub const PASS_COLOURS: [RGBColor; 6] = [
-    RGBColor(0x1F, 0x77, 0xB4),
-    RGBColor(0xFF, 0x7F, 0x0E),
-    RGBColor(0x2C, 0xA0, 0x2C),
-    RGBColor(0x94, 0x67, 0xBD),
-    RGBColor(0x8C, 0x56, 0x4B),
-    RGBColor(0x17, 0xBE, 0xCF),
+    PALETTE[0], PALETTE[1], PALETTE[2], PALETTE[3], PALETTE[4], PALETTE[5],
 ];
 /// The τ line of the `D` figure.
 pub const TAU: RGBColor = RGBColor(0xE4, 0x1A, 0x1C);

@@ -450,29 +450,25 @@ impl BagScans {
                 message.channel.message_encoding
             );
         }
-        laser_scan::decode(&message.data).with_context(|| {
-            format!(
-                "{}: scan {} of {} (log time {} ns)",
-                self.path.display(),
-                self.index,
-                self.topic.name,
-                message.log_time
-            )
-        })
+        laser_scan::decode(&message.data).with_context(|| self.where_is(message))
+    }
+
+    /// Where `message` is, for an error: the bag, the scan's index, the
+    /// topic and the log time.
+    fn where_is(&self, message: &mcap::Message<'_>) -> String {
+        format!(
+            "{}: scan {} of {} (log time {} ns)",
+            self.path.display(),
+            self.index,
+            self.topic.name,
+            message.log_time
+        )
     }
 
     /// The scan of a decoded message (its frame, stamp and frame id).
     fn input_of(&mut self, scan: LaserScan, message: &mcap::Message<'_>) -> Result<BagScan> {
-        let frame =
-            scan_frame::frame_of(&scan, self.unit, &mut self.counts).with_context(|| {
-                format!(
-                    "{}: scan {} of {} (log time {} ns)",
-                    self.path.display(),
-                    self.index,
-                    self.topic.name,
-                    message.log_time
-                )
-            })?;
+        let place = self.where_is(message);
+        let frame = scan_frame::frame_of(&scan, self.unit, &mut self.counts).context(place)?;
         let input = BagScan {
             index: self.index,
             frame,

@@ -153,7 +153,7 @@ pub struct SimulateArgs {
     /// The synthetic scene, or a log replayed (looping, resampled to the
     /// variant the client asks for).
     #[command(flatten)]
-    pub play: crate::options::PlayArgs,
+    pub play: crate::synthetic::PlayArgs,
     /// Exit after this many scans (B0 telegrams) have been sent
     #[arg(long, value_name = "N")]
     pub scans: Option<u64>,

@@ -54,7 +54,7 @@ pub struct VerifyArgs {
     pub ports: Option<Vec<PathBuf>>,
     /// The synthetic scene, or a log replayed.
     #[command(flatten)]
-    pub play: crate::options::PlayArgs,
+    pub play: crate::synthetic::PlayArgs,
     /// Frames of the log to play: A..B (B exclusive), A..=B, A.., ..B or A
     #[arg(long, value_name = "A..B", requires = "log")]
     pub frames: Option<FrameRange>,
