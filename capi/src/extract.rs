@@ -8,7 +8,7 @@ use lms_core::{Extractor, Features, Frame, Invalid, Unit, ValidParams, Variant};
 
 use crate::codes::*;
 use crate::params::LmsParams;
-use crate::{overlap, pointer_error, usable};
+use crate::{overlap, pointer_error, usable, Bytes};
 
 /// A scan variant (field of view / resolution): one of the `LMS_FOV*`
 /// constants.
@@ -271,10 +271,8 @@ unsafe fn check_common<T>(
         return Err(pointer_error(input));
     }
     if overlap(
-        input as usize,
-        n.saturating_mul(size_of::<T>()),
-        out as usize,
-        size_of::<LmsFeatures>(),
+        Bytes::at(input, n.saturating_mul(size_of::<T>())),
+        Bytes::at(out, size_of::<LmsFeatures>()),
     ) {
         return Err(LMS_ERR_OVERLAP);
     }

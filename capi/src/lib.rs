@@ -70,7 +70,25 @@ fn pointer_error<T>(ptr: *const T) -> core::ffi::c_int {
     }
 }
 
-/// `true` if the byte ranges `[a, a + a_len)` and `[b, b + b_len)` overlap.
-fn overlap(a: usize, a_len: usize, b: usize, b_len: usize) -> bool {
-    a < b.saturating_add(b_len) && b < a.saturating_add(a_len)
+/// A range of memory: `len` bytes from address `start`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Bytes {
+    start: usize,
+    len: usize,
+}
+
+impl Bytes {
+    /// The `len` bytes at `ptr`.
+    fn at<T>(ptr: *const T, len: usize) -> Self {
+        Bytes {
+            start: ptr as usize,
+            len,
+        }
+    }
+}
+
+/// `true` if the byte ranges `[a.start, a.start + a.len)` and
+/// `[b.start, b.start + b.len)` overlap.
+fn overlap(a: Bytes, b: Bytes) -> bool {
+    a.start < b.start.saturating_add(b.len) && b.start < a.start.saturating_add(a.len)
 }

@@ -10,7 +10,7 @@ use lms_core::{DataSurvey, Unit};
 use crate::codes::*;
 use crate::extract::{frame_of, set_units, unit_of, variant_of, LmsUnit, LmsVariant};
 use crate::params::LmsParams;
-use crate::{overlap, pointer_error, usable};
+use crate::{overlap, pointer_error, usable, Bytes};
 
 /// Size of `LmsSurvey`'s private storage, in 8-byte words.
 pub const LMS_SURVEY_WORDS: usize = 352;
@@ -112,7 +112,10 @@ pub unsafe extern "C" fn lms_survey_add_units(
     if !usable(raw) {
         return pointer_error(raw);
     }
-    if overlap(raw as usize, n * 2, survey as usize, size_of::<LmsSurvey>()) {
+    if overlap(
+        Bytes::at(raw, n * 2),
+        Bytes::at(survey, size_of::<LmsSurvey>()),
+    ) {
         return LMS_ERR_OVERLAP;
     }
     // SAFETY: `survey` is non-null, aligned, valid (checked, contract).

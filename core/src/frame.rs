@@ -90,6 +90,16 @@ impl Beam {
     }
 }
 
+/// A field of view and an angular resolution, as the LMS 2xx's telegrams
+/// name a variant ([`Variant::from_fov_res`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FovRes {
+    /// Field of view (°).
+    pub fov_deg: u16,
+    /// Angular resolution (1/100 °).
+    pub res_centideg: u16,
+}
+
 /// The five LMS 2xx scan variants (field of view / angular resolution).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -138,10 +148,10 @@ impl Variant {
         (self.fov_deg() as usize * 100) / self.resolution_centideg() as usize + 1
     }
 
-    /// The variant with this field of view (°) and resolution (1/100 °), if
-    /// the LMS 2xx has it.
-    pub const fn from_fov_res(fov_deg: u16, res_centideg: u16) -> Option<Self> {
-        match (fov_deg, res_centideg) {
+    /// The variant with this field of view and resolution, if the LMS 2xx
+    /// has it.
+    pub const fn from_fov_res(fov_res: FovRes) -> Option<Self> {
+        match (fov_res.fov_deg, fov_res.res_centideg) {
             (180, 100) => Some(Variant::Fov180Res100),
             (180, 50) => Some(Variant::Fov180Res50),
             (100, 100) => Some(Variant::Fov100Res100),

@@ -70,7 +70,7 @@ pub use features::{
     MAX_WINDOWS,
 };
 pub use frame::MAX_BEAMS;
-pub use frame::{Beam, Frame, Geometry, Invalid, Variant};
+pub use frame::{Beam, FovRes, Frame, Geometry, Invalid, Variant};
 pub use params::{DataProfile, DataSurvey, ParamError, Params, RangeMode, ValidParams};
 pub use pipeline::extractor::{Extractor, Trace};
 pub use pipeline::line_fit::FitError;

@@ -5,6 +5,8 @@
 //! evaluation, so the same inputs give the same bits on every target
 //! (ALGORITHM.md §9). No fused multiply-add is used.
 
+use core::num::{NonZeroU32, NonZeroU64};
+
 /// A 3-vector (one window: first, middle, last beam).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Vec3(pub [f32; 3]);
@@ -404,24 +406,30 @@ pub fn cos_sin(x: f32) -> (f32, f32) {
 /// division when `n` fits 32 bits; three when `d` fits 16 bits (schoolbook
 /// division in 16-bit digits, each partial dividend below 2³²); else binary
 /// long division over the quotient's bits only (≤ 64 − 16 steps). Exact:
-/// the same results as `/` and `%` on every target. `d = 0` gives `(0, n)`
-/// (callers guard against it; no panic).
+/// the same results as `/` and `%` on every target. The divisor is never
+/// zero ([`NonZeroU64`]; [`divisor`] for constants), so there is no panic
+/// path.
 ///
 /// The device layer's timekeeping (µs since boot, line times) and the
 /// firmware's decimal output use it; the pipeline has no integer division.
-pub const fn div_rem_u64(n: u64, d: u64) -> (u64, u64) {
-    if d == 0 || n < d {
+pub const fn div_rem_u64(n: u64, d: NonZeroU64) -> (u64, u64) {
+    let d = d.get();
+    if n < d {
         return (0, n);
     }
-    if n <= u32::MAX as u64 {
+    // `d` as a 32-bit divisor when it fits (it is not zero).
+    let d32 = match NonZeroU32::new(d as u32) {
+        Some(d32) if d <= u32::MAX as u64 => Some(d32),
+        _ => None,
+    };
+    if let (true, Some(d)) = (n <= u32::MAX as u64, d32) {
         // d ≤ n: both fit 32 bits.
-        let (q, r) = div_rem_u32(n as u32, d as u32);
+        let (q, r) = div_rem_u32(n as u32, d);
         return (q as u64, r as u64);
     }
-    if d <= u16::MAX as u64 {
+    if let (true, Some(d)) = (d <= u16::MAX as u64, d32) {
         // n = hi·2³² + mid·2¹⁶ + lo; each remainder is below d < 2¹⁶, so
         // every partial dividend (r << 16 | digit) fits 32 bits.
-        let d = d as u32;
         let (q_hi, r) = div_rem_u32((n >> 32) as u32, d);
         let (q_mid, r) = div_rem_u32((r << 16) | ((n >> 16) as u32 & 0xFFFF), d);
         let (q_lo, r) = div_rem_u32((r << 16) | (n as u32 & 0xFFFF), d);
@@ -458,29 +466,40 @@ pub const fn div_rem_u64(n: u64, d: u64) -> (u64, u64) {
 }
 
 /// `(n / d, n % d)` in 32 bits (one hardware division on the Cortex-M4);
-/// `d = 0` gives `(0, n)` (`checked_`: no panic path for the firmware's
-/// link-time check).
-const fn div_rem_u32(n: u32, d: u32) -> (u32, u32) {
+/// `checked_`: no panic path for the firmware's link-time check.
+const fn div_rem_u32(n: u32, d: NonZeroU32) -> (u32, u32) {
+    let d = d.get();
     match (n.checked_div(d), n.checked_rem(d)) {
         (Some(q), Some(r)) => (q, r),
         _ => (0, n),
     }
 }
 
-/// `n / d` rounded down, as [`div_rem_u64`]; `d = 0` gives 0.
+/// `n / d` rounded down, as [`div_rem_u64`].
 #[inline]
-pub const fn div_u64(n: u64, d: u64) -> u64 {
+pub const fn div_u64(n: u64, d: NonZeroU64) -> u64 {
     div_rem_u64(n, d).0
 }
 
-/// `n / d` rounded up, as [`div_rem_u64`]; `d = 0` gives 0.
+/// `n / d` rounded up, as [`div_rem_u64`].
 #[inline]
-pub const fn div_ceil_u64(n: u64, d: u64) -> u64 {
+pub const fn div_ceil_u64(n: u64, d: NonZeroU64) -> u64 {
     let (q, r) = div_rem_u64(n, d);
-    if d != 0 && r != 0 {
+    if r != 0 {
         q + 1
     } else {
         q
+    }
+}
+
+/// `d` as a divisor, for constants and values that are at least 1 by
+/// construction: 0 becomes 1 (as `d.max(1)`), so no caller needs a panic
+/// path.
+#[inline]
+pub const fn divisor(d: u64) -> NonZeroU64 {
+    match NonZeroU64::new(d) {
+        Some(d) => d,
+        None => NonZeroU64::MIN,
     }
 }
 

@@ -13,7 +13,7 @@ use lms_core::telegram::features::{
     Assembled, Counters, FeatureAssembler, CMD_COUNTERS, CMD_FEATURES, REQ_COUNTERS, REQ_FEATURES,
 };
 use lms_core::telegram::{
-    emit_telegram, Baud, Direction, Event, Framer, Handshake, MeasuredView, RangeBits, Reply,
+    emit_telegram, Baud, Direction, Event, Framer, Handshake, Head, MeasuredView, RangeBits, Reply,
     Request, Telegram, DEFAULT_PASSWORD,
 };
 use lms_core::test_support::Port;
@@ -111,7 +111,16 @@ impl Bench {
     fn ask(&mut self, command: u8, data: &[u8], us: u64) -> Vec<u8> {
         self.host.tx.clear();
         let mut buf = [0u8; 64];
-        let n = emit_telegram(&mut buf, 0, command, data, None).unwrap();
+        let n = emit_telegram(
+            &mut buf,
+            Head {
+                address: 0,
+                command,
+            },
+            data,
+            None,
+        )
+        .unwrap();
         self.host.rx.extend(&buf[..n]);
         self.run(us);
         let reply = std::mem::take(&mut self.host.tx);
@@ -386,7 +395,16 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
     bench.run(100_000);
     bench.host.tx.clear();
     let mut buf = [0u8; 16];
-    let n = emit_telegram(&mut buf, 0, REQ_COUNTERS, &[], None).unwrap();
+    let n = emit_telegram(
+        &mut buf,
+        Head {
+            address: 0,
+            command: REQ_COUNTERS,
+        },
+        &[],
+        None,
+    )
+    .unwrap();
     bench.host.rx.extend(&buf[..n]);
     bench.run(10_000);
     let reply = std::mem::take(&mut bench.host.tx);
@@ -664,7 +682,16 @@ fn a_relayed_reply_goes_out_before_the_stream_it_starts() {
     // chunk (found under load: a B7 reached the client before the A0).
     bench.host.tx.clear();
     let mut buf = [0u8; 64];
-    let n = emit_telegram(&mut buf, 0, 0x20, &[0x27, 10, 0, 60, 0], None).unwrap();
+    let n = emit_telegram(
+        &mut buf,
+        Head {
+            address: 0,
+            command: 0x20,
+        },
+        &[0x27, 10, 0, 60, 0],
+        None,
+    )
+    .unwrap();
     bench.host.rx.extend(&buf[..n]);
     bench.run_in_steps(400_000, 20_000);
     let (codes, acks) = commands(&std::mem::take(&mut bench.host.tx));

@@ -6,7 +6,7 @@ use lms_core::telegram::features::{
     emit_features, Assembled, Counters, EchoedParams, FeatureAssembler, CMD_FEATURES, REQ_COUNTERS,
     REQ_FEATURES,
 };
-use lms_core::telegram::{crc16, emit_telegram, Direction, Telegram};
+use lms_core::telegram::{crc16, emit_telegram, Direction, Head, Telegram};
 use lms_core::Corner;
 use lms_core::Features;
 use lms_core::Line;
@@ -140,7 +140,16 @@ fn the_worked_example_parses_back_to_the_same_bits() {
 #[test]
 fn counters_request_and_reply_are_byte_exact() {
     let mut buf = [0u8; 96];
-    let n = emit_telegram(&mut buf, 0x00, REQ_COUNTERS, &[], None).unwrap();
+    let n = emit_telegram(
+        &mut buf,
+        Head {
+            address: 0x00,
+            command: REQ_COUNTERS,
+        },
+        &[],
+        None,
+    )
+    .unwrap();
     assert_eq!(buf[..n], bytes(COUNTERS_REQUEST)[..]);
     let c = Counters {
         scans_in: 1000,
@@ -187,9 +196,27 @@ fn feature_opt_in_request_and_reply_are_byte_exact() {
         (1u8, FEATURES_ON, FEATURES_ON_REPLY),
         (0, FEATURES_OFF, FEATURES_OFF_REPLY),
     ] {
-        let n = emit_telegram(&mut buf, 0x00, REQ_FEATURES, &[state], None).unwrap();
+        let n = emit_telegram(
+            &mut buf,
+            Head {
+                address: 0x00,
+                command: REQ_FEATURES,
+            },
+            &[state],
+            None,
+        )
+        .unwrap();
         assert_eq!(buf[..n], bytes(request)[..]);
-        let n = emit_telegram(&mut buf, 0x80, CMD_FEATURES, &[state], Some(0x10)).unwrap();
+        let n = emit_telegram(
+            &mut buf,
+            Head {
+                address: 0x80,
+                command: CMD_FEATURES,
+            },
+            &[state],
+            Some(0x10),
+        )
+        .unwrap();
         assert_eq!(buf[..n], bytes(reply)[..]);
     }
 }

@@ -4,7 +4,7 @@
 
 use lms_core::pipeline::line_fit::{fit_line, fit_piece, Bearings, RawScan};
 use lms_core::test_support::Rng;
-use lms_core::{Extractor, Frame, Line, Params, Variant};
+use lms_core::{Extractor, Frame, Line, Params, Segment, Variant};
 
 /// κ of the tests (rad): the default.
 const KAPPA: f32 = lms_core::params::DEFAULT_FOOTPRINT;
@@ -54,7 +54,15 @@ fn weighted(phi: &[f64], ranges: &[f32], kappa: f32) -> Line {
         footprint: kappa,
         turns: 1,
     };
-    fit_piece(&scan, 0, (ranges.len() - 1) as u16, SIGMA).unwrap()
+    fit_piece(
+        &scan,
+        Segment {
+            first: 0,
+            last: (ranges.len() - 1) as u16,
+        },
+        SIGMA,
+    )
+    .unwrap()
 }
 
 /// Independent f64 reference: iteratively reweighted Gauss–Newton on
@@ -148,8 +156,10 @@ fn without_the_footprint_the_fit_is_section_7_bit_for_bit() {
         bearings,
         &ranges,
         &beams,
-        0,
-        (ranges.len() - 1) as u16,
+        Segment {
+            first: 0,
+            last: (ranges.len() - 1) as u16,
+        },
         SIGMA,
     )
     .unwrap();

@@ -4,7 +4,7 @@
 //! wall are fused; 1° modes are unchanged bit for bit.
 
 use lms_core::maths::Sym2;
-use lms_core::pipeline::turns::{fuse, interleaved_turns, turn_frame};
+use lms_core::pipeline::turns::{fuse, interleaved_turns, turn_frame, Turn};
 use lms_core::test_support::CONSECUTIVE_WINDOWS;
 use lms_core::{Extractor, Frame, Geometry, Invalid, Line, Params, Trace, Variant};
 use proptest::prelude::*;
@@ -37,14 +37,17 @@ fn a_turn_is_every_kth_beam_with_its_status() {
         frame.set_metres(j, 1.0 + j as f32 * 0.01);
     }
     frame.set_invalid(7, Invalid::Dazzle);
-    let odd = turn_frame(&frame, 1, 2).unwrap();
+    let odd = turn_frame(&frame, Turn { index: 1, of: 2 }).unwrap();
     assert_eq!(odd.len(), 180);
     let g = frame.geometry();
     assert_eq!(odd.geometry().step, 2.0 * g.step);
     assert_eq!(odd.geometry().first_bearing, g.first_bearing + g.step);
     assert_eq!(odd.ranges()[4], frame.ranges()[9]);
     assert_eq!(odd.beams()[3], frame.beams()[7]);
-    assert_eq!(turn_frame(&frame, 0, 2).unwrap().len(), 181);
+    assert_eq!(
+        turn_frame(&frame, Turn { index: 0, of: 2 }).unwrap().len(),
+        181
+    );
 }
 
 #[test]

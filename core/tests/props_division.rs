@@ -2,18 +2,20 @@
 //! compiler's routine) against Rust's own `/` and `%`: edge cases, then
 //! random dividends and divisors of every magnitude.
 
-use lms_core::maths::{div_ceil_u64, div_rem_u64, div_u64};
+use core::num::NonZeroU64;
+
+use lms_core::maths::{div_ceil_u64, div_rem_u64, div_u64, divisor};
 use proptest::prelude::*;
 
 fn check(n: u64, d: u64) {
-    if d == 0 {
-        assert_eq!(div_rem_u64(n, d), (0, n));
-        assert_eq!(div_ceil_u64(n, d), 0);
+    let Some(nz) = NonZeroU64::new(d) else {
+        // A zero divisor has no NonZeroU64; `divisor` makes it 1.
+        assert_eq!(divisor(d).get(), 1);
         return;
-    }
-    assert_eq!(div_rem_u64(n, d), (n / d, n % d), "{n} / {d}");
-    assert_eq!(div_u64(n, d), n / d);
-    assert_eq!(div_ceil_u64(n, d), n.div_ceil(d), "ceil {n} / {d}");
+    };
+    assert_eq!(div_rem_u64(n, nz), (n / d, n % d), "{n} / {d}");
+    assert_eq!(div_u64(n, nz), n / d);
+    assert_eq!(div_ceil_u64(n, nz), n.div_ceil(d), "ceil {n} / {d}");
 }
 
 #[test]

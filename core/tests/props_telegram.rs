@@ -15,9 +15,9 @@
 
 use lms_core::telegram::features::{emit_features, Assembled, EchoedParams, FeatureAssembler};
 use lms_core::telegram::{
-    emit_telegram, Baud, Config, Direction, Event, Framer, Handshake, MeasuredValues, MeasuredView,
-    ModeResult, RangeBits, Reply, Request, StatusBlock, Telegram, VariantReply, ACK,
-    MAX_TELEGRAM_LEN, NAK,
+    emit_telegram, Baud, Config, Direction, Event, Framer, Handshake, Head, MeasuredValues,
+    MeasuredView, ModeResult, RangeBits, Reply, Request, SensorStatus, StatusBlock, Telegram,
+    VariantReply, ACK, MAX_TELEGRAM_LEN, NAK,
 };
 use lms_core::Unit;
 use lms_core::{Beam, Stats, Variant};
@@ -52,7 +52,16 @@ enum Piece {
 
 fn telegram_bytes(command: u8, data: &[u8]) -> Vec<u8> {
     let mut buf = vec![0u8; MAX_TELEGRAM_LEN];
-    let n = emit_telegram(&mut buf, 0x80, command, data, Some(0x10)).expect("fits");
+    let n = emit_telegram(
+        &mut buf,
+        Head {
+            address: 0x80,
+            command,
+        },
+        data,
+        Some(0x10),
+    )
+    .expect("fits");
     buf.truncate(n);
     buf
 }
@@ -221,7 +230,7 @@ proptest! {
             _ => Reply::ModeChanged(ModeResult::Ok),
         };
         let mut buf = [0u8; MAX_TELEGRAM_LEN];
-        let n = reply.emit(byte & 0x7F, status, &mut buf).unwrap();
+        let n = reply.emit(byte & 0x7F, SensorStatus(status), &mut buf).unwrap();
         prop_assert_eq!(n, reply.buffer_len());
         let t = Telegram::new_checked(&buf[..n], Direction::SensorToHost).unwrap();
         prop_assert_eq!(t.status(), Some(status));

@@ -20,7 +20,7 @@ use lms_core::telegram::features::{
     Assembled, Counters, FeatureAssembler, CMD_COUNTERS, CMD_FEATURES, REQ_COUNTERS, REQ_FEATURES,
 };
 use lms_core::telegram::{
-    emit_telegram, Baud, Direction, Event, Framer, Handshake, MeasuredView, RangeBits,
+    emit_telegram, Baud, Direction, Event, Framer, Handshake, Head, MeasuredView, RangeBits,
 };
 use lms_core::test_support::Port;
 use lms_core::{Extractor, Unit, Variant};
@@ -185,7 +185,16 @@ impl Bench {
     /// A request from the client (into the co-processor's receive side).
     fn send(&mut self, command: u8, data: &[u8]) {
         let mut buf = [0u8; 128];
-        let n = emit_telegram(&mut buf, 0, command, data, None).unwrap();
+        let n = emit_telegram(
+            &mut buf,
+            Head {
+                address: 0,
+                command,
+            },
+            data,
+            None,
+        )
+        .unwrap();
         self.host.rx.extend(&buf[..n]);
     }
 
@@ -375,7 +384,16 @@ fn a_request_longer_than_the_face_keeps_is_answered_and_counted() {
     bench.send(0x77, &data);
     bench.run(100_000);
     let mut buf = [0u8; 128];
-    let n = emit_telegram(&mut buf, 0, 0x68, &data, None).unwrap();
+    let n = emit_telegram(
+        &mut buf,
+        Head {
+            address: 0,
+            command: 0x68,
+        },
+        &data,
+        None,
+    )
+    .unwrap();
     buf[80] ^= 0x10;
     bench.host.rx.extend(&buf[..n]);
     bench.send(REQ_COUNTERS, &[]);

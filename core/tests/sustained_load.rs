@@ -27,7 +27,7 @@ use lms_core::device::coprocessor::{CoProcessor, SensorSetup, Step};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{Assembled, FeatureAssembler, REQ_FEATURES};
 use lms_core::telegram::{
-    emit_telegram, Baud, Direction, Event, Framer, Handshake, MeasuredView, Request,
+    emit_telegram, Baud, Direction, Event, Framer, Handshake, Head, MeasuredView, Request,
 };
 use lms_core::test_support::Port;
 use lms_core::Unit;
@@ -145,7 +145,16 @@ fn sustained(scans: u32) -> Report {
         if request == Request::Continuous {
             break;
         }
-        let n = emit_telegram(&mut buf, 0, REQ_FEATURES, &[1], None).unwrap();
+        let n = emit_telegram(
+            &mut buf,
+            Head {
+                address: 0,
+                command: REQ_FEATURES,
+            },
+            &[1],
+            None,
+        )
+        .unwrap();
         host.rx.extend(&buf[..n]);
     }
     let (mut polls, mut poll_time, mut scan_poll_max) = (0u64, Duration::ZERO, Duration::ZERO);
@@ -365,7 +374,16 @@ fn client_requests(baud: Baud, features: bool) -> Vec<u8> {
         out.extend_from_slice(&buf[..n]);
     }
     if features {
-        let n = emit_telegram(&mut buf, 0, REQ_FEATURES, &[1], None).unwrap();
+        let n = emit_telegram(
+            &mut buf,
+            Head {
+                address: 0,
+                command: REQ_FEATURES,
+            },
+            &[1],
+            None,
+        )
+        .unwrap();
         out.extend_from_slice(&buf[..n]);
     }
     let n = Request::Continuous.emit(0, &mut buf).unwrap();

@@ -3,8 +3,8 @@
 //! skipped and counted and what follows is still found.
 
 use lms_core::telegram::{
-    Direction, Event, Framer, FramerStats, Handshake, MeasuredValues, Reply, Request, Telegram,
-    ACK, NAK,
+    Direction, Event, Framer, FramerStats, Handshake, MeasuredValues, Reply, Request, SensorStatus,
+    Telegram, ACK, NAK,
 };
 use lms_core::test_support::Rng;
 use lms_core::Unit;
@@ -117,7 +117,7 @@ fn all_chunkings(
 
 fn emit_reply(reply: Reply<'_>) -> Vec<u8> {
     let mut buf = vec![0u8; reply.buffer_len()];
-    reply.emit(0, 0x10, &mut buf).unwrap();
+    reply.emit(0, SensorStatus(0x10), &mut buf).unwrap();
     buf
 }
 

@@ -2,8 +2,8 @@
 //! mm byte for byte, every variant, and the conversion to a frame.
 
 use lms_core::telegram::{
-    Direction, MeasuredError, MeasuredValues, MeasuredView, RangeBits, Reply, ReplyError, Telegram,
-    MAX_VALUES,
+    Direction, Head, MeasuredError, MeasuredValues, MeasuredView, RangeBits, Reply, ReplyError,
+    SensorStatus, Telegram, MAX_VALUES,
 };
 use lms_core::Unit;
 use lms_core::{Beam, Invalid, Variant};
@@ -57,7 +57,9 @@ fn telegram_b0_361_cm_and_mm_bytes() {
         }
         // The reply emits the same telegram.
         let mut again = vec![0u8; 732];
-        Reply::Measured(view).emit(0, 0x10, &mut again).unwrap();
+        Reply::Measured(view)
+            .emit(0, SensorStatus(0x10), &mut again)
+            .unwrap();
         assert_eq!(again, bytes);
     }
 }
@@ -160,7 +162,16 @@ fn telegram_b0_errors() {
     let mut data = vec![0x69, 0x01];
     data.extend(std::iter::repeat_n(0x10, 720));
     let mut buf = vec![0u8; 800];
-    let n = lms_core::telegram::emit_telegram(&mut buf, 0x80, 0xB0, &data, Some(0x10)).unwrap();
+    let n = lms_core::telegram::emit_telegram(
+        &mut buf,
+        Head {
+            address: 0x80,
+            command: 0xB0,
+        },
+        &data,
+        Some(0x10),
+    )
+    .unwrap();
     let t = Telegram::new_checked(&buf[..n], Direction::SensorToHost).unwrap();
     let mismatch = MeasuredError::LengthMismatch {
         count: 361,

@@ -2,9 +2,9 @@
 //! and the other request/reply codes of §2 round-tripped.
 
 use lms_core::telegram::{
-    crc16, Baud, Config, Direction, ModeResult, Reply, ReplyError, Request, RequestError,
-    StatusBlock, StatusFields, Telegram, VariantReply, DEFAULT_PASSWORD, DEFAULT_STATUS,
-    SENSOR_TYPE_LMS200,
+    crc16, Baud, Config, Direction, Head, ModeResult, Reply, ReplyError, Request, RequestError,
+    SensorStatus, StatusBlock, StatusFields, Telegram, VariantReply, DEFAULT_PASSWORD,
+    DEFAULT_STATUS, SENSOR_TYPE_LMS200,
 };
 use lms_core::Variant;
 
@@ -177,7 +177,9 @@ fn telegram_vectors_replies_parse() {
 fn telegram_vectors_replies_emit() {
     for (bytes, address, reply) in reply_vectors() {
         let mut buf = [0u8; 32];
-        let n = reply.emit(address, DEFAULT_STATUS, &mut buf).unwrap();
+        let n = reply
+            .emit(address, SensorStatus(DEFAULT_STATUS), &mut buf)
+            .unwrap();
         assert_eq!(&buf[..n], &bytes[..], "{reply:?}");
         assert_eq!(reply.buffer_len(), bytes.len());
     }
@@ -196,7 +198,7 @@ fn telegram_vectors_direction_is_checked() {
 /// Emit, check the telegram, parse it back.
 fn reply_round_trip(reply: Reply<'_>, expected_len: usize) -> Vec<u8> {
     let mut buf = vec![0u8; expected_len + 4];
-    let n = reply.emit(0x00, 0x10, &mut buf).unwrap();
+    let n = reply.emit(0x00, SensorStatus(0x10), &mut buf).unwrap();
     assert_eq!(n, expected_len, "{reply:?}");
     buf.truncate(n);
     let t = Telegram::new_checked(&buf[..], Direction::SensorToHost).unwrap();
@@ -392,7 +394,16 @@ fn value_mode_telegrams_are_byte_exact() {
             },
         ),
     ] {
-        let n = emit_telegram(&mut buf, 0, 0x20, data, None).unwrap();
+        let n = emit_telegram(
+            &mut buf,
+            Head {
+                address: 0,
+                command: 0x20,
+            },
+            data,
+            None,
+        )
+        .unwrap();
         assert_eq!(buf[..n], hex(text)[..]);
         assert_eq!(ValueMode::parse(0x20, data), Some(mode));
     }
@@ -415,7 +426,13 @@ fn value_mode_telegrams_are_byte_exact() {
         ),
     ] {
         let n = mode
-            .emit(0, 0x10, lms_core::Unit::Centimetre, &[100, 200], &mut buf)
+            .emit(
+                0,
+                SensorStatus(0x10),
+                lms_core::Unit::Centimetre,
+                &[100, 200],
+                &mut buf,
+            )
             .unwrap();
         assert_eq!(buf[..n], hex(text)[..], "{mode:?}");
     }

@@ -6,7 +6,7 @@
 
 use lms_core::pipeline::line_fit::{fit_piece, residual_dof, Bearings, RawScan};
 use lms_core::test_support::Rng;
-use lms_core::{Beam, Extractor, Params};
+use lms_core::{Beam, Extractor, Params, Segment};
 
 mod common;
 use common::interleaved_wall;
@@ -57,8 +57,8 @@ fn chi2_without_the_turns_offset_matches_an_f64_reference() {
         turns,
     };
     let last = (ranges.len() - 1) as u16;
-    let one = fit_piece(&scan(1), 0, last, SIGMA).unwrap();
-    let two = fit_piece(&scan(2), 0, last, SIGMA).unwrap();
+    let one = fit_piece(&scan(1), Segment { first: 0, last }, SIGMA).unwrap();
+    let two = fit_piece(&scan(2), Segment { first: 0, last }, SIGMA).unwrap();
     // The line and its covariance are the same fit.
     assert_eq!((one.alpha, one.r, one.cov), (two.alpha, two.r, two.cov));
     // f64: residuals about the fitted line, each turn's mean taken out.

@@ -29,16 +29,16 @@ use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 use crate::clock;
 use crate::fault::{self, Bor, Cause, FaultRecord, ResetCause};
 use crate::rcc::{self, Clocks};
-use crate::serial::{self, RxStats, Serial};
+use crate::serial::{self, Bd, RxStats, Serial};
 
 /// Line speed of the host side at power-on (Bd): the co-processor looks like
 /// an LMS 2xx to its client, which starts at 9600 and switches on request
 /// ([`Serial::set_baud`]).
-pub const HOST_BAUD: u32 = 9_600;
+pub const HOST_BAUD: Bd = Bd(9_600);
 /// Line speed of the sensor side at power-on (Bd): the LMS 2xx starts at 9600.
-pub const SENSOR_BAUD: u32 = 9_600;
+pub const SENSOR_BAUD: Bd = Bd(9_600);
 /// Line speed of the control console (Bd).
-pub const CONTROL_BAUD: u32 = 115_200;
+pub const CONTROL_BAUD: Bd = Bd(115_200);
 
 /// Slots of the host receive queue (holds one less byte): requests are
 /// short (the longest, `77`, is 42 bytes) and a client waits for each

@@ -55,6 +55,10 @@ pub fn now_us() -> u64 {
         }
         let reload = SYST::get_reload();
         let elapsed = u64::from(reload.saturating_sub(current));
-        ms * 1_000 + lms_core::maths::div_u64(elapsed * 1_000, u64::from(reload) + 1)
+        ms * 1_000
+            + lms_core::maths::div_u64(
+                elapsed * 1_000,
+                lms_core::maths::divisor(u64::from(reload) + 1),
+            )
     })
 }

@@ -187,11 +187,12 @@ impl Line<'_> {
 /// `panic_bounds_check`, which links `core::fmt`'s integer formatting
 /// (~0.6 KiB of flash) for a message the panic handler never formats.
 fn decimal(mut value: u64, buf: &mut [u8; 20]) -> &[u8] {
+    const TEN: core::num::NonZeroU64 = lms_core::maths::divisor(10);
     let mut used = 0;
     for slot in buf.iter_mut().rev() {
         // Not `%` and `/`: on u64 they pull in the compiler's 0.9 KB
         // division routine (lms_core::maths::div_rem_u64).
-        let (rest, digit) = lms_core::maths::div_rem_u64(value, 10);
+        let (rest, digit) = lms_core::maths::div_rem_u64(value, TEN);
         *slot = b'0' + digit as u8;
         value = rest;
         used += 1;

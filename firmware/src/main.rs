@@ -31,6 +31,7 @@ use cortex_m_rt::entry;
 use lms_core::device::coprocessor::PollError;
 
 use crate::control::{Command, Report};
+use crate::serial::Bd;
 
 include!(concat!(env!("OUT_DIR"), "/build_config.rs"));
 
@@ -193,11 +194,11 @@ fn poll(app: &mut app::App, board: &mut board::Board, watch: &mut Watch) {
     }
     if let Some(baud) = outcome.sensor_baud {
         defmt::info!("sensor line to {=u32} Bd", baud.bits_per_second());
-        board.sensor.set_baud(baud.bits_per_second());
+        board.sensor.set_baud(Bd(baud.bits_per_second()));
     }
     if let Some(baud) = outcome.host_baud {
         defmt::info!("host line to {=u32} Bd", baud.bits_per_second());
-        board.host.set_baud(baud.bits_per_second());
+        board.host.set_baud(Bd(baud.bits_per_second()));
     }
 }
 

@@ -21,7 +21,7 @@
 
 use stm32f4::stm32f405 as pac;
 
-use crate::serial::brr;
+use crate::serial::{brr, Bd};
 
 /// Crystal on the board (Hz): `LMS_HSE_HZ` at build time, default 8 MHz
 /// (STM32F4-Discovery; 25 MHz on a Netduino Plus 2).
@@ -141,9 +141,11 @@ const PLL_HSI: Pll = pll_for(HSI_HZ);
 const _: () = assert!(pll_ok(HSE_HZ), "LMS_HSE_HZ gives no exact 168 MHz PLL");
 const _: () = assert!(pll_ok(HSI_HZ));
 
-/// Relative error of the line rate `pclk_hz / brr(pclk_hz, baud)` in ppm.
-pub const fn baud_error_ppm(pclk_hz: u32, baud: u32) -> u32 {
+/// Relative error of the line rate `pclk_hz / brr(pclk_hz, baud)` in ppm
+/// (`pclk_hz` in Hz).
+pub const fn baud_error_ppm(pclk_hz: u32, baud: Bd) -> u32 {
     let div = brr(pclk_hz, baud);
+    let Bd(baud) = baud;
     if div < 16 {
         return u32::MAX; // USARTDIV < 1: not possible
     }
@@ -160,15 +162,15 @@ const _: () = {
     let rates = [9_600, 19_200, 38_400, 500_000];
     let mut i = 0;
     while i < rates.len() {
-        assert!(baud_error_ppm(PCLK1_HZ, rates[i]) < 10_000);
-        assert!(baud_error_ppm(PCLK2_HZ, rates[i]) < 10_000);
-        assert!(baud_error_ppm(HSI_HZ, rates[i]) < 10_000);
+        assert!(baud_error_ppm(PCLK1_HZ, Bd(rates[i])) < 10_000);
+        assert!(baud_error_ppm(PCLK2_HZ, Bd(rates[i])) < 10_000);
+        assert!(baud_error_ppm(HSI_HZ, Bd(rates[i])) < 10_000);
         i += 1;
     }
-    assert!(baud_error_ppm(PCLK1_HZ, 500_000) == 0);
-    assert!(baud_error_ppm(PCLK2_HZ, 500_000) == 0);
-    assert!(baud_error_ppm(PCLK1_HZ, 115_200) < 10_000);
-    assert!(baud_error_ppm(HSI_HZ, 115_200) < 10_000);
+    assert!(baud_error_ppm(PCLK1_HZ, Bd(500_000)) == 0);
+    assert!(baud_error_ppm(PCLK2_HZ, Bd(500_000)) == 0);
+    assert!(baud_error_ppm(PCLK1_HZ, Bd(115_200)) < 10_000);
+    assert!(baud_error_ppm(HSI_HZ, Bd(115_200)) < 10_000);
 };
 
 /// True once `ready` returned true within [`READY_POLLS`] reads.

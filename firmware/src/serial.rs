@@ -34,7 +34,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use embedded_io::{ErrorType, Read, ReadReady, Write, WriteReady};
 use heapless::spsc::{Consumer, Producer};
-use lms_core::maths::div_u64;
+use lms_core::maths::{div_u64, divisor};
 use stm32f4::stm32f405::usart1::RegisterBlock;
 use stm32f4::stm32f405::Interrupt;
 
@@ -101,10 +101,15 @@ impl RxCounts {
     }
 }
 
+/// A line rate (Bd: bits per second on the line).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Bd(pub u32);
+
 /// Serial settings: 8 data bits, no parity, 1 stop bit, no flow control (the
-/// LMS 2xx's 8N1), at `baud` from a peripheral clock of `pclk_hz`; receive
-/// interrupt on (the transmit interrupt is switched on while bytes wait).
-pub fn configure(usart: &RegisterBlock, pclk_hz: u32, baud: u32) {
+/// LMS 2xx's 8N1), at `baud` from a peripheral clock of `pclk_hz` (Hz);
+/// receive interrupt on (the transmit interrupt is switched on while bytes
+/// wait).
+pub fn configure(usart: &RegisterBlock, pclk_hz: u32, baud: Bd) {
     usart.cr1().reset();
     usart.cr2().reset();
     usart.cr3().reset();
@@ -120,8 +125,9 @@ pub fn configure(usart: &RegisterBlock, pclk_hz: u32, baud: u32) {
 }
 
 /// The `BRR` value for 16× oversampling: `USARTDIV = pclk / baud` in 12.4
-/// fixed point, rounded to nearest (RM0090 §30.3.4).
-pub const fn brr(pclk_hz: u32, baud: u32) -> u32 {
+/// fixed point, rounded to nearest (RM0090 §30.3.4); `pclk_hz` in Hz.
+pub const fn brr(pclk_hz: u32, baud: Bd) -> u32 {
+    let Bd(baud) = baud;
     if baud == 0 {
         return 0;
     }
@@ -290,7 +296,7 @@ pub struct Serial<U> {
     stats: &'static RxStats,
     irq: Interrupt,
     pclk_hz: u32,
-    baud: u32,
+    baud: Bd,
 }
 
 impl<U: Deref<Target = RegisterBlock>> Serial<U> {
@@ -302,7 +308,7 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
         stats: &'static RxStats,
         irq: Interrupt,
         pclk_hz: u32,
-        baud: u32,
+        baud: Bd,
     ) -> Self {
         Serial {
             usart,
@@ -338,7 +344,7 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
     /// Change the line speed (e.g. after the sensor has acknowledged `20 4x`).
     /// Lets what is queued leave at the old rate first ([`Self::drain`]).
     /// QEMU ignores the rate.
-    pub fn set_baud(&mut self, baud: u32) {
+    pub fn set_baud(&mut self, baud: Bd) {
         self.drain();
         self.baud = baud;
         write_brr(&self.usart, brr(self.pclk_hz, baud));
@@ -352,7 +358,7 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
     pub fn drain(&mut self) {
         let bits = (self.tx.len() as u64 + 2) * 10;
         let deadline = crate::clock::now_us()
-            + div_u64(2 * bits * 1_000_000, u64::from(self.baud.max(1)))
+            + div_u64(2 * bits * 1_000_000, divisor(u64::from(self.baud.0)))
             + 2_000;
         let mut queued = self.tx.len();
         while crate::clock::now_us() < deadline {

@@ -20,7 +20,7 @@ use lms_core::carmen::{self, ReadError};
 use lms_core::device::coprocessor::{CoProcessor, SensorSetup};
 use lms_core::device::emulator::{Emulator, FnSource, Settings};
 use lms_core::telegram::features::{emit_features, EchoedParams};
-use lms_core::telegram::{MeasuredValues, RangeBits, Request, ACK};
+use lms_core::telegram::{Head, MeasuredValues, RangeBits, Request, ACK};
 use lms_core::{test_support, Unit};
 use lms_core::{Beam, Extractor, Params, Variant};
 use lms_fuzz::{
@@ -503,8 +503,10 @@ fn main() {
         let mut b = [0u8; 16];
         let n = lms_core::telegram::emit_telegram(
             &mut b,
-            0,
-            lms_core::telegram::features::REQ_COUNTERS,
+            Head {
+                address: 0,
+                command: lms_core::telegram::features::REQ_COUNTERS,
+            },
             &[],
             None,
         )

@@ -8,7 +8,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use lms_core::telegram::features::{emit_features, Assembled, EchoedParams, FeatureAssembler};
-use lms_core::telegram::{emit_telegram, Direction, Telegram, MAX_TELEGRAM_LEN};
+use lms_core::telegram::{emit_telegram, Direction, Head, Telegram, MAX_TELEGRAM_LEN};
 use lms_fuzz::{decode_features, feature_bits, Input};
 
 fuzz_target!(|data: &[u8]| {
@@ -21,7 +21,15 @@ fuzz_target!(|data: &[u8]| {
             let len = usize::from(input.u16()) % 820;
             let body = input.bytes(len);
             let mut buf = [0u8; MAX_TELEGRAM_LEN];
-            if let Ok(n) = emit_telegram(&mut buf, 0x80, command, body, Some(0x10)) {
+            if let Ok(n) = emit_telegram(
+                &mut buf,
+                Head {
+                    address: 0x80,
+                    command,
+                },
+                body,
+                Some(0x10),
+            ) {
                 let t = Telegram::new_checked(&buf[..n], Direction::SensorToHost).unwrap();
                 if let Ok(Assembled::Complete(summary, f)) = asm.push(&t) {
                     let _ = (summary.counts, f.lines().len());

@@ -10,8 +10,8 @@
 
 use libfuzzer_sys::fuzz_target;
 use lms_core::telegram::{
-    emit_telegram, Direction, MeasuredValues, MeasuredView, RangeBits, Reply, Request, Telegram,
-    MAX_LEN, MAX_TELEGRAM_LEN,
+    emit_telegram, Direction, Head, MeasuredValues, MeasuredView, RangeBits, Reply, Request,
+    SensorStatus, Telegram, MAX_LEN, MAX_TELEGRAM_LEN,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -58,7 +58,7 @@ fuzz_target!(|data: &[u8]| {
     if let Ok(reply) = Reply::from_parts(command, body) {
         if !matches!(reply, Reply::Other { .. }) {
             let mut buf = [0u8; MAX_TELEGRAM_LEN];
-            if let Ok(n) = reply.emit(0x00, 0x10, &mut buf) {
+            if let Ok(n) = reply.emit(0x00, SensorStatus(0x10), &mut buf) {
                 assert_eq!(n, reply.buffer_len());
                 let t = Telegram::new_checked(&buf[..n], Direction::SensorToHost)
                     .expect("emitted reply checks");
@@ -77,7 +77,15 @@ fuzz_target!(|data: &[u8]| {
         (Some(0x10), Direction::SensorToHost),
     ] {
         let mut buf = [0u8; MAX_TELEGRAM_LEN + 8];
-        match emit_telegram(&mut buf, 0x80, command, body, status) {
+        match emit_telegram(
+            &mut buf,
+            Head {
+                address: 0x80,
+                command,
+            },
+            body,
+            status,
+        ) {
             Ok(n) => {
                 let t =
                     Telegram::new_checked(&buf[..n], direction).expect("emitted telegram checks");

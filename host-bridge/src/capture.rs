@@ -570,6 +570,13 @@ pub struct CaptureScans<R: Read> {
 /// Notes kept until taken ([`CaptureScans::next_note`]).
 pub const MAX_PENDING_NOTES: usize = 64;
 
+/// Where a record is in a capture: its number, from 0, and its byte offset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct RecordAt {
+    record: u64,
+    offset: u64,
+}
+
 impl<R: Read> CaptureScans<R> {
     /// The scans of the capture on `input` (its magic already checked);
     /// `path` names it in messages.
@@ -597,8 +604,9 @@ impl<R: Read> CaptureScans<R> {
         self.notes_dropped
     }
 
-    /// Compare record `record` (at byte `offset`) with the previous one.
-    fn look_at(&mut self, record: u64, offset: u64, rec: &Record) {
+    /// Compare the record `rec` at `at` with the previous one.
+    fn look_at(&mut self, at: RecordAt, rec: &Record) {
+        let RecordAt { record, offset } = at;
         let note = match &self.previous {
             Some(p) if p == rec => Some(format!(
                 "record {record} at byte {offset} duplicates the previous record \
@@ -672,7 +680,7 @@ impl<R: Read> CaptureScans<R> {
                     ))
                 }
             };
-            self.look_at(record, offset, &rec);
+            self.look_at(RecordAt { record, offset }, &rec);
             let view = rec.view();
             if view.command() != lms_core::telegram::measured::MEASURED_COMMAND {
                 continue;

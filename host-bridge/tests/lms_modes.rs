@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 
 use lms_core::telegram::features::Counters;
 use lms_core::telegram::{
-    emit_telegram, Direction, Event, Framer, Handshake, MeasuredView, Telegram,
+    emit_telegram, Direction, Event, Framer, Handshake, Head, MeasuredView, Telegram,
 };
 use nix::fcntl::{open, OFlag};
 use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
@@ -156,7 +156,16 @@ impl Port {
 /// `payload` (command + data) as a host telegram.
 fn telegram(payload: &[u8]) -> Vec<u8> {
     let mut buf = [0u8; 64];
-    let n = emit_telegram(&mut buf, 0, payload[0], &payload[1..], None).unwrap();
+    let n = emit_telegram(
+        &mut buf,
+        Head {
+            address: 0,
+            command: payload[0],
+        },
+        &payload[1..],
+        None,
+    )
+    .unwrap();
     buf[..n].to_vec()
 }
 

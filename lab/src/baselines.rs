@@ -124,8 +124,8 @@ pub fn features_from_segments(
     };
     let mut lines: Vec<Line> = Vec::new();
     for k in 0..segments.len() {
-        let (first, last) = fit_span(segments, k, params.fit_shared_points);
-        let Ok(line) = fit_line(bearings, ranges, beams, first, last, params.sigma) else {
+        let span = fit_span(segments, k, params.fit_shared_points);
+        let Ok(line) = fit_line(bearings, ranges, beams, span, params.sigma) else {
             continue;
         };
         if !(line.chi2 <= params.max_chi2) {

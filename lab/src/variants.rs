@@ -179,7 +179,7 @@ pub fn split_before_reject(
         // Depth-first, left half first.
         let mut stack = vec![(seg, 0u8)];
         while let Some((sg, level)) = stack.pop() {
-            let line = fit_line(tables.core(), r, beams, sg.first, sg.last, params.sigma);
+            let line = fit_line(tables.core(), r, beams, sg, params.sigma);
             let fails = match line {
                 Ok(l) => {
                     let dof = f64::from(l.points.saturating_sub(2)).max(1.0);

@@ -7,7 +7,7 @@ use lms_core::maths::Sym2;
 use lms_core::unstable::fit_line;
 use lms_core::Corner;
 use lms_core::Line;
-use lms_core::{Beam, Frame, Params, Variant};
+use lms_core::{Beam, Frame, Params, Segment, Variant};
 use lms_lab::baselines::{gaussian_mask, split_and_merge, Tables};
 use lms_lab::metrics::{
     crb, scan_truth, score_corners, score_lines, CornerTruth, Gates, ScanTruth, Tally, TruePiece,
@@ -238,8 +238,10 @@ fn evaluate_the_crb_is_the_core_fit_covariance_on_a_noise_free_wall() {
         tables.bearings(),
         frame.ranges(),
         frame.beams(),
-        200,
-        300,
+        Segment {
+            first: 200,
+            last: 300,
+        },
         0.005,
     )
     .unwrap();

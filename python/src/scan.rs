@@ -2,7 +2,7 @@
 //! caller gives `Extractor.run` (a numpy array or a list) as a core frame,
 //! with errors that name the beam.
 
-use lms_core::{Beam, Frame as CoreFrame, Variant};
+use lms_core::{Beam, FovRes, Frame as CoreFrame, Variant};
 use numpy::{PyArray1, PyReadonlyArray1, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -29,7 +29,12 @@ pub fn variant_of(resolution_deg: f64, fov_deg: f64) -> PyResult<Variant> {
     let centideg = (resolution_deg * 100.0).round();
     let exact = (resolution_deg * 100.0 - centideg).abs() < 1e-6 && fov_deg.fract() == 0.0;
     let found = (exact && (1.0..=100.0).contains(&centideg) && (1.0..=180.0).contains(&fov_deg))
-        .then(|| Variant::from_fov_res(fov_deg as u16, centideg as u16))
+        .then(|| {
+            Variant::from_fov_res(FovRes {
+                fov_deg: fov_deg as u16,
+                res_centideg: centideg as u16,
+            })
+        })
         .flatten();
     found.ok_or_else(|| {
         PyValueError::new_err(format!(

@@ -6,7 +6,7 @@ use lms_core::frame::{Frame, Variant};
 use lms_core::pipeline::corners::intersect;
 use lms_core::pipeline::line_fit::Bearings;
 use lms_core::unstable::fit_line;
-use lms_core::{Extractor, Params};
+use lms_core::{Extractor, Params, Segment};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use workspace_tests::synth::{self, Wall};
@@ -291,8 +291,10 @@ fn a_ten_degree_bend_is_an_ill_conditioned_corner() {
         bearings,
         frame.ranges(),
         frame.beams(),
-        lo,
-        split.floor() as u16,
+        Segment {
+            first: lo,
+            last: split.floor() as u16,
+        },
         SIGMA as f32,
     )
     .unwrap();
@@ -300,8 +302,10 @@ fn a_ten_degree_bend_is_an_ill_conditioned_corner() {
         bearings,
         frame.ranges(),
         frame.beams(),
-        split.floor() as u16 + 1,
-        hi,
+        Segment {
+            first: split.floor() as u16 + 1,
+            last: hi,
+        },
         SIGMA as f32,
     )
     .unwrap();

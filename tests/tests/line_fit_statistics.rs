@@ -29,7 +29,7 @@
 use lms_core::frame::{Frame, Variant};
 use lms_core::pipeline::line_fit::Bearings;
 use lms_core::unstable::fit_line;
-use lms_core::{Extractor, Params};
+use lms_core::{Extractor, Params, Segment};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -88,8 +88,10 @@ fn wall_fit_spread_matches_the_reported_covariance_and_the_cramer_rao_bound() {
             bearings,
             frame.ranges(),
             frame.beams(),
-            FIRST as u16,
-            LAST as u16,
+            Segment {
+                first: FIRST as u16,
+                last: LAST as u16,
+            },
             SIGMA as f32,
         )
         .expect("a wall fits");
@@ -211,8 +213,10 @@ fn an_arc_is_not_accepted_as_a_line() {
             bearings,
             frame.ranges(),
             frame.beams(),
-            lo as u16,
-            hi as u16,
+            Segment {
+                first: lo as u16,
+                last: hi as u16,
+            },
             SIGMA as f32,
         )
         .expect("the arc's beams can be fitted");
@@ -228,14 +232,7 @@ fn an_arc_is_not_accepted_as_a_line() {
         let f = ex.run(&frame, &params.validate().unwrap());
         let mut seg_chi2 = Vec::new();
         for s in f.segments().iter() {
-            let line = fit_line(
-                bearings,
-                frame.ranges(),
-                frame.beams(),
-                s.first,
-                s.last,
-                SIGMA as f32,
-            );
+            let line = fit_line(bearings, frame.ranges(), frame.beams(), *s, SIGMA as f32);
             seg_chi2.push((s.first, s.last, line.map(|l| l.chi2).ok()));
         }
         eprintln!(

@@ -47,7 +47,7 @@
 //! accepted ≤ 1 per scan on average.
 
 use lms_core::test_support::CONSECUTIVE_WINDOWS;
-use lms_core::{Extractor, Frame, Params, Variant};
+use lms_core::{Extractor, Frame, Params, Segment, Variant};
 use lms_scene::{seeded_rng, Bearings, NoiseModel, Pose, Scene, TrueScan, WindowTruth};
 use workspace_tests::reference;
 
@@ -455,8 +455,10 @@ fn the_line_model_keeps_a_corner_that_a_gaussian_mask_moves() {
                         bearings,
                         r,
                         f.beams(),
-                        l.first_beam as u16,
-                        l.last_beam as u16,
+                        Segment {
+                            first: l.first_beam as u16,
+                            last: l.last_beam as u16,
+                        },
                         SIGMA as f32,
                     )
                     .expect("a wall fits")

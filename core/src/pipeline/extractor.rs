@@ -23,7 +23,7 @@ use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{EdgeList, Segmenter};
 use crate::pipeline::smoothing::{
-    interleaved_turns, smoothing_pass, usable, usable_windows, WindowSink, WINDOW_WORDS,
+    interleaved_turns, smoothing_pass, usable, usable_windows, WindowSink, Windows, WINDOW_WORDS,
 };
 use crate::pipeline::split::split_before_reject;
 
@@ -223,7 +223,7 @@ impl Extractor {
     where
         F: FnMut(u16, &[f32], &[f32]),
     {
-        use crate::pipeline::turns::{turn_frame, TurnsMerged};
+        use crate::pipeline::turns::{turn_frame, Turn, TurnsMerged};
         if !params.per_turn {
             return false;
         }
@@ -241,7 +241,7 @@ impl Extractor {
         trace.fill(f32::INFINITY);
         let mut merged = TurnsMerged::new(k);
         for t in 0..k {
-            let Some(turn) = turn_frame(frame, t, k) else {
+            let Some(turn) = turn_frame(frame, Turn { index: t, of: k }) else {
                 continue;
             };
             let mut turn_d = [f32::INFINITY; MAX_WINDOWS];
@@ -338,8 +338,10 @@ impl ScaleSpace<'_> {
             frame.beams(),
             frame.ranges(),
             params.max_range,
-            stride,
-            windows,
+            Windows {
+                stride,
+                count: windows,
+            },
             &mut self.window_ok[..],
         );
         let filter = window_filter(params, stride as f32 * frame.geometry().step);
@@ -416,8 +418,8 @@ fn fit_lines<B: BearingTable>(
     stats: &mut Stats,
 ) {
     for k in 0..f.segments.len() {
-        let (first, last) = fit_span(&f.segments, k, params.fit_shared_points);
-        let line = match fit_piece(scan, first, last, params.line_sigma()) {
+        let span = fit_span(&f.segments, k, params.fit_shared_points);
+        let line = match fit_piece(scan, span, params.line_sigma()) {
             Ok(line) => line,
             Err(_) => {
                 stats.degenerate_fits = stats.degenerate_fits.saturating_add(1);

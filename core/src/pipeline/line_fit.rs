@@ -21,7 +21,7 @@
 //! So a fit needs no libm `sinf`/`cosf`, which on the M4F run in software
 //! f64 (docs/DESIGN.md, "Sine, cosine and `atan2` of the core's own").
 
-use crate::features::Line;
+use crate::features::{Line, Segment};
 use crate::frame::Beam;
 use crate::maths::{atan2, cos_sin, wrap_angle, Sym2};
 pub use crate::pipeline::bearings::{BearingTable, Bearings, Sweep};
@@ -129,7 +129,7 @@ pub(crate) fn offset_turns(points: u16, turns: u8) -> u8 {
     }
 }
 
-/// Fit a line to the valid beams of `first..=last` of `ranges` (m), with
+/// Fit a line to the valid beams `span.first..=span.last` of `ranges` (m), with
 /// range noise `sigma` (m). Beams outside the slices are ignored. With the
 /// extractor's own table (`&TwoLevelBearings`) the result is the
 /// extractor's bit for bit; with full tables (`Bearings`) it may differ in
@@ -140,8 +140,7 @@ pub fn fit_line<B: BearingTable>(
     bearings: B,
     ranges: &[f32],
     beams: &[Beam],
-    first: u16,
-    last: u16,
+    span: Segment,
     sigma: f32,
 ) -> Result<Line, FitError> {
     let scan = RawScan {
@@ -152,18 +151,18 @@ pub fn fit_line<B: BearingTable>(
         footprint: 0.0,
         turns: 1,
     };
-    fit_piece(&scan, first, last, sigma)
+    fit_piece(&scan, span, sigma)
 }
 
-/// Fit a line to the beams `first..=last` of `scan` that are valid and
-/// below its `max_range`, with range noise `sigma` (m).
+/// Fit a line to the beams `piece.first..=piece.last` of `scan` that are
+/// valid and below its `max_range`, with range noise `sigma` (m).
 pub fn fit_piece<B: BearingTable>(
     scan: &RawScan<'_, B>,
-    first: u16,
-    last: u16,
+    piece: Segment,
     sigma: f32,
 ) -> Result<Line, FitError> {
-    let mut span = Span::new(scan, first, last).ok_or(FitError::TooFewPoints)?;
+    let first = piece.first;
+    let mut span = Span::new(scan, piece).ok_or(FitError::TooFewPoints)?;
     span.set_footprint(scan.footprint, sigma);
     // 1. Total least squares start.
     let (m, start) = span.total_least_squares()?;
@@ -228,12 +227,12 @@ impl<'a, B: BearingTable> Span<'a, B> {
         1.0 / (1.0 + t * t)
     }
 
-    /// The span, or `None` if it holds no beam.
-    fn new(scan: &RawScan<'a, B>, first: u16, last: u16) -> Option<Self> {
+    /// The span of `piece`'s beams, or `None` if it holds no beam.
+    fn new(scan: &RawScan<'a, B>, piece: Segment) -> Option<Self> {
         let (bearings, ranges, beams) = (scan.bearings, scan.ranges, scan.beams);
         let n = ranges.len().min(beams.len()).min(bearings.beams());
-        let lo = first as usize;
-        let hi = (last as usize + 1).min(n);
+        let lo = piece.first as usize;
+        let hi = (piece.last as usize + 1).min(n);
         if lo >= hi {
             return None;
         }

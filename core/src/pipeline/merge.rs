@@ -14,19 +14,19 @@ use crate::pipeline::smoothing::usable;
 /// The beams fitted for segment `k`: the whole segment (§7), or, with
 /// `fit_shared_points == false`, without a first/last point it shares with
 /// the neighbouring segment (a corner point lies on neither line exactly).
-pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> (u16, u16) {
-    let Some(seg) = segments.get(k) else {
-        return (0, 0);
+pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> Segment {
+    let Some(&seg) = segments.get(k) else {
+        return Segment { first: 0, last: 0 };
     };
     if fit_shared_points {
-        return (seg.first, seg.last);
+        return seg;
     }
     let shares_first = k > 0 && segments.get(k - 1).is_some_and(|p| p.last == seg.first);
     let shares_last = segments.get(k + 1).is_some_and(|n| n.first == seg.last);
-    (
-        seg.first.saturating_add(u16::from(shares_first)),
-        seg.last.saturating_sub(u16::from(shares_last)),
-    )
+    Segment {
+        first: seg.first.saturating_add(u16::from(shares_first)),
+        last: seg.last.saturating_sub(u16::from(shares_last)),
+    }
 }
 
 /// §7.6: merge `prev` and `next` if only invalid beams (or at most
@@ -57,7 +57,11 @@ pub fn try_merge<B: BearingTable>(
         return None;
     }
     let (sigma, turns) = (params.line_sigma(), scan.turns);
-    let merged = fit_piece(scan, prev.first, next.last, sigma).ok()?;
+    let union = Segment {
+        first: prev.first,
+        last: next.last,
+    };
+    let merged = fit_piece(scan, union, sigma).ok()?;
     // A bridge (§10 (e)): each line's own beams must fit the union line.
     let fits = |part: &Line| part_chi2(part, &merged, turns).is_some_and(|c| c <= params.max_chi2);
     let larger = if next.points > prev.points {

@@ -5,6 +5,8 @@
 //! point where two lines meet belongs to both segments, while a jump leaves no
 //! shared point. Edge points are the middle points of breaking *valid* windows.
 
+use core::ops::Range;
+
 use heapless::Vec;
 
 use crate::features::{Edges, Segment};
@@ -158,7 +160,7 @@ impl<'a, const S: usize, L: EdgeList> Segmenter<'a, S, L> {
                 self.emit_pending((i + self.stride - 1) as u16);
                 self.run_start = Some(i);
             }
-            (true, Some(start)) => self.close(start, i),
+            (true, Some(start)) => self.close(start..i),
             _ => {}
         }
     }
@@ -171,16 +173,17 @@ impl<'a, const S: usize, L: EdgeList> Segmenter<'a, S, L> {
     /// Close the last run after `windows` windows; what was dropped.
     pub fn finish(&mut self, windows: usize) -> SegmentationCounts {
         if let Some(start) = self.run_start.take() {
-            self.close(start, windows);
+            self.close(start..windows);
         }
         self.emit_pending(u16::MAX);
         self.counts
     }
 
-    /// The run of windows `start..end`: every beam of its windows, from
-    /// the last kept segment's last beam on; kept back until the next run
-    /// bounds its end.
-    fn close(&mut self, start: usize, end: usize) {
+    /// The run of windows `run` (`start..end`): every beam of its windows,
+    /// from the last kept segment's last beam on; kept back until the next
+    /// run bounds its end.
+    fn close(&mut self, run: Range<usize>) {
+        let Range { start, end } = run;
         self.run_start = None;
         if end - start < self.windows_needed() {
             self.counts.short_segments = self.counts.short_segments.saturating_add(1);

@@ -47,22 +47,32 @@ pub fn usable(beam: Beam, d: f32, max_range: f32) -> bool {
 /// `i % 32` of word `i / 32` (one word per smoothing block).
 pub const WINDOW_WORDS: usize = MAX_WINDOWS.div_ceil(BLOCK);
 
-/// The usable windows of stride `stride` as a bitset: window `i` (beams
+/// The windows of one smoothing pass: `count` windows of stride `stride`
+/// (window `i` has beams `i, i+stride, i+2·stride`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Windows {
+    /// Beams between a window's first and middle beam (1 or the turns).
+    pub stride: usize,
+    /// Number of windows.
+    pub count: usize,
+}
+
+/// The usable windows of `windows` as a bitset: window `i` (beams
 /// `i, i+stride, i+2·stride`) is set iff every beam of `i..=i + 2·stride`
 /// is [`usable`], so that a segment (a run of windows) never spans an
 /// unusable beam (§2; at stride 1, the window's three beams). Sets the bits
-/// of the first `windows` windows (as many as `window_ok` holds) and clears
-/// every other bit. One pass over the beams with the length of the current
-/// run of usable beams.
+/// of the first `windows.count` windows (as many as `window_ok` holds) and
+/// clears every other bit. One pass over the beams with the length of the
+/// current run of usable beams.
 pub fn usable_windows(
     beams: &[Beam],
     ranges: &[f32],
     max_range: f32,
-    stride: usize,
-    windows: usize,
+    windows: Windows,
     window_ok: &mut [u32],
 ) {
-    let windows = windows.min(window_ok.len() * BLOCK);
+    let Windows { stride, count } = windows;
+    let windows = count.min(window_ok.len() * BLOCK);
     for w in window_ok.iter_mut() {
         *w = 0;
     }
@@ -446,7 +456,11 @@ mod tests {
         frame.set_metres(30, 90.0); // beyond max_range below
         let n = frame.len();
         let mut ok = [u32::MAX; WINDOW_WORDS];
-        usable_windows(frame.beams(), frame.ranges(), 80.0, 2, n - 2, &mut ok);
+        let windows = Windows {
+            stride: 2,
+            count: n - 2,
+        };
+        usable_windows(frame.beams(), frame.ranges(), 80.0, windows, &mut ok);
         for i in 0..WINDOW_WORDS * BLOCK {
             let w = (ok[i / BLOCK] >> (i % BLOCK)) & 1 != 0;
             let want = i + 4 < n && (i..=i + 4).all(|j| j != 10 && j != 30);

@@ -80,7 +80,7 @@ fn not_straight<B: BearingTable>(scan: &RawScan<'_, B>, piece: Segment, sigma: f
         Bounds::Below => return false,
         Bounds::Between => {}
     }
-    match fit_piece(scan, piece.first, piece.last, sigma) {
+    match fit_piece(scan, piece, sigma) {
         Ok(line) => {
             let dof = residual_dof(line.points, scan.turns);
             line.chi2 * dof > chi2_quantile_999(dof)

@@ -31,10 +31,20 @@ use crate::maths::{cos_sin, wrap_angle};
 use crate::params::{TURN_FUSE_ALPHA_DEG, TURN_FUSE_R};
 pub use crate::pipeline::smoothing::interleaved_turns;
 
+/// One mirror turn of an interleaved scan: turn `index` of `of` (`0..of`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Turn {
+    /// Which turn, from 0.
+    pub index: usize,
+    /// Turns per scan.
+    pub of: usize,
+}
+
 /// Turn `t` of `k` of `frame` as a frame of its own: its beam `i` is the
 /// frame's beam `k·i + t`, at bearing step `k·γ`. `None` if that leaves
 /// too few beams for a frame.
-pub fn turn_frame(frame: &Frame, t: usize, k: usize) -> Option<Frame> {
+pub fn turn_frame(frame: &Frame, turn: Turn) -> Option<Frame> {
+    let Turn { index: t, of: k } = turn;
     let g = frame.geometry();
     let n = frame.len().saturating_sub(t).div_ceil(k.max(1));
     let geometry = Geometry {

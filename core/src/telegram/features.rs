@@ -32,7 +32,7 @@ use crate::frame::MAX_BEAMS;
 use crate::maths::Sym2;
 use crate::params::Params;
 
-use super::packet::{emit_telegram_with, EmitError, Telegram};
+use super::packet::{emit_telegram_with, EmitError, Head, Telegram};
 use super::{DEFAULT_STATUS, MAX_TELEGRAM_LEN, REPLY_ADDRESS_BIT};
 
 /// Summary of one scan's features; closes the group.
@@ -253,8 +253,10 @@ impl Counters {
     pub fn emit(&self, address: u8, buf: &mut [u8]) -> Result<usize, EmitError> {
         emit_telegram_with(
             buf,
-            REPLY_ADDRESS_BIT | address,
-            CMD_COUNTERS,
+            Head {
+                address: REPLY_ADDRESS_BIT | address,
+                command: CMD_COUNTERS,
+            },
             COUNTERS_LEN,
             Some(DEFAULT_STATUS),
             |d| self.encode(d),
@@ -305,7 +307,21 @@ pub fn emit_features<E, F>(
 where
     F: FnMut(&[u8]) -> Result<(), E>,
 {
-    emit_features_from(0, scan_counter, beams, params, features, address, send)
+    let of = FeaturesOf {
+        scan: scan_counter,
+        beams,
+    };
+    emit_features_from(0, of, params, features, address, send)
+}
+
+/// The scan whose features the telegrams describe: its number (the scan
+/// counter they carry) and its beam count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FeaturesOf {
+    /// The scan counter.
+    pub scan: u32,
+    /// Beams per scan.
+    pub beams: u16,
 }
 
 /// [`emit_features`] from the telegram with index `first` on (0 is the
@@ -314,8 +330,7 @@ where
 /// resumes with `first = k`. Returns the scan's number of telegrams.
 pub fn emit_features_from<E, F>(
     first: u32,
-    scan_counter: u32,
-    beams: u16,
+    of: FeaturesOf,
     params: &EchoedParams,
     features: &Features,
     address: u8,
@@ -327,7 +342,7 @@ where
     let mut out = Sender {
         buf: [0u8; MAX_TELEGRAM_LEN],
         address: REPLY_ADDRESS_BIT | address,
-        scan_counter,
+        scan_counter: of.scan,
         first,
         sent: 0,
         send,
@@ -365,7 +380,7 @@ where
     out.parts(&corners, &features.corners, 0, encode_corner)?;
     // D0: the summary, last.
     out.telegram(CMD_SUMMARY, SUMMARY_LEN, |w| {
-        encode_summary(w, beams, params, features)
+        encode_summary(w, of.beams, params, features)
     })?;
     Ok(out.sent)
 }
@@ -408,8 +423,10 @@ impl<F> Sender<F> {
         let counter = self.scan_counter;
         let n = emit_telegram_with(
             &mut self.buf,
-            self.address,
-            command,
+            Head {
+                address: self.address,
+                command,
+            },
             len,
             Some(DEFAULT_STATUS),
             |d| {
@@ -948,7 +965,11 @@ mod tests {
         let mut first = 0;
         for _ in 0..whole.len() {
             let mut taken = 0;
-            let r = emit_features_from(first, 7, 361, &params, &f, 0, |t| {
+            let of = FeaturesOf {
+                scan: 7,
+                beams: 361,
+            };
+            let r = emit_features_from(first, of, &params, &f, 0, |t| {
                 if taken == 2 {
                     return Err(());
                 }

@@ -80,7 +80,7 @@
 
 use core::fmt;
 
-use super::packet::{buffer_len, emit_telegram_with, EmitError, Telegram};
+use super::packet::{buffer_len, emit_telegram_with, EmitError, Head, Telegram};
 use super::{le_u16, put_le_u16, Direction};
 use crate::frame::{Beam, Frame, Invalid, Variant};
 use crate::units::Unit;
@@ -640,8 +640,10 @@ impl MeasuredValues {
     pub fn emit(&self, address: u8, buf: &mut [u8]) -> Result<usize, EmitError> {
         emit_telegram_with(
             buf,
-            Direction::SensorToHost.address_byte(address),
-            MEASURED_COMMAND,
+            Head {
+                address: Direction::SensorToHost.address_byte(address),
+                command: MEASURED_COMMAND,
+            },
             self.data_len(),
             Some(self.status),
             |data| self.write_data(data),

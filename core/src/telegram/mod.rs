@@ -34,7 +34,9 @@
 //! # Example: a request, its reply, and the framer in between
 //!
 //! ```
-//! use lms_core::telegram::{Direction, Event, Framer, Handshake, Reply, Request, ModeResult};
+//! use lms_core::telegram::{
+//!     Direction, Event, Framer, Handshake, ModeResult, Reply, Request, SensorStatus,
+//! };
 //!
 //! // Host side: the status request is `02 00 01 00 31 15 12`.
 //! let mut buf = [0u8; 16];
@@ -45,7 +47,9 @@
 //! // host's framer one byte at a time.
 //! let mut wire = [0u8; 16];
 //! wire[0] = lms_core::telegram::ACK;
-//! let n = Reply::ModeChanged(ModeResult::Ok).emit(0, 0x10, &mut wire[1..]).unwrap();
+//! let n = Reply::ModeChanged(ModeResult::Ok)
+//!     .emit(0, SensorStatus(0x10), &mut wire[1..])
+//!     .unwrap();
 //! let mut framer = Framer::new(Direction::SensorToHost, Handshake::Expected);
 //! let mut seen = 0;
 //! for b in &wire[..1 + n] {
@@ -150,7 +154,7 @@ pub use measured::{
     MAX_VALUES, PARTIAL_SCAN_BIT,
 };
 pub use packet::{
-    buffer_len, emit_telegram, emit_telegram_with, EmitError, Telegram, TelegramError,
+    buffer_len, emit_telegram, emit_telegram_with, EmitError, Head, Telegram, TelegramError,
 };
 pub use reply::{ModeResult, Reply, ReplyError, VariantReply};
 pub use request::{Baud, Request, RequestError};

@@ -304,28 +304,34 @@ pub const fn buffer_len(data_len: usize, direction: Direction) -> usize {
         .saturating_add(CRC_LEN)
 }
 
+/// The bytes that say whom a telegram is for and what it asks or answers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Head {
+    /// The raw `ADDR` byte (`0x80 | address` from the sensor).
+    pub address: u8,
+    /// The command byte.
+    pub command: u8,
+}
+
 /// Write a complete telegram `STX | address | LEN | command | data |
 /// [status] | CRC` into `buf`; returns its length in bytes.
 ///
-/// `address` is the raw `ADDR` byte (see [`Direction::address_byte`]); a
-/// `status` makes it a sensor → host telegram.
+/// `head.address` is the raw `ADDR` byte (see [`Direction::address_byte`]);
+/// a `status` makes it a sensor → host telegram.
 ///
 /// ```
-/// use lms_core::telegram::emit_telegram;
+/// use lms_core::telegram::{emit_telegram, Head};
 /// let mut buf = [0u8; 8];
-/// assert_eq!(emit_telegram(&mut buf, 0x80, 0x92, &[], Some(0x10)), Ok(8));
+/// assert_eq!(emit_telegram(&mut buf, Head { address: 0x80, command: 0x92 }, &[], Some(0x10)), Ok(8));
 /// assert_eq!(buf, [0x02, 0x80, 0x02, 0x00, 0x92, 0x10, 0x7F, 0x33]);
 /// ```
 pub fn emit_telegram(
     buf: &mut [u8],
-    address: u8,
-    command: u8,
+    head: Head,
     data: &[u8],
     status: Option<u8>,
 ) -> Result<usize, EmitError> {
-    emit_telegram_with(buf, address, command, data.len(), status, |d| {
-        copy_into(d, data)
-    })
+    emit_telegram_with(buf, head, data.len(), status, |d| copy_into(d, data))
 }
 
 /// Like [`emit_telegram`], but `fill` writes the `data_len` data bytes in
@@ -333,8 +339,7 @@ pub fn emit_telegram(
 /// no second buffer. The CRC is computed after `fill` returns.
 pub fn emit_telegram_with<F: FnOnce(&mut [u8])>(
     buf: &mut [u8],
-    address: u8,
-    command: u8,
+    head: Head,
     data_len: usize,
     status: Option<u8>,
     fill: F,
@@ -354,7 +359,7 @@ pub fn emit_telegram_with<F: FnOnce(&mut [u8])>(
         .split_first_chunk_mut::<{ HEADER_LEN + 1 }>()
         .ok_or(too_small)?;
     let [lo, hi] = len_bytes.to_le_bytes();
-    *header = [STX, address, lo, hi, command];
+    *header = [STX, head.address, lo, hi, head.command];
     let (body, _crc) = rest.split_last_chunk_mut::<CRC_LEN>().ok_or(too_small)?;
     let (data, tail) = body.split_at_mut_checked(data_len).ok_or(too_small)?;
     fill(data);
@@ -413,8 +418,10 @@ mod tests {
         let mut buf = [0xEEu8; 20];
         let n = emit_telegram(
             &mut buf,
-            0x80,
-            0xBB,
+            Head {
+                address: 0x80,
+                command: 0xBB,
+            },
             &[0x01, 0xB4, 0x00, 0x32, 0x00],
             Some(0x10),
         );
@@ -423,7 +430,15 @@ mod tests {
         assert!(buf[13..].iter().all(|&b| b == 0xEE));
         assert_eq!(buffer_len(5, Direction::SensorToHost), 13);
         assert_eq!(buffer_len(0, Direction::HostToSensor), 7);
-        let n = emit_telegram(&mut buf, 0x00, 0x31, &[], None);
+        let n = emit_telegram(
+            &mut buf,
+            Head {
+                address: 0x00,
+                command: 0x31,
+            },
+            &[],
+            None,
+        );
         assert_eq!(n, Ok(7));
         assert_eq!(&buf[..7], &STATUS_REQUEST);
     }
@@ -432,21 +447,54 @@ mod tests {
     fn telegram_emit_errors() {
         let mut small = [0u8; 12];
         assert_eq!(
-            emit_telegram(&mut small, 0x80, 0xBB, &[1, 2, 3, 4, 5], Some(0x10)),
+            emit_telegram(
+                &mut small,
+                Head {
+                    address: 0x80,
+                    command: 0xBB
+                },
+                &[1, 2, 3, 4, 5],
+                Some(0x10)
+            ),
             Err(EmitError::BufferTooSmall { needed: 13 })
         );
         let mut big = [0u8; 900];
         let data = [0u8; 812];
         assert_eq!(
-            emit_telegram(&mut big, 0x00, 0x77, &data, None),
+            emit_telegram(
+                &mut big,
+                Head {
+                    address: 0x00,
+                    command: 0x77
+                },
+                &data,
+                None
+            ),
             Err(EmitError::TooLong { len: 813 })
         );
         assert_eq!(
-            emit_telegram(&mut big, 0x00, 0x77, &data[..811], None),
+            emit_telegram(
+                &mut big,
+                Head {
+                    address: 0x00,
+                    command: 0x77
+                },
+                &data[..811],
+                None
+            ),
             Ok(818)
         );
         assert_eq!(
-            emit_telegram_with(&mut big, 0, 0, usize::MAX, Some(0), |_| {}),
+            emit_telegram_with(
+                &mut big,
+                Head {
+                    address: 0,
+                    command: 0
+                },
+                usize::MAX,
+                Some(0),
+                |_| {}
+            ),
             Err(EmitError::TooLong { len: usize::MAX })
         );
     }

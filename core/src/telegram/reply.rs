@@ -23,10 +23,10 @@ use core::fmt;
 
 use super::config::{Config, CONFIG_LEN};
 use super::measured::{MeasuredError, MeasuredView, MEASURED_COMMAND};
-use super::packet::{buffer_len, emit_telegram, EmitError, Telegram};
-use super::status::{StatusBlock, STATUS_BLOCK_LEN};
+use super::packet::{buffer_len, emit_telegram, EmitError, Head, Telegram};
+use super::status::{SensorStatus, StatusBlock, STATUS_BLOCK_LEN};
 use super::{copy_into, le_u16, Direction};
-use crate::frame::Variant;
+use crate::frame::{FovRes, Variant};
 
 /// Command codes of replies.
 pub mod code {
@@ -107,7 +107,10 @@ pub struct VariantReply {
 impl VariantReply {
     /// The variant named by angle and resolution, if the sensor has it.
     pub const fn variant(&self) -> Option<Variant> {
-        Variant::from_fov_res(self.angle_deg, self.resolution_centideg)
+        Variant::from_fov_res(FovRes {
+            fov_deg: self.angle_deg,
+            res_centideg: self.resolution_centideg,
+        })
     }
 }
 
@@ -315,15 +318,22 @@ impl<'a> Reply<'a> {
     /// Write the reply as a telegram from the sensor at `address` (0..=0x7F;
     /// `ADDR = 0x80 | address`) with this `status` byte (typically
     /// [`DEFAULT_STATUS`](super::DEFAULT_STATUS)); returns its length.
-    pub fn emit(&self, address: u8, status: u8, buf: &mut [u8]) -> Result<usize, EmitError> {
+    pub fn emit(
+        &self,
+        address: u8,
+        status: SensorStatus,
+        buf: &mut [u8],
+    ) -> Result<usize, EmitError> {
         let mut scratch = [0u8; CONFIG_LEN + 1];
         let data = self.data(&mut scratch);
         emit_telegram(
             buf,
-            Direction::SensorToHost.address_byte(address),
-            self.command(),
+            Head {
+                address: Direction::SensorToHost.address_byte(address),
+                command: self.command(),
+            },
             data,
-            Some(status),
+            Some(status.0),
         )
     }
 }

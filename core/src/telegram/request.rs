@@ -21,9 +21,9 @@
 use core::fmt;
 
 use super::config::{Config, CONFIG_LEN};
-use super::packet::{buffer_len, emit_telegram, EmitError, Telegram};
+use super::packet::{buffer_len, emit_telegram, EmitError, Head, Telegram};
 use super::{copy_into, le_u16, Direction, REPLY_COMMAND_BIT};
-use crate::frame::Variant;
+use crate::frame::{FovRes, Variant};
 
 /// Command codes of requests.
 pub mod code {
@@ -278,7 +278,10 @@ impl<'a> Request<'a> {
             Request::SetVariant {
                 angle_deg,
                 resolution_centideg,
-            } => Variant::from_fov_res(angle_deg, resolution_centideg),
+            } => Variant::from_fov_res(FovRes {
+                fov_deg: angle_deg,
+                res_centideg: resolution_centideg,
+            }),
             _ => None,
         }
     }
@@ -335,6 +338,14 @@ impl<'a> Request<'a> {
     pub fn emit(&self, address: u8, buf: &mut [u8]) -> Result<usize, EmitError> {
         let mut scratch = [0u8; CONFIG_LEN];
         let data = self.data(&mut scratch);
-        emit_telegram(buf, address, self.command(), data, None)
+        emit_telegram(
+            buf,
+            Head {
+                address,
+                command: self.command(),
+            },
+            data,
+            None,
+        )
     }
 }

@@ -16,7 +16,7 @@
 
 use super::request::Baud;
 use super::{le_u16, put_le_u16};
-use crate::frame::Variant;
+use crate::frame::{FovRes, Variant};
 
 /// Bytes of `B1` data (without the command and the status byte).
 pub const STATUS_BLOCK_LEN: usize = 152;
@@ -173,7 +173,10 @@ impl StatusBlock {
     /// The scan variant, if angle and resolution name one.
     #[inline]
     pub fn variant(&self) -> Option<Variant> {
-        Variant::from_fov_res(self.scan_angle_deg(), self.resolution_centideg())
+        Variant::from_fov_res(FovRes {
+            fov_deg: self.scan_angle_deg(),
+            res_centideg: self.resolution_centideg(),
+        })
     }
 
     /// Baud word, 10⁶ / baud − 1 (payload `[116..=117]`).

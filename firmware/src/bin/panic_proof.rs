@@ -42,7 +42,7 @@ use lms_core::frame::MAX_BEAMS;
 use lms_core::telegram::features::{emit_features, EchoedParams, FeatureAssembler};
 use lms_core::telegram::{
     Config, Direction, Event, Framer, Handshake, MeasuredValues, MeasuredView, RangeBits, Reply,
-    Request, StatusBlock, Telegram, MAX_TELEGRAM_LEN,
+    Request, SensorStatus, StatusBlock, Telegram, MAX_TELEGRAM_LEN,
 };
 use lms_core::Unit;
 use lms_core::{Extractor, Frame, Geometry, Invalid, Params, ValidParams, Variant};
@@ -260,7 +260,7 @@ fn reach_parsers(input: &[u8], out: &mut [u8], assembler: &mut FeatureAssembler)
         let _ = black_box(r.emit(black_box(0), out));
     }
     if let Ok(r) = Reply::parse(&t) {
-        let _ = black_box(r.emit(black_box(0), black_box(0x10), out));
+        let _ = black_box(r.emit(black_box(0), black_box(SensorStatus(0x10)), out));
     }
     if let Ok(v) = MeasuredView::new(input) {
         let _ = black_box(v.to_frame(RangeBits::Bits14));

@@ -225,8 +225,16 @@ mod tests {
     fn sensor_telegram(command: u8, data_len: usize) -> Vec<u8> {
         let mut buf = [0u8; 1024];
         let data = vec![0u8; data_len];
-        let n =
-            lms_core::telegram::emit_telegram(&mut buf, 0x80, command, &data, Some(0x10)).unwrap();
+        let n = lms_core::telegram::emit_telegram(
+            &mut buf,
+            lms_core::telegram::Head {
+                address: 0x80,
+                command,
+            },
+            &data,
+            Some(0x10),
+        )
+        .unwrap();
         buf[..n].to_vec()
     }
 

@@ -1,7 +1,7 @@
 //! The emulator's events: counted, and logged with `--verbose`.
 
 use lms_core::device::emulator::{Emulator, Event, Handled, ScanSource};
-use lms_core::Variant;
+use lms_core::{FovRes, Variant};
 
 use super::line::PtyLine;
 use crate::scan::variant_name;
@@ -92,7 +92,10 @@ fn refused_variant(h: Handled) {
         accepted: false,
     } = h
     {
-        if let Some(v) = Variant::from_fov_res(angle_deg, resolution_centideg) {
+        if let Some(v) = Variant::from_fov_res(FovRes {
+            fov_deg: angle_deg,
+            res_centideg: resolution_centideg,
+        }) {
             eprintln!(
                 "host-bridge simulate: refused variant {}: the scan source \
                  cannot produce it",

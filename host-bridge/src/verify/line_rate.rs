@@ -117,7 +117,7 @@ impl LineRate {
             return;
         };
         let (sender, receiver) = roles(firmware, lms_rate);
-        if rates_match(sender, receiver) {
+        if rates_match(Rates { sender, receiver }) {
             out.extend_from_slice(bytes);
             return;
         }
@@ -141,8 +141,19 @@ impl LineRate {
     }
 }
 
-/// True when a receiver at `receiver` bit/s frames a sender's bytes.
-pub(super) fn rates_match(sender: u32, receiver: u32) -> bool {
+/// The line rates of the two ends of a line (bit/s).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Rates {
+    /// The sender's rate.
+    pub sender: u32,
+    /// The receiver's rate.
+    pub receiver: u32,
+}
+
+/// True when a receiver at `rates.receiver` bit/s frames the bytes of a
+/// sender at `rates.sender`.
+pub(super) fn rates_match(rates: Rates) -> bool {
+    let Rates { sender, receiver } = rates;
     let diff = u64::from(sender.abs_diff(receiver));
     diff * 100 <= u64::from(sender) * u64::from(TOLERANCE_PERCENT)
 }
@@ -153,12 +164,30 @@ mod tests {
 
     #[test]
     fn rates_within_three_percent_match() {
-        assert!(rates_match(9600, 9600));
-        assert!(rates_match(500_000, 500_000));
-        assert!(rates_match(9600, 9880)); // 2.9 %
-        assert!(!rates_match(9600, 9900)); // 3.1 %
-        assert!(!rates_match(500_000, 38_400));
-        assert!(!rates_match(9600, 19_200));
+        assert!(rates_match(Rates {
+            sender: 9600,
+            receiver: 9600
+        }));
+        assert!(rates_match(Rates {
+            sender: 500_000,
+            receiver: 500_000
+        }));
+        assert!(rates_match(Rates {
+            sender: 9600,
+            receiver: 9880
+        })); // 2.9 %
+        assert!(!rates_match(Rates {
+            sender: 9600,
+            receiver: 9900
+        })); // 3.1 %
+        assert!(!rates_match(Rates {
+            sender: 500_000,
+            receiver: 38_400
+        }));
+        assert!(!rates_match(Rates {
+            sender: 9600,
+            receiver: 19_200
+        }));
     }
 
     #[test]

@@ -341,8 +341,8 @@ mod tests {
     use super::*;
 
     /// A run of 10 scans of which `lost` did not come back, with the
-    /// co-processor's counters `counters`.
-    fn outcome(lost: usize, warmup_dropped: usize, counters: Counters) -> Outcome {
+    /// co-processor's counters `counters` (no warm-up scan dropped).
+    fn outcome(lost: usize, counters: Counters) -> Outcome {
         Outcome {
             wanted: 10,
             lost,
@@ -353,7 +353,7 @@ mod tests {
             timeout: Duration::from_secs(60),
             power_cycle: None,
             mcu_reset: None,
-            warmup_dropped,
+            warmup_dropped: 0,
             written_off: 0,
             garbled: (0, 0),
             tally: Tally {
@@ -379,7 +379,7 @@ mod tests {
             host_scans_dropped: 3,
             ..Counters::ZERO
         };
-        let o = outcome(3, 0, counters);
+        let o = outcome(3, counters);
         let why = verdict(&o);
         assert!(
             why.contains("3 scans lost") && why.contains("host_scans_dropped=3"),
@@ -391,7 +391,10 @@ mod tests {
             host_scans_dropped: 4,
             ..Counters::ZERO
         };
-        let why = verdict(&outcome(3, 1, counters));
+        let why = verdict(&Outcome {
+            warmup_dropped: 1,
+            ..outcome(3, counters)
+        });
         assert!(
             why.contains("host_scans_dropped=4, 1 of them warm-up"),
             "{why}"
@@ -402,7 +405,7 @@ mod tests {
     #[test]
     fn counters_that_do_not_add_up_fail_the_run_and_say_so() {
         // Lost scans the co-processor did not count.
-        let why = verdict(&outcome(2, 0, Counters::ZERO));
+        let why = verdict(&outcome(2, Counters::ZERO));
         assert!(why.contains("2 scans lost"), "{why}");
         assert!(
             why.contains(
@@ -416,7 +419,7 @@ mod tests {
             scans_dropped: 1,
             ..Counters::ZERO
         };
-        let o = outcome(0, 0, counters);
+        let o = outcome(0, counters);
         assert!(!o.ok());
         let why = verdict(&o);
         assert!(
@@ -424,7 +427,7 @@ mod tests {
             "{why}"
         );
         // All back, nothing counted: passes.
-        assert!(outcome(0, 0, Counters::ZERO).ok());
+        assert!(outcome(0, Counters::ZERO).ok());
     }
 
     #[test]
@@ -435,7 +438,7 @@ mod tests {
         };
         let written_off = |n: u32, written_off: usize| Outcome {
             written_off,
-            ..outcome(0, 0, dropped(n))
+            ..outcome(0, dropped(n))
         };
         // Seven written off: none, one or all seven counted by the rebooted
         // firmware add up; eight do not.

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::device::emulator::{Emulator, FnSource, Settings};
-use crate::telegram::{ModeResult, Reply, ACK, DEFAULT_STATUS, NAK};
+use crate::telegram::{ModeResult, Reply, SensorStatus, ACK, DEFAULT_STATUS, NAK};
 use std::vec::Vec;
 
 const LIMITS: Limits = Limits {
@@ -14,7 +14,9 @@ const LIMITS: Limits = Limits {
 /// A reply telegram from the sensor at `address`.
 fn reply(address: u8, r: &Reply<'_>) -> Vec<u8> {
     let mut buf = [0u8; MAX_TELEGRAM_LEN];
-    let n = r.emit(address, DEFAULT_STATUS, &mut buf).unwrap();
+    let n = r
+        .emit(address, SensorStatus(DEFAULT_STATUS), &mut buf)
+        .unwrap();
     buf[..n].to_vec()
 }
 
@@ -182,8 +184,16 @@ fn awaited_in_words() {
 #[test]
 fn the_wait_runs_from_the_stream_telegrams_ahead_of_the_reply() {
     let mut b0 = [0u8; 64];
-    let n = crate::telegram::emit_telegram(&mut b0, 0x80, 0xB0, &[2, 0, 1, 0, 1, 0], Some(0x10))
-        .unwrap();
+    let n = crate::telegram::emit_telegram(
+        &mut b0,
+        crate::telegram::Head {
+            address: 0x80,
+            command: 0xB0,
+        },
+        &[2, 0, 1, 0, 1, 0],
+        Some(0x10),
+    )
+    .unwrap();
     let b0 = &b0[..n];
     // Without `wait_behind_stream`: scans change nothing.
     let mut c = sent(&Request::OnRequest);

@@ -56,9 +56,9 @@ impl HostLine {
         self.free_us = start.saturating_add(line_time_us(bytes, baud));
     }
 
-    /// `true` if what is on the line has left by `now_us + within_us`.
-    pub fn free_within(&self, now_us: u64, within_us: u64) -> bool {
-        self.free_us <= now_us.saturating_add(within_us)
+    /// `true` if what is on the line has left by `by_us`.
+    pub fn free_by(&self, by_us: u64) -> bool {
+        self.free_us <= by_us
     }
 
     /// When the line is idle (µs).
@@ -74,12 +74,12 @@ mod tests {
     #[test]
     fn bytes_queue_behind_each_other_at_the_line_rate() {
         let mut line = HostLine::new();
-        assert!(line.free_within(0, 0));
+        assert!(line.free_by(0));
         // 732 bytes at 38400 Bd: 190 625 µs.
         line.occupy(1_000, 732, Baud::B38400);
         assert_eq!(line.free_at_us(), 191_625);
-        assert!(!line.free_within(100_000, 26_667));
-        assert!(line.free_within(165_000, 26_667));
+        assert!(!line.free_by(100_000 + 26_667));
+        assert!(line.free_by(165_000 + 26_667));
         // Written while busy: queued behind.
         line.occupy(2_000, 3, Baud::B9600);
         assert_eq!(line.free_at_us(), 191_625 + 3_125);

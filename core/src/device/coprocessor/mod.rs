@@ -118,10 +118,11 @@ use crate::device::emulator::{
     ValueMode, MIN_TX_CAPACITY, MODE_PARTIAL,
 };
 use crate::features::Features;
+use crate::maths::divisor;
 use crate::params::ValidParams;
 use crate::pipeline::extractor::Extractor;
 use crate::telegram::features::{
-    emit_features_from, BootRecord, Counters, EchoedParams, CMD_FEATURES, REQ_COUNTERS,
+    emit_features_from, BootRecord, Counters, EchoedParams, FeaturesOf, CMD_FEATURES, REQ_COUNTERS,
     REQ_FEATURES,
 };
 use crate::telegram::reply::{self, ModeResult};
@@ -458,15 +459,6 @@ pub struct CoProcessor {
 /// ([`Counters::relays_failed`]) and the face's queue moves on (a sensor
 /// being brought up again may take longer).
 pub const RELAY_TIMEOUT_US: u64 = 2_000_000;
-
-/// The scan whose features the extractor holds: its number (the
-/// `scans_in` count when it came) and its beams, as the feature telegrams
-/// carry them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct FeaturesOf {
-    scan: u32,
-    beams: u16,
-}
 
 /// The feature telegrams of a scan still to go to the host: from index
 /// `next` on (of [`emit_features_from`]), each when the host port has room
@@ -1153,7 +1145,7 @@ impl CoProcessor {
         let period = match self.stream {
             // One partial scan per mirror turn.
             SensorStream::Partial { .. } => {
-                crate::maths::div_u64(scan_period, turns_per_scan(variant))
+                crate::maths::div_u64(scan_period, divisor(turns_per_scan(variant)))
             }
             SensorStream::Values { samples } => {
                 scan_period.saturating_mul(u64::from(samples.max(1)))
@@ -1164,7 +1156,8 @@ impl CoProcessor {
                 return Ok(());
             }
         };
-        let fits = self.fits_now(host, now_us, period, self.link.scan_bytes().len())?;
+        let by_us = now_us.saturating_add(period);
+        let fits = self.fits_now(host, by_us, self.link.scan_bytes().len())?;
         if !fits {
             self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
             return Ok(());
@@ -1177,18 +1170,17 @@ impl CoProcessor {
     }
 
     /// `true` if a stream telegram of `len` bytes may go to the host now:
-    /// the host line is free within `period` (the budget), nothing of the
-    /// latest scan or of the face is half out, and the port has room for
-    /// it whole. (Never inside or ahead of a reply: `drain_host` stops
-    /// only when the face has nothing ready or the port is full.)
+    /// the host line is free by `by_us` (now plus the budget, µs), nothing
+    /// of the latest scan or of the face is half out, and the port has
+    /// room for it whole. (Never inside or ahead of a reply: `drain_host`
+    /// stops only when the face has nothing ready or the port is full.)
     fn fits_now<H: WriteRoom, E>(
         &mut self,
         host: &mut H,
-        now_us: u64,
-        period: u64,
+        by_us: u64,
         len: usize,
     ) -> Result<bool, PollError<E, H::Error>> {
-        if !self.host_line.free_within(now_us, period) || self.host_busy() {
+        if !self.host_line.free_by(by_us) || self.host_busy() {
             return Ok(false);
         }
         Ok(host.write_room().map_err(PollError::Host)? >= len)
@@ -1205,7 +1197,7 @@ impl CoProcessor {
         let rate = self.host.baud();
         let period = crate::device::emulator::scan_period_us(self.host.variant());
         let len = self.link.scan_bytes().len();
-        if !self.fits_now(host, now_us, period, len)? {
+        if !self.fits_now(host, now_us.saturating_add(period), len)? {
             self.counters.host_scans_dropped = self.counters.host_scans_dropped.wrapping_add(1);
             return Ok(false);
         }
@@ -1226,14 +1218,8 @@ impl CoProcessor {
         let mut room = host.write_room().map_err(PollError::Host)?;
         let echoed = EchoedParams::from(self.params.get());
         let (first, mut sent, mut bytes) = (pump.next, 0u32, 0usize);
-        let result = emit_features_from(
-            first,
-            pump.of.scan,
-            pump.of.beams,
-            &echoed,
-            self.extractor.features(),
-            0,
-            |t| {
+        let result =
+            emit_features_from(first, pump.of, &echoed, self.extractor.features(), 0, |t| {
                 // `None`: no room now (the next poll goes on from here).
                 if t.len() > room {
                     return Err(None);
@@ -1242,8 +1228,7 @@ impl CoProcessor {
                 room = room.saturating_sub(t.len());
                 (sent, bytes) = (sent.wrapping_add(1), bytes.saturating_add(t.len()));
                 Ok(())
-            },
-        );
+            });
         self.host_line.occupy(pump.at_us, bytes, self.host.baud());
         self.counters.feature_telegrams_out =
             self.counters.feature_telegrams_out.wrapping_add(sent);

@@ -9,7 +9,9 @@ use proptest::prelude::*;
 use super::*;
 use crate::device::emulator::{partial_values, FnSource};
 use crate::telegram::features::{Assembled, FeatureAssembler};
-use crate::telegram::{emit_telegram, Event as FramerEvent, Framer, Handshake, DEFAULT_PASSWORD};
+use crate::telegram::{
+    emit_telegram, Event as FramerEvent, Framer, Handshake, Head, DEFAULT_PASSWORD,
+};
 use crate::test_support::Port;
 
 type Source = FnSource<std::boxed::Box<dyn FnMut(Variant, Unit, &mut [u16]) -> usize>>;
@@ -94,7 +96,16 @@ impl Bench {
     /// `payload` (command + data) as a host telegram.
     fn telegram(payload: &[u8]) -> Vec<u8> {
         let mut buf = [0u8; 64];
-        let n = emit_telegram(&mut buf, 0, payload[0], &payload[1..], None).unwrap();
+        let n = emit_telegram(
+            &mut buf,
+            Head {
+                address: 0,
+                command: payload[0],
+            },
+            &payload[1..],
+            None,
+        )
+        .unwrap();
         buf[..n].to_vec()
     }
 

@@ -120,6 +120,7 @@ use transmit::{Done, Outgoing, Pending, Stream};
 use heapless::Deque;
 
 use crate::frame::{Invalid, Variant};
+use crate::maths::divisor;
 use crate::telegram::crc::Crc;
 use crate::telegram::measured::{count_word as measured_count_word, MEASURED_COMMAND};
 use crate::telegram::partial_scan_flags;
@@ -127,9 +128,10 @@ use crate::telegram::reply::POWER_ON_LEN;
 use crate::telegram::status::STATUS_BLOCK_LEN;
 use crate::telegram::{
     copy_into, emit_telegram, Baud, Config, Direction, Event as FramerEvent, Framer, FramerStats,
-    Handshake, MeasuredValues, ModeResult, RangeBits, Reply, Request, StatusBlock, StatusFields,
-    VariantReply, ACK, CRC_LEN, DEFAULT_ADDRESS, DEFAULT_PASSWORD, DEFAULT_STATUS, HEADER_LEN,
-    MAX_TELEGRAM_LEN, MAX_VALUES, NAK, REPLY_ADDRESS_BIT, SENSOR_TYPE_LMS200, STX,
+    Handshake, Head, MeasuredValues, ModeResult, RangeBits, Reply, Request, SensorStatus,
+    StatusBlock, StatusFields, VariantReply, ACK, CRC_LEN, DEFAULT_ADDRESS, DEFAULT_PASSWORD,
+    DEFAULT_STATUS, HEADER_LEN, MAX_TELEGRAM_LEN, MAX_VALUES, NAK, REPLY_ADDRESS_BIT,
+    SENSOR_TYPE_LMS200, STX,
 };
 use crate::Unit;
 
@@ -184,7 +186,7 @@ pub const MIN_TX_CAPACITY: usize = 1 + HEADER_LEN + 1 + STATUS_BLOCK_LEN + 1 + C
 pub const fn line_time_us(bytes: usize, baud: Baud) -> u64 {
     let bits = (bytes as u64).saturating_mul(BITS_PER_BYTE);
     let bps = baud.bits_per_second() as u64;
-    crate::maths::div_ceil_u64(bits.saturating_mul(1_000_000), bps)
+    crate::maths::div_ceil_u64(bits.saturating_mul(1_000_000), divisor(bps))
 }
 
 /// Mirror turns per complete scan: 1 at 1°, 2 at 0.5° and 4 at 0.25°
@@ -230,7 +232,7 @@ pub const fn partial_offset_code(variant: Variant, part: u8) -> u8 {
 /// Time between complete scans in continuous mode (µs, rounded): 13333 at
 /// 1°, 26667 at 0.5°, 53333 at 0.25°.
 pub const fn scan_period_us(variant: Variant) -> u64 {
-    crate::maths::div_u64(turns_per_scan(variant) * TURN_US_TIMES_3 + 1, 3)
+    crate::maths::div_u64(turns_per_scan(variant) * TURN_US_TIMES_3 + 1, divisor(3))
 }
 
 /// The simulated sensor (see the [module docs](self)). `TX` is its

@@ -2,8 +2,9 @@
 
 use super::transmit::ReplyKind;
 use super::*;
+use crate::frame::FovRes;
 use crate::telegram::request::code;
-use crate::telegram::Telegram;
+use crate::telegram::{Head, Telegram};
 
 /// A received telegram, copied out of the framer.
 #[derive(Clone, Copy, Debug)]
@@ -52,12 +53,15 @@ struct Classified {
 }
 
 impl Classified {
-    /// A request of `len` (`LEN`) bytes too long to be kept: unknown.
-    fn unknown(address: u8, command: u8, len: u16) -> Self {
+    /// A request `head` of `len` (`LEN`) bytes too long to be kept: unknown.
+    fn unknown(head: Head, len: u16) -> Self {
         Classified {
             incoming: Incoming {
-                address,
-                request: Request::Unknown { command, data: &[] },
+                address: head.address,
+                request: Request::Unknown {
+                    command: head.command,
+                    data: &[],
+                },
             },
             data_len: usize::from(len).saturating_sub(1),
             extra: None,
@@ -140,7 +144,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
                     address,
                     command,
                     len,
-                }) => Some(Classified::unknown(address, command, len)),
+                }) => Some(Classified::unknown(Head { address, command }, len)),
                 Some(FramerEvent::Ack | FramerEvent::Nak) | None => None,
             };
             for _ in 0..naks {
@@ -272,7 +276,13 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             Request::SetVariant {
                 angle_deg,
                 resolution_centideg,
-            } => self.variant_request(now_us, angle_deg, resolution_centideg),
+            } => self.variant_request(
+                now_us,
+                FovRes {
+                    fov_deg: angle_deg,
+                    res_centideg: resolution_centideg,
+                },
+            ),
             Request::ReadConfig => (
                 ReplyKind::Config(self.config),
                 Done::Nothing,
@@ -363,14 +373,8 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
 
     /// `3B`: switch to the variant if it exists and the source supports it;
     /// the `BB` reply names the variant in force either way.
-    fn variant_request(
-        &mut self,
-        now_us: u64,
-        angle_deg: u16,
-        resolution_centideg: u16,
-    ) -> (ReplyKind, Done, Handled) {
-        let wanted = Variant::from_fov_res(angle_deg, resolution_centideg)
-            .filter(|&v| self.source.supports(v));
+    fn variant_request(&mut self, now_us: u64, asked: FovRes) -> (ReplyKind, Done, Handled) {
+        let wanted = Variant::from_fov_res(asked).filter(|&v| self.source.supports(v));
         if let Some(v) = wanted {
             self.set_variant(now_us, v);
         }
@@ -383,8 +387,8 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             }),
             Done::Nothing,
             Handled::SetVariant {
-                angle_deg,
-                resolution_centideg,
+                angle_deg: asked.fov_deg,
+                resolution_centideg: asked.res_centideg,
                 accepted,
             },
         )

@@ -2,7 +2,9 @@
 //! turns (see *Timing* in the module docs).
 
 use super::*;
-use crate::maths::div_u64;
+use core::num::NonZeroU64;
+
+use crate::maths::{div_rem_u64, div_u64, divisor};
 
 /// A reply as decided when its request arrived.
 #[derive(Clone, Copy, Debug)]
@@ -83,22 +85,22 @@ impl Stream {
         self.sent.checked_sub(1)
     }
 
-    /// Time scan `k` is complete (µs).
-    fn tick_us(&self, k: u64, turns: u64) -> u64 {
-        let offset = div_u64(k.saturating_mul(turns * TURN_US_TIMES_3), 3);
+    /// Time scan `k` is complete (µs), `turns` mirror turns per scan.
+    fn tick_us(&self, k: u64, turns: NonZeroU64) -> u64 {
+        let offset = div_u64(k.saturating_mul(turns.get() * TURN_US_TIMES_3), divisor(3));
         self.start_us.saturating_add(offset)
     }
 
     /// The scan to send next when the line is free from `free_us` on: the
     /// newest complete by then if it has not been sent, else the one after
-    /// the last sent. Returns its index and completion time.
-    fn next(&self, free_us: u64, turns: u64) -> (u64, u64) {
+    /// the last sent, `turns` mirror turns per scan. Returns its index and
+    /// completion time.
+    fn next(&self, free_us: u64, turns: NonZeroU64) -> (u64, u64) {
         let free = free_us.max(self.start_us);
         let elapsed = free.saturating_sub(self.start_us);
-        // A zero divisor gives 0: `turns` comes from the value mode's samples too.
         let newest = div_u64(
             elapsed.saturating_mul(3),
-            turns.saturating_mul(TURN_US_TIMES_3),
+            turns.saturating_mul(divisor(TURN_US_TIMES_3)),
         );
         let k = match self.last() {
             Some(last) if newest <= last => last.saturating_add(1),
@@ -158,9 +160,9 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
         // elapsed < 818 bytes at 9600 Bd < 10⁶ µs: no overflow.
         let bits = div_u64(
             elapsed.saturating_mul(u64::from(self.baud.bits_per_second())),
-            1_000_000,
+            divisor(1_000_000),
         );
-        usize::try_from(div_u64(bits, BITS_PER_BYTE))
+        usize::try_from(div_u64(bits, divisor(BITS_PER_BYTE)))
             .unwrap_or(usize::MAX)
             .min(self.tx_len)
     }
@@ -273,7 +275,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             OperatingMode::Values(mode) => self.start_value_scan(tick, mode, done),
             OperatingMode::Partial if TX < TX_CAPACITY => self.set_frame(tick, None, done),
             OperatingMode::Partial => {
-                let part = crate::maths::div_rem_u64(k, turns_per_scan(self.variant)).1 as u8;
+                let part = div_rem_u64(k, divisor(turns_per_scan(self.variant))).1 as u8;
                 self.start_partial_scan(tick, part, done);
             }
             _ => self.start_scan(tick, false, done),
@@ -317,15 +319,15 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
     }
 
     /// Mirror turns per stream telegram: a scan's, times the samples of a
-    /// mean value mode.
-    fn stream_turns(&self) -> u64 {
+    /// mean value mode; at least 1.
+    fn stream_turns(&self) -> NonZeroU64 {
         let samples = match self.mode {
             OperatingMode::Values(m) => u64::from(m.samples()),
             // One partial scan per mirror turn.
-            OperatingMode::Partial => return 1,
+            OperatingMode::Partial => return NonZeroU64::MIN,
             _ => 1,
         };
-        turns_per_scan(self.variant).saturating_mul(samples.max(1))
+        divisor(turns_per_scan(self.variant).saturating_mul(samples.max(1)))
     }
 
     /// A `B6`/`B7`/`BF` of the value mode: `samples` scans from the source,
@@ -353,7 +355,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
         let values = scan
             .get(start..start.saturating_add(count))
             .unwrap_or_default();
-        let (address, status) = (self.settings.address, self.settings.status);
+        let (address, status) = (self.settings.address, SensorStatus(self.settings.status));
         let index = self.index_byte();
         let n = mode.emit_with_index(address, status, units, values, index, &mut self.tx);
         self.set_frame(ready_us, n.ok(), done);
@@ -414,7 +416,8 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             // Taken in `advance`.
             Outgoing::Relay { .. } => {}
             Outgoing::PowerOn => {
-                let n = Reply::PowerOn(POWER_ON_DATA).emit(address, status, &mut self.tx);
+                let n =
+                    Reply::PowerOn(POWER_ON_DATA).emit(address, SensorStatus(status), &mut self.tx);
                 self.set_frame(ready_us, n.ok(), Done::PowerOn);
             }
             Outgoing::Reply {
@@ -446,8 +449,10 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
                         let n = self.emit_after_ack(|buf| {
                             emit_telegram(
                                 buf,
-                                REPLY_ADDRESS_BIT | address,
-                                command,
+                                Head {
+                                    address: REPLY_ADDRESS_BIT | address,
+                                    command,
+                                },
                                 data,
                                 Some(status),
                             )
@@ -456,7 +461,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
                         return;
                     }
                 };
-                let n = self.emit_after_ack(|buf| reply.emit(address, status, buf));
+                let n = self.emit_after_ack(|buf| reply.emit(address, SensorStatus(status), buf));
                 self.set_frame(ready_us, n.ok(), then);
             }
         }

@@ -17,7 +17,9 @@
 //! code in any of the `n` scans is sent as that code (the last one).
 
 use crate::frame::Variant;
-use crate::telegram::{emit_telegram_with, EmitError, RangeBits, REPLY_ADDRESS_BIT};
+use crate::telegram::{
+    emit_telegram_with, EmitError, Head, RangeBits, SensorStatus, REPLY_ADDRESS_BIT,
+};
 use crate::Unit;
 
 /// `20 26`: mean values.
@@ -138,7 +140,7 @@ impl ValueMode {
     pub fn emit(
         self,
         address: u8,
-        status: u8,
+        status: SensorStatus,
         units: Unit,
         values: &[u16],
         buf: &mut [u8],
@@ -151,7 +153,7 @@ impl ValueMode {
     pub fn emit_with_index(
         self,
         address: u8,
-        status: u8,
+        status: SensorStatus,
         units: Unit,
         values: &[u16],
         index: Option<u8>,
@@ -184,10 +186,12 @@ impl ValueMode {
         let len = prefix.len() + 2 + 2 * values.len() + usize::from(index.is_some());
         emit_telegram_with(
             buf,
-            REPLY_ADDRESS_BIT | address,
-            self.reply_code(),
+            Head {
+                address: REPLY_ADDRESS_BIT | address,
+                command: self.reply_code(),
+            },
             len,
-            Some(status),
+            Some(status.0),
             |d| {
                 for (slot, b) in d.iter_mut().zip(prefix.iter().copied()) {
                     *slot = b;
@@ -291,7 +295,13 @@ mod tests {
         let mut buf = [0u8; 32];
         let sub = ValueMode::Subrange { first: 1, last: 2 };
         let n = sub
-            .emit(0, 0x10, Unit::Centimetre, &[100, 200], &mut buf)
+            .emit(
+                0,
+                SensorStatus(0x10),
+                Unit::Centimetre,
+                &[100, 200],
+                &mut buf,
+            )
             .unwrap();
         assert_eq!(
             &buf[..n - 2],
@@ -305,7 +315,14 @@ mod tests {
         let mut buf = [0u8; 32];
         let sub = ValueMode::Subrange { first: 1, last: 2 };
         let n = sub
-            .emit_with_index(0, 0x10, Unit::Centimetre, &[100, 200], Some(0x2C), &mut buf)
+            .emit_with_index(
+                0,
+                SensorStatus(0x10),
+                Unit::Centimetre,
+                &[100, 200],
+                Some(0x2C),
+                &mut buf,
+            )
             .unwrap();
         assert_eq!(
             &buf[..n - 2],
