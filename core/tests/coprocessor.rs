@@ -395,16 +395,7 @@ fn brings_the_sensor_up_and_streams_bit_identical_features() {
     bench.run(100_000);
     bench.host.tx.clear();
     let mut buf = [0u8; 16];
-    let n = emit_telegram(
-        &mut buf,
-        Head {
-            address: 0,
-            command: REQ_COUNTERS,
-        },
-        &[],
-        None,
-    )
-    .unwrap();
+    let n = emit_telegram(&mut buf, Head::to_sensor(REQ_COUNTERS), &[], None).unwrap();
     bench.host.rx.extend(&buf[..n]);
     bench.run(10_000);
     let reply = std::mem::take(&mut bench.host.tx);
@@ -682,16 +673,7 @@ fn a_relayed_reply_goes_out_before_the_stream_it_starts() {
     // chunk (found under load: a B7 reached the client before the A0).
     bench.host.tx.clear();
     let mut buf = [0u8; 64];
-    let n = emit_telegram(
-        &mut buf,
-        Head {
-            address: 0,
-            command: 0x20,
-        },
-        &[0x27, 10, 0, 60, 0],
-        None,
-    )
-    .unwrap();
+    let n = emit_telegram(&mut buf, Head::to_sensor(0x20), &[0x27, 10, 0, 60, 0], None).unwrap();
     bench.host.rx.extend(&buf[..n]);
     bench.run_in_steps(400_000, 20_000);
     let (codes, acks) = commands(&std::mem::take(&mut bench.host.tx));

@@ -397,16 +397,7 @@ fn bring_up(bench: &mut Bench, client: &mut Vec<u8>) {
         bench.step(&mut pass, &mut pass2, client);
     }
     let mut on = [0u8; 16];
-    let n = lms_core::telegram::emit_telegram(
-        &mut on,
-        Head {
-            address: 0,
-            command: 0x56,
-        },
-        &[1],
-        None,
-    )
-    .unwrap();
+    let n = lms_core::telegram::emit_telegram(&mut on, Head::to_sensor(0x56), &[1], None).unwrap();
     bench.send_host(&on[..n]);
     for _ in 0..50 {
         bench.step(&mut pass, &mut pass2, client);
@@ -770,16 +761,7 @@ fn damaged_requests_are_refused() {
     let mut client = Vec::new();
     bring_up(&mut bench, &mut client);
     let mut counters = [0u8; 16];
-    let n = emit_telegram(
-        &mut counters,
-        Head {
-            address: 0,
-            command: REQ_COUNTERS,
-        },
-        &[],
-        None,
-    )
-    .unwrap();
+    let n = emit_telegram(&mut counters, Head::to_sensor(REQ_COUNTERS), &[], None).unwrap();
     let counters = counters[..n].to_vec();
     let stop = request(Request::OnRequest);
     let mut pass = |_: u64, t: Option<&[u8]>, out: &mut Vec<u8>| out.extend(t.unwrap_or(&[]));

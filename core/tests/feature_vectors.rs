@@ -140,16 +140,7 @@ fn the_worked_example_parses_back_to_the_same_bits() {
 #[test]
 fn counters_request_and_reply_are_byte_exact() {
     let mut buf = [0u8; 96];
-    let n = emit_telegram(
-        &mut buf,
-        Head {
-            address: 0x00,
-            command: REQ_COUNTERS,
-        },
-        &[],
-        None,
-    )
-    .unwrap();
+    let n = emit_telegram(&mut buf, Head::to_sensor(REQ_COUNTERS), &[], None).unwrap();
     assert_eq!(buf[..n], bytes(COUNTERS_REQUEST)[..]);
     let c = Counters {
         scans_in: 1000,
@@ -196,23 +187,11 @@ fn feature_opt_in_request_and_reply_are_byte_exact() {
         (1u8, FEATURES_ON, FEATURES_ON_REPLY),
         (0, FEATURES_OFF, FEATURES_OFF_REPLY),
     ] {
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0x00,
-                command: REQ_FEATURES,
-            },
-            &[state],
-            None,
-        )
-        .unwrap();
+        let n = emit_telegram(&mut buf, Head::to_sensor(REQ_FEATURES), &[state], None).unwrap();
         assert_eq!(buf[..n], bytes(request)[..]);
         let n = emit_telegram(
             &mut buf,
-            Head {
-                address: 0x80,
-                command: CMD_FEATURES,
-            },
+            Head::from_sensor(CMD_FEATURES),
             &[state],
             Some(0x10),
         )

@@ -384,16 +384,7 @@ fn a_request_longer_than_the_face_keeps_is_answered_and_counted() {
     bench.send(0x77, &data);
     bench.run(100_000);
     let mut buf = [0u8; 128];
-    let n = emit_telegram(
-        &mut buf,
-        Head {
-            address: 0,
-            command: 0x68,
-        },
-        &data,
-        None,
-    )
-    .unwrap();
+    let n = emit_telegram(&mut buf, Head::to_sensor(0x68), &data, None).unwrap();
     buf[80] ^= 0x10;
     bench.host.rx.extend(&buf[..n]);
     bench.send(REQ_COUNTERS, &[]);

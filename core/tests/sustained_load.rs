@@ -145,16 +145,7 @@ fn sustained(scans: u32) -> Report {
         if request == Request::Continuous {
             break;
         }
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0,
-                command: REQ_FEATURES,
-            },
-            &[1],
-            None,
-        )
-        .unwrap();
+        let n = emit_telegram(&mut buf, Head::to_sensor(REQ_FEATURES), &[1], None).unwrap();
         host.rx.extend(&buf[..n]);
     }
     let (mut polls, mut poll_time, mut scan_poll_max) = (0u64, Duration::ZERO, Duration::ZERO);
@@ -374,16 +365,7 @@ fn client_requests(baud: Baud, features: bool) -> Vec<u8> {
         out.extend_from_slice(&buf[..n]);
     }
     if features {
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0,
-                command: REQ_FEATURES,
-            },
-            &[1],
-            None,
-        )
-        .unwrap();
+        let n = emit_telegram(&mut buf, Head::to_sensor(REQ_FEATURES), &[1], None).unwrap();
         out.extend_from_slice(&buf[..n]);
     }
     let n = Request::Continuous.emit(0, &mut buf).unwrap();

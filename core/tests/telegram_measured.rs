@@ -162,16 +162,8 @@ fn telegram_b0_errors() {
     let mut data = vec![0x69, 0x01];
     data.extend(std::iter::repeat_n(0x10, 720));
     let mut buf = vec![0u8; 800];
-    let n = lms_core::telegram::emit_telegram(
-        &mut buf,
-        Head {
-            address: 0x80,
-            command: 0xB0,
-        },
-        &data,
-        Some(0x10),
-    )
-    .unwrap();
+    let n = lms_core::telegram::emit_telegram(&mut buf, Head::from_sensor(0xB0), &data, Some(0x10))
+        .unwrap();
     let t = Telegram::new_checked(&buf[..n], Direction::SensorToHost).unwrap();
     let mismatch = MeasuredError::LengthMismatch {
         count: 361,

@@ -394,16 +394,7 @@ fn value_mode_telegrams_are_byte_exact() {
             },
         ),
     ] {
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0,
-                command: 0x20,
-            },
-            data,
-            None,
-        )
-        .unwrap();
+        let n = emit_telegram(&mut buf, Head::to_sensor(0x20), data, None).unwrap();
         assert_eq!(buf[..n], hex(text)[..]);
         assert_eq!(ValueMode::parse(0x20, data), Some(mode));
     }

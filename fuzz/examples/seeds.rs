@@ -503,10 +503,7 @@ fn main() {
         let mut b = [0u8; 16];
         let n = lms_core::telegram::emit_telegram(
             &mut b,
-            Head {
-                address: 0,
-                command: lms_core::telegram::features::REQ_COUNTERS,
-            },
+            Head::to_sensor(lms_core::telegram::features::REQ_COUNTERS),
             &[],
             None,
         )

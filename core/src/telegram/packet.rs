@@ -313,6 +313,24 @@ pub struct Head {
     pub command: u8,
 }
 
+impl Head {
+    /// `command` from a host to the sensor at address 0 (`ADDR` 0x00).
+    pub const fn to_sensor(command: u8) -> Head {
+        Head {
+            address: 0x00,
+            command,
+        }
+    }
+
+    /// `command` from the sensor at address 0 to its host (`ADDR` 0x80).
+    pub const fn from_sensor(command: u8) -> Head {
+        Head {
+            address: super::REPLY_ADDRESS_BIT,
+            command,
+        }
+    }
+}
+
 /// Write a complete telegram `STX | address | LEN | command | data |
 /// [status] | CRC` into `buf`; returns its length in bytes.
 ///
@@ -322,7 +340,7 @@ pub struct Head {
 /// ```
 /// use lms_core::telegram::{emit_telegram, Head};
 /// let mut buf = [0u8; 8];
-/// assert_eq!(emit_telegram(&mut buf, Head { address: 0x80, command: 0x92 }, &[], Some(0x10)), Ok(8));
+/// assert_eq!(emit_telegram(&mut buf, Head::from_sensor(0x92), &[], Some(0x10)), Ok(8));
 /// assert_eq!(buf, [0x02, 0x80, 0x02, 0x00, 0x92, 0x10, 0x7F, 0x33]);
 /// ```
 pub fn emit_telegram(
@@ -418,10 +436,7 @@ mod tests {
         let mut buf = [0xEEu8; 20];
         let n = emit_telegram(
             &mut buf,
-            Head {
-                address: 0x80,
-                command: 0xBB,
-            },
+            Head::from_sensor(0xBB),
             &[0x01, 0xB4, 0x00, 0x32, 0x00],
             Some(0x10),
         );
@@ -430,15 +445,7 @@ mod tests {
         assert!(buf[13..].iter().all(|&b| b == 0xEE));
         assert_eq!(buffer_len(5, Direction::SensorToHost), 13);
         assert_eq!(buffer_len(0, Direction::HostToSensor), 7);
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0x00,
-                command: 0x31,
-            },
-            &[],
-            None,
-        );
+        let n = emit_telegram(&mut buf, Head::to_sensor(0x31), &[], None);
         assert_eq!(n, Ok(7));
         assert_eq!(&buf[..7], &STATUS_REQUEST);
     }
@@ -449,10 +456,7 @@ mod tests {
         assert_eq!(
             emit_telegram(
                 &mut small,
-                Head {
-                    address: 0x80,
-                    command: 0xBB
-                },
+                Head::from_sensor(0xBB),
                 &[1, 2, 3, 4, 5],
                 Some(0x10)
             ),
@@ -461,40 +465,15 @@ mod tests {
         let mut big = [0u8; 900];
         let data = [0u8; 812];
         assert_eq!(
-            emit_telegram(
-                &mut big,
-                Head {
-                    address: 0x00,
-                    command: 0x77
-                },
-                &data,
-                None
-            ),
+            emit_telegram(&mut big, Head::to_sensor(0x77), &data, None),
             Err(EmitError::TooLong { len: 813 })
         );
         assert_eq!(
-            emit_telegram(
-                &mut big,
-                Head {
-                    address: 0x00,
-                    command: 0x77
-                },
-                &data[..811],
-                None
-            ),
+            emit_telegram(&mut big, Head::to_sensor(0x77), &data[..811], None),
             Ok(818)
         );
         assert_eq!(
-            emit_telegram_with(
-                &mut big,
-                Head {
-                    address: 0,
-                    command: 0
-                },
-                usize::MAX,
-                Some(0),
-                |_| {}
-            ),
+            emit_telegram_with(&mut big, Head::to_sensor(0), usize::MAX, Some(0), |_| {}),
             Err(EmitError::TooLong { len: usize::MAX })
         );
     }

@@ -85,15 +85,7 @@ impl Session {
     /// The co-processor's counters (`55` → `D5`).
     pub(super) fn counters(&mut self, deadline: Instant) -> Result<Counters> {
         let mut buf = [0u8; 16];
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0,
-                command: REQ_COUNTERS,
-            },
-            &[],
-            None,
-        )?;
+        let n = emit_telegram(&mut buf, Head::to_sensor(REQ_COUNTERS), &[], None)?;
         let data = self.exchange(&buf[..n], CMD_COUNTERS, "55 (counters)", deadline)?;
         Counters::decode(&data).context("malformed D5 counters")
     }
@@ -102,15 +94,7 @@ impl Session {
     /// off by default, so that the host line carries only what an LMS would.
     pub(super) fn features_on(&mut self, deadline: Instant) -> Result<()> {
         let mut buf = [0u8; 16];
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0,
-                command: REQ_FEATURES,
-            },
-            &[1],
-            None,
-        )?;
+        let n = emit_telegram(&mut buf, Head::to_sensor(REQ_FEATURES), &[1], None)?;
         let data = self.exchange(&buf[..n], CMD_FEATURES, "56 01 (features on)", deadline)?;
         ensure!(
             data == [1],

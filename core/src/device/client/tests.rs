@@ -186,10 +186,7 @@ fn the_wait_runs_from_the_stream_telegrams_ahead_of_the_reply() {
     let mut b0 = [0u8; 64];
     let n = crate::telegram::emit_telegram(
         &mut b0,
-        crate::telegram::Head {
-            address: 0x80,
-            command: 0xB0,
-        },
+        crate::telegram::Head::from_sensor(0xB0),
         &[2, 0, 1, 0, 1, 0],
         Some(0x10),
     )

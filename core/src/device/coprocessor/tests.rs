@@ -96,16 +96,7 @@ impl Bench {
     /// `payload` (command + data) as a host telegram.
     fn telegram(payload: &[u8]) -> Vec<u8> {
         let mut buf = [0u8; 64];
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0,
-                command: payload[0],
-            },
-            &payload[1..],
-            None,
-        )
-        .unwrap();
+        let n = emit_telegram(&mut buf, Head::to_sensor(payload[0]), &payload[1..], None).unwrap();
         buf[..n].to_vec()
     }
 
