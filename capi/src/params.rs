@@ -128,40 +128,44 @@ fn flag(v: u8) -> Result<bool, c_int> {
 impl LmsParams {
     /// The core's parameters, validated.
     pub(crate) fn validated(&self) -> Result<ValidParams, c_int> {
-        let p = Params {
-            sigma: self.sigma,
-            q: self.q,
-            iterations: self.iterations,
-            tau: self.tau,
-            min_points: self.min_points,
-            max_chi2: self.max_chi2,
-            min_length: self.min_length,
-            fit_shared_points: flag(self.fit_shared_points)?,
-            merge: flag(self.merge)?,
-            merge_gap_beams: self.merge_gap_beams,
-            merge_gate: self.merge_gate,
-            corner_gap: self.corner_gap,
-            min_corner_angle_deg: self.min_corner_angle_deg,
-            split_depth: self.split_depth,
-            max_range: self.max_range,
-            merge_collinear: flag(self.merge_collinear)?,
-            max_alpha_sd_deg: self.max_alpha_sd_deg,
-            grazing_noise: self.grazing_noise,
-            same_turn_windows: flag(self.same_turn_windows)?,
-            fit_sigma: self.fit_sigma,
-            per_turn: flag(self.per_turn)?,
-            bridge_merge: flag(self.bridge_merge)?,
-            footprint: self.footprint,
-            arc_chain: self.arc_chain,
-            arc_min_turn_deg: self.arc_min_turn_deg,
-            arc_max_turn_deg: self.arc_max_turn_deg,
-            split_budget: self.split_budget,
-            merge_anchor_gate: self.merge_anchor_gate,
-            turn_offsets: flag(self.turn_offsets)?,
-            merge_f_test: self.merge_f_test,
-            arc_pairs: flag(self.arc_pairs)?,
-        };
-        p.validate().map_err(param_code)
+        self.core_params()?.validate().map_err(param_code)
+    }
+
+    /// The core's parameters, not validated; `LMS_ERR_FLAG` for a flag
+    /// that is neither 0 nor 1.
+    fn core_params(&self) -> Result<Params, c_int> {
+        Ok(Params::DEFAULT
+            .with_sigma(self.sigma)
+            .with_q(self.q)
+            .with_iterations(self.iterations)
+            .with_tau(self.tau)
+            .with_min_points(self.min_points)
+            .with_max_chi2(self.max_chi2)
+            .with_min_length(self.min_length)
+            .with_fit_shared_points(flag(self.fit_shared_points)?)
+            .with_merge(flag(self.merge)?)
+            .with_merge_gap_beams(self.merge_gap_beams)
+            .with_merge_gate(self.merge_gate)
+            .with_corner_gap(self.corner_gap)
+            .with_min_corner_angle_deg(self.min_corner_angle_deg)
+            .with_split_depth(self.split_depth)
+            .with_max_range(self.max_range)
+            .with_merge_collinear(flag(self.merge_collinear)?)
+            .with_max_alpha_sd_deg(self.max_alpha_sd_deg)
+            .with_grazing_noise(self.grazing_noise)
+            .with_same_turn_windows(flag(self.same_turn_windows)?)
+            .with_fit_sigma(self.fit_sigma)
+            .with_per_turn(flag(self.per_turn)?)
+            .with_bridge_merge(flag(self.bridge_merge)?)
+            .with_footprint(self.footprint)
+            .with_arc_chain(self.arc_chain)
+            .with_arc_min_turn_deg(self.arc_min_turn_deg)
+            .with_arc_max_turn_deg(self.arc_max_turn_deg)
+            .with_split_budget(self.split_budget)
+            .with_merge_anchor_gate(self.merge_anchor_gate)
+            .with_turn_offsets(flag(self.turn_offsets)?)
+            .with_merge_f_test(self.merge_f_test)
+            .with_arc_pairs(flag(self.arc_pairs)?))
     }
 }
 
@@ -245,6 +249,30 @@ mod tests {
             unsafe { lms_params_preset(core::ptr::null(), &mut out) },
             LMS_ERR_NULL
         );
+    }
+
+    /// Every field of `Params` to a value of its own and back: a field
+    /// `LmsParams` leaves out, or one it writes to another, fails.
+    #[test]
+    fn every_field_is_mirrored() {
+        let (mut x, mut n, mut b) = (0.0f32, 0u16, false);
+        let p = Params::from_sources(
+            || {
+                x += 1.0;
+                x
+            },
+            || {
+                n += 1;
+                n
+            },
+            || {
+                b = !b;
+                b
+            },
+        );
+        assert_eq!(LmsParams::from(&p).core_params(), Ok(p));
+        let flips = Params::from_sources(|| 0.5, || 2, || true);
+        assert_eq!(LmsParams::from(&flips).core_params(), Ok(flips));
     }
 
     #[test]

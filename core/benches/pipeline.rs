@@ -28,26 +28,19 @@ use criterion::{
 use lms_core::{test_support, Extractor, Frame, Params};
 
 /// The defaults with pairs of lines kept whatever a circle says of them.
-const ARC_PAIRS_KEPT: Params = Params {
-    arc_pairs: false,
-    ..Params::DEFAULT
-};
+const ARC_PAIRS_KEPT: Params = Params::DEFAULT.with_arc_pairs(false);
 
 /// [`ARC_PAIRS_KEPT`] with no anchor gate on the merges and no turn offsets
 /// in the fits' χ².
-const NO_ANCHOR_GATE: Params = Params {
-    merge_anchor_gate: f32::INFINITY,
-    turn_offsets: false,
-    ..ARC_PAIRS_KEPT
-};
+const NO_ANCHOR_GATE: Params = ARC_PAIRS_KEPT
+    .with_merge_anchor_gate(f32::INFINITY)
+    .with_turn_offsets(false);
 
 /// [`NO_ANCHOR_GATE`] with windows of consecutive beams in every mode
 /// (§2–6) and no work bound on split before reject.
-const CONSECUTIVE_WINDOWS: Params = Params {
-    same_turn_windows: false,
-    split_budget: 0,
-    ..NO_ANCHOR_GATE
-};
+const CONSECUTIVE_WINDOWS: Params = NO_ANCHOR_GATE
+    .with_same_turn_windows(false)
+    .with_split_budget(0);
 
 /// All FLASER frames of the CSAIL log through the one CARMEN reader
 /// (`lms_core::test_support`; 361 beams, cm error codes invalid).
@@ -69,16 +62,10 @@ fn pipeline(c: &mut Criterion) {
     group.sample_size(10);
     group.warm_up_time(Duration::from_secs(1));
     group.measurement_time(Duration::from_secs(3));
-    let cm = Params {
-        sigma: 0.01,
-        ..Params::default()
-    };
+    let cm = Params::default().with_sigma(0.01);
     let cases = [1u16, 20, 30]
         .map(|passes| {
-            let params = Params {
-                iterations: passes,
-                ..Params::default()
-            };
+            let params = Params::default().with_iterations(passes);
             (BenchmarkId::new("passes", passes), params)
         })
         .into_iter()
@@ -86,39 +73,24 @@ fn pipeline(c: &mut Criterion) {
             (BenchmarkId::new("sigma_10mm", 30), cm),
             (
                 BenchmarkId::new("sigma_10mm_per_turn", 30),
-                Params {
-                    per_turn: true,
-                    ..cm
-                },
+                cm.with_per_turn(true),
             ),
             (
                 BenchmarkId::new("arc_pairs_kept_sigma_10mm", 30),
-                Params {
-                    sigma: 0.01,
-                    ..ARC_PAIRS_KEPT
-                },
+                ARC_PAIRS_KEPT.with_sigma(0.01),
             ),
             (
                 BenchmarkId::new("no_anchor_gate_sigma_10mm", 30),
-                Params {
-                    sigma: 0.01,
-                    ..NO_ANCHOR_GATE
-                },
+                NO_ANCHOR_GATE.with_sigma(0.01),
             ),
             (
                 BenchmarkId::new("consecutive_windows_sigma_10mm", 30),
-                Params {
-                    sigma: 0.01,
-                    ..CONSECUTIVE_WINDOWS
-                },
+                CONSECUTIVE_WINDOWS.with_sigma(0.01),
             ),
             (BenchmarkId::new("v2", 30), Params::V2),
             (
                 BenchmarkId::new("v2_sigma_10mm", 30),
-                Params {
-                    sigma: 0.01,
-                    ..Params::V2
-                },
+                Params::V2.with_sigma(0.01),
             ),
         ]);
     for (id, params) in cases {

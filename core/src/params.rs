@@ -7,13 +7,17 @@ use core::fmt;
 mod data;
 mod table;
 pub use data::{max_range_of, sigma_for_step, DataProfile, DataSurvey, RangeMode};
-pub use table::{field, preset, Field, Preset, Value, FIELDS, PRESETS};
+pub use table::{field, preset, Field, Preset, Range, Value, FIELDS, HOST_ONLY, PRESETS};
 
-/// All tunable parameters. Build with [`Params::default`] and adjust the
-/// fields; [`Params::validate`] refuses nonsense and gives the
-/// [`ValidParams`] the pipeline runs with.
+/// All tunable parameters. Start from a preset ([`Params::DEFAULT`],
+/// [`Params::V2`], [`Params::PAPER`]) and change fields with the `const`
+/// setters, e.g. `Params::DEFAULT.with_iterations(5).with_tau(9.0)`;
+/// [`Params::validate`] refuses nonsense and gives the [`ValidParams`] the
+/// pipeline runs with. Each field's name, unit, range and meaning are
+/// declared once, in [`FIELDS`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct Params {
     /// Range noise standard deviation `sigma` (m). Default 0.005 (LMS 2xx, mm mode).
     pub sigma: f32,
@@ -315,12 +319,6 @@ impl Params {
     };
 }
 
-/// The parameters only a build with feature `section10` runs (the host
-/// crates; the firmware leaves them out): any other value than the default
-/// fails validation elsewhere ([`ParamError::NotInBuild`]), and the
-/// co-processor paths of the host refuse them.
-pub const HOST_ONLY: [&str; 4] = ["grazing_noise", "fit_sigma", "per_turn", "merge_f_test"];
-
 /// Whether this build of the core has the ALGORITHM.md §10 options
 /// (feature `section10`; [`ParamError::NotInBuild`] without it).
 pub const SECTION10_BUILT: bool = cfg!(feature = "section10");
@@ -331,54 +329,39 @@ pub const MAX_ITERATIONS: u16 = 1000;
 /// Largest accepted [`Params::split_depth`].
 pub const MAX_SPLIT_DEPTH: u8 = 16;
 
+// The ranges of the declaration ([`FIELDS`]) take these two limits.
+const _: () = {
+    let d = Params::DEFAULT;
+    assert!(d.with_iterations(MAX_ITERATIONS).out_of_range().is_none());
+    assert!(d
+        .with_iterations(MAX_ITERATIONS + 1)
+        .out_of_range()
+        .is_some());
+    assert!(d.with_split_depth(MAX_SPLIT_DEPTH).out_of_range().is_none());
+    assert!(d
+        .with_split_depth(MAX_SPLIT_DEPTH + 1)
+        .out_of_range()
+        .is_some());
+};
+
 /// A parameter that makes no sense; names the field.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum ParamError {
-    /// `sigma` must be finite and > 0.
-    Sigma,
-    /// `q` must be finite and ≥ 0.
-    ProcessNoise,
-    /// `iterations` must be in 1..=[`MAX_ITERATIONS`].
-    Iterations,
-    /// `tau` must be finite and > 0.
-    Tau,
-    /// `min_points` must be ≥ 3.
-    MinPoints,
-    /// `max_chi2` must be finite and > 0.
-    MaxChi2,
-    /// `min_length` must be finite and ≥ 0.
-    MinLength,
-    /// `merge_gate` must be finite and > 0.
-    MergeGate,
-    /// `corner_gap` must be finite and ≥ 0.
-    CornerGap,
-    /// `min_corner_angle_deg` must be in 0..=90.
-    MinCornerAngle,
-    /// `split_depth` must be at most [`MAX_SPLIT_DEPTH`].
-    SplitDepth,
-    /// `max_range` must be > 0 (`+inf` allowed).
-    MaxRange,
-    /// `max_alpha_sd_deg` must be > 0 (`+inf` allowed).
-    MaxAlphaSd,
-    /// `merge_anchor_gate` must be > 0 (`+inf` allowed).
-    MergeAnchorGate,
-    /// `merge_f_test` must be finite and ≥ 0.
-    MergeFTest,
-    /// `grazing_noise` must be finite and ≥ 0.
-    GrazingNoise,
-    /// `fit_sigma` must be finite and ≥ 0.
-    FitSigma,
-    /// `footprint` must be finite and ≥ 0.
-    Footprint,
+    /// A field outside its own range ([`Field::range`] of [`FIELDS`]).
+    OutOfRange {
+        /// The field of [`Params`].
+        name: &'static str,
+        /// The values it takes, e.g. "finite and > 0".
+        range: &'static str,
+    },
     /// `arc_chain` must be 0 or ≥ 2, and `0 ≤ arc_min_turn_deg ≤
     /// arc_max_turn_deg ≤ 180`.
     Arc,
-    /// An ALGORITHM.md §10 option (`grazing_noise`, `fit_sigma`,
-    /// `per_turn`, `merge_f_test`; named by `option`) has a non-default value, but this
-    /// build of the core leaves the §10 options out (feature `section10`
-    /// off, as in the firmware).
+    /// An ALGORITHM.md §10 option (one of [`HOST_ONLY`], named by
+    /// `option`) has a non-default value, but this build of the core leaves
+    /// the §10 options out (feature `section10` off, as in the firmware).
     NotInBuild {
         /// The field of [`Params`].
         option: &'static str,
@@ -397,46 +380,26 @@ pub enum ParamError {
 
 impl fmt::Display for ParamError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if let ParamError::BadValue { name, expected } = self {
-            return write!(f, "{name} must be {expected}");
-        }
-        if let ParamError::NotInBuild { option } = self {
-            return write!(
+        match self {
+            ParamError::OutOfRange { name, range } => {
+                write!(f, "{name} must be {range}")?;
+                match field(name).map(|field| field.unit) {
+                    Some(unit) if unit != "-" && unit != "bool" => write!(f, " ({unit})"),
+                    _ => Ok(()),
+                }
+            }
+            ParamError::BadValue { name, expected } => write!(f, "{name} must be {expected}"),
+            ParamError::NotInBuild { option } => write!(
                 f,
                 "{option} is an ALGORITHM.md §10 option that this build leaves out \
                  (lms-core without feature `section10`, as in the firmware): leave it at its default"
-            );
-        }
-        f.write_str(match self {
-            ParamError::Sigma => "sigma must be finite and > 0 (metres)",
-            ParamError::ProcessNoise => "q must be finite and >= 0 (m^2)",
-            ParamError::Iterations => "iterations must be between 1 and 1000",
-            ParamError::Tau => "tau must be finite and > 0",
-            ParamError::MinPoints => "min_points must be at least 3",
-            ParamError::MaxChi2 => "max_chi2 must be finite and > 0",
-            ParamError::MinLength => "min_length must be finite and >= 0 (metres)",
-            ParamError::MergeGate => "merge_gate must be finite and > 0",
-            ParamError::CornerGap => "corner_gap must be finite and >= 0 (metres)",
-            ParamError::MinCornerAngle => "min_corner_angle_deg must be between 0 and 90",
-            ParamError::SplitDepth => "split_depth must be at most 16",
-            ParamError::MaxRange => "max_range must be > 0 (metres; inf for no limit)",
-            ParamError::MaxAlphaSd => "max_alpha_sd_deg must be > 0 (degrees; inf for no limit)",
-            ParamError::MergeAnchorGate => {
-                "merge_anchor_gate must be > 0 (chi-square, 2 dof; inf for no test)"
-            }
-            ParamError::MergeFTest => {
-                "merge_f_test must be finite and >= 0 (an F threshold; 0: off)"
-            }
-            ParamError::GrazingNoise => "grazing_noise must be finite and >= 0",
-            ParamError::FitSigma => "fit_sigma must be finite and >= 0 (metres; 0: sigma)",
-            ParamError::Footprint => "footprint must be finite and >= 0 (radians; 0: off)",
-            ParamError::Arc => {
+            ),
+            ParamError::Arc => f.write_str(
                 "arc_chain must be 0 (off) or at least 2, and 0 <= arc_min_turn_deg <= \
-                 arc_max_turn_deg <= 180 (degrees)"
-            }
-            ParamError::UnknownName => "no parameter of that name",
-            ParamError::NotInBuild { .. } | ParamError::BadValue { .. } => "",
-        })
+                 arc_max_turn_deg <= 180 (degrees)",
+            ),
+            ParamError::UnknownName => f.write_str("no parameter of that name"),
+        }
     }
 }
 
@@ -528,65 +491,8 @@ impl Params {
     /// Check every field; the first nonsense found is returned, else the
     /// parameters as [`ValidParams`].
     pub const fn validate(&self) -> Result<ValidParams, ParamError> {
-        const fn pos(x: f32) -> bool {
-            x.is_finite() && x > 0.0
-        }
-        const fn non_neg(x: f32) -> bool {
-            x.is_finite() && x >= 0.0
-        }
-        if !pos(self.sigma) {
-            return Err(ParamError::Sigma);
-        }
-        if !non_neg(self.q) {
-            return Err(ParamError::ProcessNoise);
-        }
-        if self.iterations == 0 || self.iterations > MAX_ITERATIONS {
-            return Err(ParamError::Iterations);
-        }
-        if !pos(self.tau) {
-            return Err(ParamError::Tau);
-        }
-        if self.min_points < 3 {
-            return Err(ParamError::MinPoints);
-        }
-        if !pos(self.max_chi2) {
-            return Err(ParamError::MaxChi2);
-        }
-        if !non_neg(self.min_length) {
-            return Err(ParamError::MinLength);
-        }
-        if !pos(self.merge_gate) {
-            return Err(ParamError::MergeGate);
-        }
-        if !non_neg(self.corner_gap) {
-            return Err(ParamError::CornerGap);
-        }
-        if !(self.min_corner_angle_deg >= 0.0 && self.min_corner_angle_deg <= 90.0) {
-            return Err(ParamError::MinCornerAngle);
-        }
-        if self.split_depth > MAX_SPLIT_DEPTH {
-            return Err(ParamError::SplitDepth);
-        }
-        if !(self.max_range > 0.0) {
-            return Err(ParamError::MaxRange);
-        }
-        if !(self.max_alpha_sd_deg > 0.0) {
-            return Err(ParamError::MaxAlphaSd);
-        }
-        if !non_neg(self.merge_f_test) {
-            return Err(ParamError::MergeFTest);
-        }
-        if !(self.merge_anchor_gate > 0.0) {
-            return Err(ParamError::MergeAnchorGate);
-        }
-        if !non_neg(self.grazing_noise) {
-            return Err(ParamError::GrazingNoise);
-        }
-        if !non_neg(self.fit_sigma) {
-            return Err(ParamError::FitSigma);
-        }
-        if !non_neg(self.footprint) {
-            return Err(ParamError::Footprint);
+        if let Some((name, range)) = self.out_of_range() {
+            return Err(ParamError::OutOfRange { name, range });
         }
         let turns_ok = self.arc_min_turn_deg >= 0.0
             && self.arc_min_turn_deg <= self.arc_max_turn_deg
@@ -606,16 +512,8 @@ impl Params {
     const fn option_not_in_build(&self) -> Option<&'static str> {
         if cfg!(feature = "section10") {
             None
-        } else if self.grazing_noise != 0.0 {
-            Some("grazing_noise")
-        } else if self.fit_sigma != 0.0 {
-            Some("fit_sigma")
-        } else if self.per_turn {
-            Some("per_turn")
-        } else if self.merge_f_test != 0.0 {
-            Some("merge_f_test")
         } else {
-            None
+            self.host_only_changed()
         }
     }
 }

@@ -84,16 +84,10 @@ fn count(surface: &dyn Fn(f64) -> f64, params: &Params, seed: u64) -> (usize, us
 }
 
 /// The defaults with pairs of lines kept whatever a circle says of them.
-const ARC_PAIRS_KEPT: Params = Params {
-    arc_pairs: false,
-    ..Params::DEFAULT
-};
+const ARC_PAIRS_KEPT: Params = Params::DEFAULT.with_arc_pairs(false);
 
 fn at(params: Params) -> Params {
-    Params {
-        sigma: SIGMA as f32,
-        ..params
-    }
+    params.with_sigma(SIGMA as f32)
 }
 
 /// With pairs kept the curved wall is two lines in 189 of 200 draws; the

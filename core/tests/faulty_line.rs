@@ -303,12 +303,10 @@ impl Bench {
             room(k, out)
         });
         let mut cop = CoProcessor::new(
-            Params {
-                iterations: 2,
-                ..Params::DEFAULT
-            }
-            .validate()
-            .expect("2 passes are valid"),
+            Params::DEFAULT
+                .with_iterations(2)
+                .validate()
+                .expect("2 passes are valid"),
             SensorSetup::DEFAULT,
         );
         cop.start(0);

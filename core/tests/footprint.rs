@@ -227,12 +227,7 @@ fn wall_scan(r: [f32; 2], split_at: usize, patch: std::ops::Range<usize>, zigzag
 }
 
 fn lines(frame: &Frame, params: Params) -> Vec<Line> {
-    let params = Params {
-        sigma: 0.005,
-        ..params
-    }
-    .validate()
-    .unwrap();
+    let params = params.with_sigma(0.005).validate().unwrap();
     Extractor::new().run(frame, &params).lines().to_vec()
 }
 

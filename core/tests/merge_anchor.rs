@@ -85,18 +85,13 @@ fn merged_over_bend(bend_deg: f64, params: &Params) -> (usize, f64) {
 
 /// The defaults with no anchor gate on the merges, no turn offsets in the
 /// fits' χ² and pairs of lines kept whatever a circle says of them.
-const NO_ANCHOR_GATE: Params = Params {
-    merge_anchor_gate: f32::INFINITY,
-    turn_offsets: false,
-    arc_pairs: false,
-    ..Params::DEFAULT
-};
+const NO_ANCHOR_GATE: Params = Params::DEFAULT
+    .with_merge_anchor_gate(f32::INFINITY)
+    .with_turn_offsets(false)
+    .with_arc_pairs(false);
 
 fn params(base: Params) -> Params {
-    Params {
-        sigma: SIGMA as f32,
-        ..base
-    }
+    base.with_sigma(SIGMA as f32)
 }
 
 #[test]

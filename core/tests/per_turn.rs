@@ -13,10 +13,7 @@ mod common;
 use common::{interleaved_wall, one_degree_room};
 
 fn per_turn(p: Params) -> Params {
-    Params {
-        per_turn: true,
-        ..p
-    }
+    p.with_per_turn(true)
 }
 
 #[test]
@@ -55,10 +52,7 @@ fn an_offset_wall_is_one_line_per_turn_and_broken_at_once() {
     // 2 cm between the turns, σ = 1 cm, ripple ±5 mm, incidences up to 75°.
     let frame = interleaved_wall(0.2, 2.0, 0.02, 0.005);
     // The windows of §2–6 over both turns.
-    let spec = Params {
-        sigma: 0.01,
-        ..CONSECUTIVE_WINDOWS
-    };
+    let spec = CONSECUTIVE_WINDOWS.with_sigma(0.01);
     let valid = frame.beams().iter().filter(|b| b.is_valid()).count();
     let mut ex = Extractor::new();
     let whole = ex.run(&frame, &spec.validate().unwrap()).clone();
@@ -69,10 +63,7 @@ fn an_offset_wall_is_one_line_per_turn_and_broken_at_once() {
         "the whole scan at once: longest line {longest} of {valid} beams"
     );
     // Same-turn windows (the defaults) do not break it either.
-    let same_turn = Params {
-        same_turn_windows: true,
-        ..spec
-    };
+    let same_turn = spec.with_same_turn_windows(true);
     let f = ex.run(&frame, &same_turn.validate().unwrap()).clone();
     assert_eq!(f.lines().len(), 1, "{:?}", f.lines());
     assert!(covered(&f.lines()[0]) + 8 >= valid);
@@ -91,12 +82,9 @@ fn an_offset_wall_is_one_line_per_turn_and_broken_at_once() {
 #[test]
 fn d_is_traced_at_the_window_of_the_same_middle_beam() {
     let frame = interleaved_wall(0.2, 2.0, 0.02, 0.005);
-    let params = per_turn(Params {
-        sigma: 0.01,
-        ..Params::DEFAULT
-    })
-    .validate()
-    .unwrap();
+    let params = per_turn(Params::DEFAULT.with_sigma(0.01))
+        .validate()
+        .unwrap();
     let mut ex = Extractor::new();
     let mut trace = Trace::new();
     let mut calls = Vec::new();
@@ -281,7 +269,7 @@ proptest! {
             };
             frame.set_metres(j, v);
         }
-        let params = per_turn(Params { sigma, ..Params::DEFAULT }).validate().unwrap();
+        let params = per_turn(Params::DEFAULT.with_sigma(sigma)).validate().unwrap();
         let mut ex = Extractor::new();
         let f = ex.run(&frame, &params).clone();
         for w in f.lines().windows(2) {

@@ -158,39 +158,40 @@ fn params_strategy() -> impl Strategy<Value = Params> {
             prop_oneof![Just(f32::INFINITY), 0.5f32..50.0],
         ),
     )
-        .prop_map(|(a, b, c, d, e, f)| Params {
-            sigma: a.0,
-            q: a.1,
-            iterations: a.2,
-            tau: b.0,
-            min_points: b.1,
-            max_chi2: b.2,
-            min_length: b.3,
-            fit_shared_points: c.0,
-            merge: c.1,
-            merge_gap_beams: c.2,
-            merge_gate: c.3,
-            corner_gap: d.0,
-            min_corner_angle_deg: d.1,
-            split_depth: d.2,
-            max_range: d.3,
-            merge_collinear: c.1,
-            max_alpha_sd_deg: if c.0 { f32::INFINITY } else { 5.0 / 3.0 },
-            same_turn_windows: e.0,
-            grazing_noise: e.1,
-            fit_sigma: e.2,
-            // Its segments interleave by design: tests/per_turn.rs.
-            per_turn: false,
-            bridge_merge: e.3,
-            footprint: e.4,
-            arc_chain: f.0,
-            arc_min_turn_deg: f.1,
-            arc_max_turn_deg: f.2,
-            split_budget: f.3,
-            merge_anchor_gate: f.4,
-            turn_offsets: c.0 ^ e.0,
-            arc_pairs: c.1 ^ e.0,
-            merge_f_test: if c.2 % 2 == 0 { 0.0 } else { f.4.min(40.0) },
+        .prop_map(|(a, b, c, d, e, f)| {
+            Params::DEFAULT
+                .with_sigma(a.0)
+                .with_q(a.1)
+                .with_iterations(a.2)
+                .with_tau(b.0)
+                .with_min_points(b.1)
+                .with_max_chi2(b.2)
+                .with_min_length(b.3)
+                .with_fit_shared_points(c.0)
+                .with_merge(c.1)
+                .with_merge_gap_beams(c.2)
+                .with_merge_gate(c.3)
+                .with_corner_gap(d.0)
+                .with_min_corner_angle_deg(d.1)
+                .with_split_depth(d.2)
+                .with_max_range(d.3)
+                .with_merge_collinear(c.1)
+                .with_max_alpha_sd_deg(if c.0 { f32::INFINITY } else { 5.0 / 3.0 })
+                .with_same_turn_windows(e.0)
+                .with_grazing_noise(e.1)
+                .with_fit_sigma(e.2)
+                // Its segments interleave by design: tests/per_turn.rs.
+                .with_per_turn(false)
+                .with_bridge_merge(e.3)
+                .with_footprint(e.4)
+                .with_arc_chain(f.0)
+                .with_arc_min_turn_deg(f.1)
+                .with_arc_max_turn_deg(f.2)
+                .with_split_budget(f.3)
+                .with_merge_anchor_gate(f.4)
+                .with_turn_offsets(c.0 ^ e.0)
+                .with_arc_pairs(c.1 ^ e.0)
+                .with_merge_f_test(if c.2 % 2 == 0 { 0.0 } else { f.4.min(40.0) })
         })
 }
 
@@ -579,24 +580,15 @@ fn invalid_params_are_refused() {
         assert!(p.validate().is_err(), "field {field} = {value}");
     }
     for iterations in [0, 1001, u16::MAX] {
-        let p = Params {
-            iterations,
-            ..Params::default()
-        };
+        let p = Params::default().with_iterations(iterations);
         assert!(p.validate().is_err());
     }
     for split_depth in [lms_core::params::MAX_SPLIT_DEPTH + 1, u8::MAX] {
-        let p = Params {
-            split_depth,
-            ..Params::default()
-        };
+        let p = Params::default().with_split_depth(split_depth);
         assert!(p.validate().is_err());
     }
     for min_points in [0, 1, 2] {
-        let p = Params {
-            min_points,
-            ..Params::default()
-        };
+        let p = Params::default().with_min_points(min_points);
         assert!(p.validate().is_err());
     }
 }

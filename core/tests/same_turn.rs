@@ -23,15 +23,8 @@ fn a_turn_offset_breaks_spec_windows_but_not_same_turn_windows() {
     // Offset 2 cm between turns, σ = 1 cm, ripple ±5 mm, incidences up to 75°.
     let frame = interleaved_wall(0.2, 2.0, 0.02, 0.005);
     // No split before reject: the segments are the windows' (§6).
-    let spec = Params {
-        sigma: 0.01,
-        split_depth: 0,
-        ..CONSECUTIVE_WINDOWS
-    };
-    let turn = Params {
-        same_turn_windows: true,
-        ..spec
-    };
+    let spec = CONSECUTIVE_WINDOWS.with_sigma(0.01).with_split_depth(0);
+    let turn = spec.with_same_turn_windows(true);
     let mut ex = Extractor::new();
     let mut trace = Trace::new();
     ex.run_traced(&frame, &spec.validate().unwrap(), &mut trace);

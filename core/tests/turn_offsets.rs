@@ -96,11 +96,9 @@ fn a_wall_two_turns_apart_stays_one_line() {
     // Offset 2 cm between the turns, ±5 mm ripple, incidences up to 75°.
     let frame = interleaved_wall(0.2, 2.0, 0.02, 0.005);
     let run = |turn_offsets| {
-        let params = Params {
-            sigma: SIGMA,
-            turn_offsets,
-            ..Params::DEFAULT
-        };
+        let params = Params::DEFAULT
+            .with_sigma(SIGMA)
+            .with_turn_offsets(turn_offsets);
         let mut ex = Extractor::new();
         let f = ex.run(&frame, &params.validate().unwrap());
         f.lines()

@@ -160,14 +160,11 @@ fn b0_telegram(scan: &Scan) -> Vec<u8> {
 fn feature_telegrams(scan: &Scan, counter: u32) -> (Vec<Vec<u8>>, lms_core::Features, Params) {
     let v = MeasuredValues::from_raw(&scan.words, scan.units, 0x10).unwrap();
     let frame = v.to_frame(scan.bits).unwrap();
-    let params = Params {
-        sigma: if scan.units == Unit::Millimetre {
-            0.005
-        } else {
-            0.01
-        },
-        ..Params::DEFAULT
-    };
+    let params = Params::DEFAULT.with_sigma(if scan.units == Unit::Millimetre {
+        0.005
+    } else {
+        0.01
+    });
     let mut extractor = Extractor::new();
     let features = extractor.run(&frame, &params.validate().unwrap()).clone();
     let mut out = Vec::new();
@@ -217,12 +214,10 @@ fn cop_session(scans: &[Scan], host_at: &[(u64, Vec<u8>)], until: u64, step: u64
     });
     let mut lms = Emulator::new(source, Settings::default(), 0);
     let mut cop = CoProcessor::new(
-        Params {
-            iterations: 2,
-            ..Params::DEFAULT
-        }
-        .validate()
-        .expect("2 passes are valid"),
+        Params::DEFAULT
+            .with_iterations(2)
+            .validate()
+            .expect("2 passes are valid"),
         SensorSetup::DEFAULT,
     );
     cop.start(0);

@@ -20,10 +20,7 @@ use lms_fuzz::{drain, op, Ev, Input, Port};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
-    let params = Params {
-        iterations: 1 + u16::from(input.u8() % 4),
-        ..Params::DEFAULT
-    };
+    let params = Params::DEFAULT.with_iterations(1 + u16::from(input.u8() % 4));
     let params = params.validate().expect("1..=4 passes are valid");
     let mut cop = CoProcessor::new(params, SensorSetup::DEFAULT);
     let mut now = 0u64;

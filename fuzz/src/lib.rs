@@ -437,121 +437,116 @@ pub fn decode_pipeline(data: &[u8]) -> PipelineInput {
     let params = match mode {
         PARAMS_RAW => {
             let iterations = raw[2] as u16;
-            Params {
-                sigma: f32::from_bits(raw[0]),
-                q: f32::from_bits(raw[1]),
+            Params::DEFAULT
+                .with_sigma(f32::from_bits(raw[0]))
+                .with_q(f32::from_bits(raw[1]))
                 // Valid counts above the cap are capped; invalid ones stay.
-                iterations: if (MAX_FUZZ_ITERATIONS..=1000).contains(&iterations) {
+                .with_iterations(if (MAX_FUZZ_ITERATIONS..=1000).contains(&iterations) {
                     MAX_FUZZ_ITERATIONS
                 } else {
                     iterations
-                },
-                tau: f32::from_bits(raw[3]),
-                min_points: raw[4] as u16,
-                max_chi2: f32::from_bits(raw[5]),
-                min_length: f32::from_bits(raw[6]),
-                fit_shared_points: flags & 1 != 0,
-                merge: flags & 2 != 0,
-                merge_gap_beams: raw[7] as u16,
-                merge_gate: f32::from_bits(raw[8]),
-                corner_gap: f32::from_bits(raw[9]),
-                min_corner_angle_deg: f32::from_bits(raw[10]),
-                split_depth: raw[11] as u8,
-                max_range: f32::from_bits(limits[0]),
-                merge_collinear: flags & 8 != 0,
-                max_alpha_sd_deg: f32::from_bits(limits[1]),
-                grazing_noise: f32::from_bits(limits[2]),
-                same_turn_windows: flags & 64 != 0,
-                fit_sigma: f32::from_bits(limits[3]),
-                per_turn: raw[11] & 0x8000_0000 != 0,
-                bridge_merge: flags & 128 != 0,
-                footprint: f32::from_bits(raw[7] ^ raw[9]),
-                arc_chain: (raw[10] >> 24) as u8,
-                arc_min_turn_deg: f32::from_bits(raw[8] ^ raw[10]),
-                arc_max_turn_deg: f32::from_bits(limits[0] ^ raw[3]),
-                split_budget: (raw[11] >> 8) as u16,
-                merge_anchor_gate: f32::from_bits(raw[6] ^ limits[1]),
-                turn_offsets: raw[6] & 0x10 != 0,
-                arc_pairs: raw[6] & 0x20 != 0,
-                merge_f_test: f32::from_bits(raw[5] ^ limits[2]),
-            }
+                })
+                .with_tau(f32::from_bits(raw[3]))
+                .with_min_points(raw[4] as u16)
+                .with_max_chi2(f32::from_bits(raw[5]))
+                .with_min_length(f32::from_bits(raw[6]))
+                .with_fit_shared_points(flags & 1 != 0)
+                .with_merge(flags & 2 != 0)
+                .with_merge_gap_beams(raw[7] as u16)
+                .with_merge_gate(f32::from_bits(raw[8]))
+                .with_corner_gap(f32::from_bits(raw[9]))
+                .with_min_corner_angle_deg(f32::from_bits(raw[10]))
+                .with_split_depth(raw[11] as u8)
+                .with_max_range(f32::from_bits(limits[0]))
+                .with_merge_collinear(flags & 8 != 0)
+                .with_max_alpha_sd_deg(f32::from_bits(limits[1]))
+                .with_grazing_noise(f32::from_bits(limits[2]))
+                .with_same_turn_windows(flags & 64 != 0)
+                .with_fit_sigma(f32::from_bits(limits[3]))
+                .with_per_turn(raw[11] & 0x8000_0000 != 0)
+                .with_bridge_merge(flags & 128 != 0)
+                .with_footprint(f32::from_bits(raw[7] ^ raw[9]))
+                .with_arc_chain((raw[10] >> 24) as u8)
+                .with_arc_min_turn_deg(f32::from_bits(raw[8] ^ raw[10]))
+                .with_arc_max_turn_deg(f32::from_bits(limits[0] ^ raw[3]))
+                .with_split_budget((raw[11] >> 8) as u16)
+                .with_merge_anchor_gate(f32::from_bits(raw[6] ^ limits[1]))
+                .with_turn_offsets(raw[6] & 0x10 != 0)
+                .with_arc_pairs(raw[6] & 0x20 != 0)
+                .with_merge_f_test(f32::from_bits(raw[5] ^ limits[2]))
         }
-        PARAMS_SANE => Params {
-            sigma: 2e-4 + unit(raw[0]) * 0.1,
-            q: if raw[1] & 1 == 0 {
+        PARAMS_SANE => Params::DEFAULT
+            .with_sigma(2e-4 + unit(raw[0]) * 0.1)
+            .with_q(if raw[1] & 1 == 0 {
                 0.0
             } else {
                 unit(raw[1]) * 1e-3
-            },
-            iterations: 1 + (raw[2] % u32::from(MAX_FUZZ_ITERATIONS)) as u16,
-            tau: 0.01 + unit(raw[3]) * 100.0,
-            min_points: 3 + (raw[4] % 40) as u16,
-            max_chi2: 0.01 + unit(raw[5]) * 100.0,
-            min_length: unit(raw[6]) * 2.0,
-            fit_shared_points: flags & 1 != 0,
-            merge: flags & 2 != 0,
-            merge_gap_beams: (raw[7] % 20) as u16,
-            merge_gate: 0.01 + unit(raw[8]) * 100.0,
-            corner_gap: unit(raw[9]) * 2.0,
-            min_corner_angle_deg: unit(raw[10]) * 90.0,
-            split_depth: if flags & 4 == 0 {
+            })
+            .with_iterations(1 + (raw[2] % u32::from(MAX_FUZZ_ITERATIONS)) as u16)
+            .with_tau(0.01 + unit(raw[3]) * 100.0)
+            .with_min_points(3 + (raw[4] % 40) as u16)
+            .with_max_chi2(0.01 + unit(raw[5]) * 100.0)
+            .with_min_length(unit(raw[6]) * 2.0)
+            .with_fit_shared_points(flags & 1 != 0)
+            .with_merge(flags & 2 != 0)
+            .with_merge_gap_beams((raw[7] % 20) as u16)
+            .with_merge_gate(0.01 + unit(raw[8]) * 100.0)
+            .with_corner_gap(unit(raw[9]) * 2.0)
+            .with_min_corner_angle_deg(unit(raw[10]) * 90.0)
+            .with_split_depth(if flags & 4 == 0 {
                 0
             } else {
                 (raw[11] % (u32::from(lms_core::params::MAX_SPLIT_DEPTH) + 1)) as u8
-            },
-            max_range: if flags & 16 == 0 {
+            })
+            .with_max_range(if flags & 16 == 0 {
                 f32::INFINITY
             } else {
                 0.1 + unit(limits[0]) * 100.0
-            },
-            merge_collinear: flags & 8 != 0,
-            max_alpha_sd_deg: if flags & 32 == 0 {
+            })
+            .with_merge_collinear(flags & 8 != 0)
+            .with_max_alpha_sd_deg(if flags & 32 == 0 {
                 f32::INFINITY
             } else {
                 0.01 + unit(limits[1]) * 90.0
-            },
-            grazing_noise: if flags & 128 == 0 {
+            })
+            .with_grazing_noise(if flags & 128 == 0 {
                 0.0
             } else {
                 unit(limits[2]) * 3.0
-            },
-            same_turn_windows: flags & 64 != 0,
-            fit_sigma: if limits[3] & 1 == 0 {
+            })
+            .with_same_turn_windows(flags & 64 != 0)
+            .with_fit_sigma(if limits[3] & 1 == 0 {
                 0.0
             } else {
                 1e-4 + unit(limits[3]) * 0.1
-            },
-            per_turn: raw[11] & 0x8000_0000 != 0,
-            bridge_merge: flags & 128 != 0,
-            footprint: if raw[7] & 0x1_0000 == 0 {
+            })
+            .with_per_turn(raw[11] & 0x8000_0000 != 0)
+            .with_bridge_merge(flags & 128 != 0)
+            .with_footprint(if raw[7] & 0x1_0000 == 0 {
                 0.0
             } else {
                 unit(raw[7].rotate_left(16)) * 0.02
-            },
-            arc_chain: match raw[10] >> 28 {
+            })
+            .with_arc_chain(match raw[10] >> 28 {
                 0..=3 => 0,
                 k => (k - 2) as u8,
-            },
-            arc_min_turn_deg: unit(raw[8].rotate_left(8)) * 20.0,
-            arc_max_turn_deg: 20.0 + unit(raw[9].rotate_left(8)) * 160.0,
-            split_budget: (raw[11] >> 16) as u16 % 2048,
-            turn_offsets: raw[6] & 0x10 != 0,
-            merge_anchor_gate: if raw[6] & 0x100 == 0 {
+            })
+            .with_arc_min_turn_deg(unit(raw[8].rotate_left(8)) * 20.0)
+            .with_arc_max_turn_deg(20.0 + unit(raw[9].rotate_left(8)) * 160.0)
+            .with_split_budget((raw[11] >> 16) as u16 % 2048)
+            .with_turn_offsets(raw[6] & 0x10 != 0)
+            .with_merge_anchor_gate(if raw[6] & 0x100 == 0 {
                 f32::INFINITY
             } else {
                 0.5 + unit(raw[6].rotate_left(12)) * 50.0
-            },
-            arc_pairs: raw[6] & 0x20 != 0,
-            merge_f_test: if raw[6] & 0x200 == 0 {
+            })
+            .with_arc_pairs(raw[6] & 0x20 != 0)
+            .with_merge_f_test(if raw[6] & 0x200 == 0 {
                 0.0
             } else {
                 unit(raw[5].rotate_left(12)) * 50.0
-            },
-        },
-        _ => Params {
-            iterations: 1 + (raw[2] % 40) as u16,
-            ..Params::DEFAULT
-        },
+            }),
+        _ => Params::DEFAULT.with_iterations(1 + (raw[2] % 40) as u16),
     };
 
     match input.u8() % 3 {

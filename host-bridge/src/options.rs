@@ -129,6 +129,47 @@ pub fn preset_parser() -> impl TypedValueParser<Value = String> {
     )
 }
 
+/// Where `--sigma`'s default comes from with a log.
+const PER_LOG_SIGMA: &str = "a log's quantisation step (0.01 for cm logs, 0.005 for mm), else";
+
+/// Where `--max-range`'s default comes from with a log.
+const PER_LOG_MAX_RANGE: &str = "a log's unit and range mode, else";
+
+/// The help of the flag of the parameter `name`: its meaning, unit and
+/// range from [`core_params::FIELDS`], and its default in
+/// [`Params::DEFAULT`], after `per_log` (where a log's data sets it) if
+/// given.
+fn param_help(name: &str, per_log: Option<&str>) -> String {
+    let Some(field) = core_params::field(name) else {
+        return format!("the parameter {name}");
+    };
+    let unit = match field.unit {
+        "-" | "bool" => String::new(),
+        unit => format!("{unit}; "),
+    };
+    let default = Params::DEFAULT
+        .get(name)
+        .map(|v| v.to_string())
+        .unwrap_or_default();
+    let default = per_log.map_or(default.clone(), |p| format!("{p} {default}"));
+    format!(
+        "{} ({unit}{}) [default: {default}]",
+        field.meaning, field.range
+    )
+}
+
+/// The parameters that have a flag of their own (`--sigma`, …), in
+/// [`core_params::FIELDS`] order: those of [`ParamArgs`]'s options named as
+/// a parameter.
+pub fn flagged_parameters() -> Vec<&'static core_params::Field> {
+    use clap::Args as _;
+    let command = ParamArgs::augment_args(clap::Command::new("parameters"));
+    core_params::FIELDS
+        .iter()
+        .filter(|f| command.get_arguments().any(|a| a.get_id() == f.name))
+        .collect()
+}
+
 /// Pipeline parameters: a preset, a parameter file, `--set NAME=VALUE`,
 /// and the everyday flags, each overriding the one before.
 ///
@@ -140,39 +181,44 @@ pub fn preset_parser() -> impl TypedValueParser<Value = String> {
 /// `Params::validate` checks the result and names a parameter out of range.
 #[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct ParamArgs {
-    /// Smoothing passes, the first scale parameter (1..=1000) [default: 30]
-    #[arg(long, value_name = "N", help_heading = "Parameters",
+    /// Smoothing passes (`--iterations`; help from the table)
+    #[arg(long, value_name = "N", help_heading = "Parameters", help = param_help("iterations", None),
           value_parser = clap::value_parser!(u16).range(1..=i64::from(lms_core::params::MAX_ITERATIONS)))]
     pub iterations: Option<u16>,
-    /// Process noise q (m²), the second scale parameter [default: 0]
+    /// Process noise (`--q`; help from the table)
     #[arg(
         long,
         value_name = "Q",
         allow_negative_numbers = true,
-        help_heading = "Parameters"
+        help_heading = "Parameters",
+        help = param_help("q", None)
     )]
     pub q: Option<f32>,
-    /// Range noise standard deviation σ (m) [default: a log's quantisation
-    /// step (0.01 for cm logs, 0.005 for mm), else 0.005]
+    /// Range noise (`--sigma`; help from the table)
     #[arg(
         long,
         value_name = "S",
         allow_negative_numbers = true,
-        help_heading = "Parameters"
+        help_heading = "Parameters",
+        help = param_help("sigma", Some(PER_LOG_SIGMA))
     )]
     pub sigma: Option<f32>,
-    /// Segmentation gate τ on D [default: 9]
+    /// Segmentation gate (`--tau`; help from the table)
     #[arg(
         long,
         value_name = "T",
         allow_negative_numbers = true,
-        help_heading = "Parameters"
+        help_heading = "Parameters",
+        help = param_help("tau", None)
     )]
     pub tau: Option<f32>,
-    /// Largest true range (m): beams at or beyond it are invalid (fill
-    /// values); inf for no limit [default: a log's unit and range mode,
-    /// else 81.83]
-    #[arg(long, value_name = "M", help_heading = "Parameters")]
+    /// Largest true range (`--max-range`; help from the table)
+    #[arg(
+        long,
+        value_name = "M",
+        help_heading = "Parameters",
+        help = param_help("max_range", Some(PER_LOG_MAX_RANGE))
+    )]
     pub max_range: Option<f32>,
     /// Start from a named set of parameters [default: default]
     ///
@@ -246,11 +292,7 @@ impl ParamArgs {
             (None, Some(d)) => d,
             (None, None) => Params::DEFAULT,
             (Some(pre), None) => pre.params,
-            (Some(pre), Some(d)) => Params {
-                sigma: d.sigma,
-                max_range: d.max_range,
-                ..pre.params
-            },
+            (Some(pre), Some(d)) => pre.params.with_sigma(d.sigma).with_max_range(d.max_range),
         };
         file.apply(&mut p)?;
         for s in &self.set {
@@ -488,11 +530,7 @@ mod tests {
     #[test]
     fn later_sources_win() {
         let set = |s: &str| s.parse::<Setting>().unwrap();
-        let data = Params {
-            sigma: 0.01,
-            max_range: 50.0,
-            ..Params::DEFAULT
-        };
+        let data = Params::DEFAULT.with_sigma(0.01).with_max_range(50.0);
         // No preset: the data's defaults; a preset: its values, σ and
         // max_range from the data.
         assert_eq!(ParamArgs::default().to_params_over(data).unwrap(), data);
@@ -503,11 +541,7 @@ mod tests {
         assert_eq!(paper.to_params().unwrap(), Params::PAPER);
         assert_eq!(
             paper.to_params_over(data).unwrap(),
-            Params {
-                sigma: 0.01,
-                max_range: 50.0,
-                ..Params::PAPER
-            }
+            Params::PAPER.with_sigma(0.01).with_max_range(50.0)
         );
         // --set over the preset, the flags over --set.
         let args = ParamArgs {

@@ -12,6 +12,8 @@ use std::io::{self, Write};
 use anyhow::{anyhow, Result};
 use clap::Args;
 use lms_core::params::{Preset, FIELDS, PRESETS};
+
+use crate::options::flagged_parameters;
 use lms_core::telegram::features::{CounterKind, Counters};
 use lms_core::{Params, Stats};
 
@@ -101,6 +103,7 @@ pub fn parameters_text(preset: &Preset) -> String {
         "NAME".to_string(),
         "VALUE".to_string(),
         "UNIT".to_string(),
+        "RANGE".to_string(),
         "MEANING".to_string(),
     ]];
     rows.extend(FIELDS.iter().map(|f| {
@@ -108,20 +111,32 @@ pub fn parameters_text(preset: &Preset) -> String {
             f.name.to_string(),
             (f.get)(&preset.params).to_string(),
             f.unit.to_string(),
+            f.range.to_string(),
             f.meaning.to_string(),
         ]
     }));
     let names: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
+    let flagged: Vec<&str> = flagged_parameters().iter().map(|f| f.name).collect();
     format!(
         "Preset {}: {}.\n\n{}\n\
-         Set one with --set NAME=VALUE or in a --params FILE; sigma, iterations, q, tau and\n\
-         max_range have flags of their own. With a log, sigma and max_range come from its\n\
-         data unless set. Presets: {} (--preset NAME).\n",
+         Set one with --set NAME=VALUE or in a --params FILE; {} have flags of their own.\n\
+         With a log, sigma and max_range come from its data unless set. Presets: {}\n\
+         (--preset NAME).\n",
         preset.name,
         preset.summary,
         aligned(&rows),
+        and_list(&flagged),
         names.join(", ")
     )
+}
+
+/// `items` as English: `a`, `a and b`, `a, b and c`.
+fn and_list(items: &[&str]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => (*one).to_string(),
+        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+    }
 }
 
 /// The fields of `p` that differ from [`Params::DEFAULT`], as
@@ -138,6 +153,12 @@ fn changes(p: &Params) -> Vec<String> {
 /// `preset`, unit and meaning, then the presets with what each changes.
 pub fn parameters_markdown(preset: &Preset) -> String {
     let mut out = String::new();
+    let flagged = flagged_parameters();
+    let ticked: Vec<String> = flagged.iter().map(|f| format!("`{}`", f.name)).collect();
+    let flags: Vec<String> = flagged
+        .iter()
+        .map(|f| format!("`--{}`", f.name.replace('_', "-")))
+        .collect();
     let _ = write!(
         out,
         "# Parameters\n\n\
@@ -146,12 +167,13 @@ pub fn parameters_markdown(preset: &Preset) -> String {
          Every parameter of the pipeline is a field of `lms_core::Params`. On the command line\n\
          of `extract`, `plot`, `verify` and `coprocessor` one is set by its name with\n\
          `--set NAME=VALUE` (repeatable) or in a TOML file given to `--params FILE`\n\
-         (`NAME = VALUE` lines, and an optional `preset = \"NAME\"`); `sigma`, `iterations`,\n\
-         `q`, `tau` and `max_range` also have flags of their own (`--sigma`, `--iterations`,\n\
-         `--q`, `--tau`, `--max-range`). Later wins: the preset (`--preset NAME`, else\n\
-         `default`), then the file, then `--set`, then those flags. With a log, `sigma` and\n\
-         `max_range` come from its data (quantisation step, range mode) unless set.\n\
-         `Params::validate` checks the result and names a parameter out of range.\n\
+         (`NAME = VALUE` lines, and an optional `preset = \"NAME\"`).\n\
+         {} also have flags of their own\n\
+         ({}).\n\
+         Later wins: the preset (`--preset NAME`, else `default`), then\n\
+         the file, then `--set`, then those flags. With a log, `sigma` and `max_range` come\n\
+         from their data (quantisation step, range mode) unless set. `Params::validate`\n\
+         checks the result and names a parameter out of its range (the column range).\n\
          Values are numbers (`inf` for infinity), whole numbers or `true`/`false`. E.g.\n\n\
          ```sh\n\
          host-bridge extract LOG --preset v2 --set split_depth=0 --set min_length=0.2\n\
@@ -165,16 +187,19 @@ pub fn parameters_markdown(preset: &Preset) -> String {
          ```\n\n\
          `host-bridge params` prints this table; `host-bridge params --preset NAME` with a\n\
          preset's values.\n\n\
-         | name | {} | unit | meaning |\n| --- | --- | --- | --- |\n",
+         | name | {} | unit | range | meaning |\n| --- | --- | --- | --- | --- |\n",
+        and_list(&ticked.iter().map(String::as_str).collect::<Vec<_>>()),
+        flags.join(", "),
         preset.name
     );
     for f in FIELDS {
         let _ = writeln!(
             out,
-            "| `{}` | {} | {} | {} |",
+            "| `{}` | {} | {} | {} | {} |",
             f.name,
             (f.get)(&preset.params),
             f.unit,
+            f.range,
             f.meaning
         );
     }

@@ -7,7 +7,6 @@
 //! `cargo run --release -p lms-lab --example arc_pairs -- [EVERY] [SCANS]`
 
 use anyhow::Result;
-use lms_core::Params;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 fn main() -> Result<()> {
@@ -15,22 +14,10 @@ fn main() -> Result<()> {
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
     let variants: Vec<(&'static str, Adjust)> = vec![
         ("defaults", |p| p),
-        ("arc_pairs=false", |p| Params {
-            arc_pairs: false,
-            ..p
-        }),
-        ("merge_f_test=20", |p| Params {
-            merge_f_test: 20.0,
-            ..p
-        }),
-        ("merge_f_test=30", |p| Params {
-            merge_f_test: 30.0,
-            ..p
-        }),
-        ("merge_f_test=50", |p| Params {
-            merge_f_test: 50.0,
-            ..p
-        }),
+        ("arc_pairs=false", |p| p.with_arc_pairs(false)),
+        ("merge_f_test=20", |p| p.with_merge_f_test(20.0)),
+        ("merge_f_test=30", |p| p.with_merge_f_test(30.0)),
+        ("merge_f_test=50", |p| p.with_merge_f_test(50.0)),
     ];
     print_sweep(&variants, every, scans)
 }

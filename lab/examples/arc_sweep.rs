@@ -8,7 +8,6 @@
 //! `cargo run --release -p lms-lab --example arc_sweep -- [EVERY] [SCANS]`
 
 use anyhow::Result;
-use lms_core::Params;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 /// The variants, each applied to the defaults (the per-data defaults on
@@ -16,21 +15,14 @@ use lms_lab::sweep::{print_sweep, Adjust};
 fn variants() -> Vec<(&'static str, Adjust)> {
     vec![
         ("defaults (chains of 3, turns 5–40°)", |p| p),
-        ("arc_chain=0 (no arcs dropped)", |p| Params {
-            arc_chain: 0,
-            ..p
+        ("arc_chain=0 (no arcs dropped)", |p| p.with_arc_chain(0)),
+        ("arc_chain=4", |p| p.with_arc_chain(4)),
+        ("arc_chain=2", |p| p.with_arc_chain(2)),
+        ("arc_min_turn_deg=2, arc_max_turn_deg=30", |p| {
+            p.with_arc_min_turn_deg(2.0).with_arc_max_turn_deg(30.0)
         }),
-        ("arc_chain=4", |p| Params { arc_chain: 4, ..p }),
-        ("arc_chain=2", |p| Params { arc_chain: 2, ..p }),
-        ("arc_min_turn_deg=2, arc_max_turn_deg=30", |p| Params {
-            arc_min_turn_deg: 2.0,
-            arc_max_turn_deg: 30.0,
-            ..p
-        }),
-        ("arc_min_turn_deg=10, arc_max_turn_deg=60", |p| Params {
-            arc_min_turn_deg: 10.0,
-            arc_max_turn_deg: 60.0,
-            ..p
+        ("arc_min_turn_deg=10, arc_max_turn_deg=60", |p| {
+            p.with_arc_min_turn_deg(10.0).with_arc_max_turn_deg(60.0)
         }),
     ]
 }

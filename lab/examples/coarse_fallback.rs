@@ -34,10 +34,7 @@ const VARIANTS: [Variant; 6] = [
 
 /// The fine lines of `params` and the coarse lines on what they leave.
 fn extract(ex: &mut Extractor, frame: &Frame, params: &Params, v: &Variant) -> Extraction {
-    let params = Params {
-        per_turn: v.2,
-        ..*params
-    };
+    let params = (*params).with_per_turn(v.2);
     let mut x = run_core(ex, frame, &params);
     if v.1 <= 0.0 {
         return x;
@@ -47,14 +44,7 @@ fn extract(ex: &mut Extractor, frame: &Frame, params: &Params, v: &Variant) -> E
     for l in &x.lines {
         held[usize::from(l.first)..=usize::from(l.last)].fill(true);
     }
-    let coarse = run_core(
-        ex,
-        frame,
-        &Params {
-            sigma: params.sigma * v.1,
-            ..params
-        },
-    );
+    let coarse = run_core(ex, frame, &params.with_sigma(params.sigma * v.1));
     for l in coarse.lines {
         let beams: Vec<usize> = (usize::from(l.first)..=usize::from(l.last))
             .filter(|&j| valid[j])

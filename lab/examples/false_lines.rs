@@ -147,10 +147,7 @@ fn print_straight(scan: &ScoredScan<'_>, e: usize, l: &Line) {
 fn main() -> Result<()> {
     let (scans, args) = count_and_flags(100)?;
     let base = if args.iter().any(|a| a == "--pairs-kept") {
-        Params {
-            arc_pairs: false,
-            ..Params::DEFAULT
-        }
+        Params::DEFAULT.with_arc_pairs(false)
     } else {
         Params::DEFAULT
     };

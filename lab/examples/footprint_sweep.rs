@@ -7,7 +7,6 @@
 //! `cargo run --release -p lms-lab --example footprint_sweep -- [EVERY] [SCANS]`
 
 use anyhow::Result;
-use lms_core::Params;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 /// The variants, each applied to the defaults (the per-data defaults on
@@ -15,31 +14,14 @@ use lms_lab::sweep::{print_sweep, Adjust};
 fn variants() -> Vec<(&'static str, Adjust)> {
     vec![
         ("defaults (footprint=0.003, bridge_merge=true)", |p| p),
-        ("footprint=0", |p| Params {
-            footprint: 0.0,
-            ..p
+        ("footprint=0", |p| p.with_footprint(0.0)),
+        ("bridge_merge=false", |p| p.with_bridge_merge(false)),
+        ("footprint=0, bridge_merge=false", |p| {
+            p.with_footprint(0.0).with_bridge_merge(false)
         }),
-        ("bridge_merge=false", |p| Params {
-            bridge_merge: false,
-            ..p
-        }),
-        ("footprint=0, bridge_merge=false", |p| Params {
-            footprint: 0.0,
-            bridge_merge: false,
-            ..p
-        }),
-        ("footprint=0.002", |p| Params {
-            footprint: 0.002,
-            ..p
-        }),
-        ("footprint=0.004", |p| Params {
-            footprint: 0.004,
-            ..p
-        }),
-        ("footprint=0.005", |p| Params {
-            footprint: 0.005,
-            ..p
-        }),
+        ("footprint=0.002", |p| p.with_footprint(0.002)),
+        ("footprint=0.004", |p| p.with_footprint(0.004)),
+        ("footprint=0.005", |p| p.with_footprint(0.005)),
     ]
 }
 

@@ -25,69 +25,33 @@ fn main() -> Result<()> {
     };
     let mut ms = vec![
         m("defaults (max_alpha_sd_deg=1.67)", |p| p),
-        m("max_alpha_sd_deg=1.0", |p| Params {
-            max_alpha_sd_deg: 1.0,
-            ..p
+        m("max_alpha_sd_deg=1.0", |p| p.with_max_alpha_sd_deg(1.0)),
+        m("max_alpha_sd_deg=0.75", |p| p.with_max_alpha_sd_deg(0.75)),
+        m("max_alpha_sd_deg=0.5", |p| p.with_max_alpha_sd_deg(0.5)),
+        m("min_points=10", |p| p.with_min_points(10)),
+        m("min_points=10, max_alpha_sd_deg=1.0", |p| {
+            p.with_min_points(10).with_max_alpha_sd_deg(1.0)
         }),
-        m("max_alpha_sd_deg=0.75", |p| Params {
-            max_alpha_sd_deg: 0.75,
-            ..p
-        }),
-        m("max_alpha_sd_deg=0.5", |p| Params {
-            max_alpha_sd_deg: 0.5,
-            ..p
-        }),
-        m("min_points=10", |p| Params {
-            min_points: 10,
-            ..p
-        }),
-        m("min_points=10, max_alpha_sd_deg=1.0", |p| Params {
-            min_points: 10,
-            max_alpha_sd_deg: 1.0,
-            ..p
-        }),
-        m("min_points=15", |p| Params {
-            min_points: 15,
-            ..p
-        }),
-        m("min_length=0.3", |p| Params {
-            min_length: 0.3,
-            ..p
-        }),
-        m("min_length=0.5", |p| Params {
-            min_length: 0.5,
-            ..p
-        }),
+        m("min_points=15", |p| p.with_min_points(15)),
+        m("min_length=0.3", |p| p.with_min_length(0.3)),
+        m("min_length=0.5", |p| p.with_min_length(0.5)),
     ];
     ms.extend([
-        m("per_turn=true", |p| Params {
-            per_turn: true,
-            ..p
+        m("per_turn=true", |p| p.with_per_turn(true)),
+        m("per_turn=true, max_alpha_sd_deg=1.0", |p| {
+            p.with_per_turn(true).with_max_alpha_sd_deg(1.0)
         }),
-        m("per_turn=true, max_alpha_sd_deg=1.0", |p| Params {
-            per_turn: true,
-            max_alpha_sd_deg: 1.0,
-            ..p
+        m("per_turn=true, max_alpha_sd_deg=0.75", |p| {
+            p.with_per_turn(true).with_max_alpha_sd_deg(0.75)
         }),
-        m("per_turn=true, max_alpha_sd_deg=0.75", |p| Params {
-            per_turn: true,
-            max_alpha_sd_deg: 0.75,
-            ..p
+        m("per_turn=true, min_points=8", |p| {
+            p.with_per_turn(true).with_min_points(8)
         }),
-        m("per_turn=true, min_points=8", |p| Params {
-            per_turn: true,
-            min_points: 8,
-            ..p
+        m("per_turn=true, σ ≥ 15 mm", |p| {
+            p.with_per_turn(true).with_sigma(p.sigma.max(0.015))
         }),
-        m("per_turn=true, σ ≥ 15 mm", |p| Params {
-            per_turn: true,
-            sigma: p.sigma.max(0.015),
-            ..p
-        }),
-        m("per_turn=true, σ ≥ 20 mm", |p| Params {
-            per_turn: true,
-            sigma: p.sigma.max(0.02),
-            ..p
+        m("per_turn=true, σ ≥ 20 mm", |p| {
+            p.with_per_turn(true).with_sigma(p.sigma.max(0.02))
         }),
     ]);
     ms.extend(

@@ -13,7 +13,7 @@
 use std::path::Path;
 
 use anyhow::Result;
-use lms_core::{Extractor, Params};
+use lms_core::Extractor;
 use lms_lab::maptruth::{frame_truth, TruthConfig};
 
 /// Upper edges of the incidence bins (degrees).
@@ -87,12 +87,10 @@ fn main() -> Result<()> {
             cfg,
             map,
         } = lms_lab::realtruth::load_with_map(path, &cfg)?;
-        let params = Params {
-            grazing_noise: rho,
-            same_turn_windows: same_turn,
-            ..base
-        }
-        .validate()?;
+        let params = base
+            .with_grazing_noise(rho)
+            .with_same_turn_windows(same_turn)
+            .validate()?;
         let mut inc = vec![Bin::default(); INC.len()];
         let mut rng = vec![Bin::default(); RANGE.len()];
         let mut steps = std::collections::BTreeMap::<i64, usize>::new();

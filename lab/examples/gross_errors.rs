@@ -23,10 +23,7 @@ const GROSS: f64 = 10.83;
 fn main() -> Result<()> {
     let (scans, args) = count_and_flags(100)?;
     let base = if args.iter().any(|a| a == "--no-anchor-gate") {
-        Params {
-            merge_anchor_gate: f32::INFINITY,
-            ..Params::DEFAULT
-        }
+        Params::DEFAULT.with_merge_anchor_gate(f32::INFINITY)
     } else {
         Params::DEFAULT
     };
@@ -35,10 +32,7 @@ fn main() -> Result<()> {
         .iter()
         .find_map(|a| a.strip_prefix("--merge-f-test="))
         .map_or(Ok(base.merge_f_test), |s| s.parse())?;
-    let base = Params {
-        merge_f_test: f_test,
-        ..base
-    };
+    let base = base.with_merge_f_test(f_test);
     println!("| σ₀ | matched resolvable | gross | with beams on another surface | of those: on an arc | median such beams | all on the piece's wall |");
     println!("|---|---:|---:|---:|---:|---:|---:|");
     for sigma in SIGMAS {

@@ -7,33 +7,23 @@
 //! `cargo run --release -p lms-lab --example merge_anchor_sweep -- [SCANS]`
 
 use anyhow::Result;
-use lms_core::Params;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 fn main() -> Result<()> {
     let scans: usize = std::env::args().nth(1).map_or(Ok(100), |s| s.parse())?;
     let v: Vec<(&'static str, Adjust)> = vec![
-        ("merge_anchor_gate=inf (no gate)", |p| Params {
-            merge_anchor_gate: f32::INFINITY,
-            ..p
+        ("merge_anchor_gate=inf (no gate)", |p| {
+            p.with_merge_anchor_gate(f32::INFINITY)
         }),
-        ("merge_anchor_gate=4.61 (χ²₂ 90 %)", |p| Params {
-            merge_anchor_gate: 4.61,
-            ..p
+        ("merge_anchor_gate=4.61 (χ²₂ 90 %)", |p| {
+            p.with_merge_anchor_gate(4.61)
         }),
-        ("merge_anchor_gate=9.21 (99 %)", |p| Params {
-            merge_anchor_gate: 9.21,
-            ..p
+        ("merge_anchor_gate=9.21 (99 %)", |p| {
+            p.with_merge_anchor_gate(9.21)
         }),
         ("defaults (13.8, χ²₂ 99.9 %)", |p| p),
-        ("merge_anchor_gate=30", |p| Params {
-            merge_anchor_gate: 30.0,
-            ..p
-        }),
-        ("merge_anchor_gate=100", |p| Params {
-            merge_anchor_gate: 100.0,
-            ..p
-        }),
+        ("merge_anchor_gate=30", |p| p.with_merge_anchor_gate(30.0)),
+        ("merge_anchor_gate=100", |p| p.with_merge_anchor_gate(100.0)),
     ];
     print_sweep(&v, 5, scans)
 }

@@ -9,28 +9,15 @@
 //! `cargo run --release -p lms-lab --example split_budget_sweep`
 
 use anyhow::Result;
-use lms_core::Params;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 fn main() -> Result<()> {
     let v: Vec<(&'static str, Adjust)> = vec![
-        ("split_budget=0 (no bound)", |p| Params {
-            split_budget: 0,
-            ..p
-        }),
-        ("split_budget=361", |p| Params {
-            split_budget: 361,
-            ..p
-        }),
+        ("split_budget=0 (no bound)", |p| p.with_split_budget(0)),
+        ("split_budget=361", |p| p.with_split_budget(361)),
         ("defaults (542)", |p| p),
-        ("split_budget=722", |p| Params {
-            split_budget: 722,
-            ..p
-        }),
-        ("split_budget=1083", |p| Params {
-            split_budget: 1083,
-            ..p
-        }),
+        ("split_budget=722", |p| p.with_split_budget(722)),
+        ("split_budget=1083", |p| p.with_split_budget(1083)),
     ];
     print_sweep(&v, 5, 100)
 }

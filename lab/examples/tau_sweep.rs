@@ -9,7 +9,6 @@
 //! `cargo run --release -p lms-lab --example tau_sweep -- [EVERY] [SCANS]`
 
 use anyhow::Result;
-use lms_core::Params;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 /// The variants, each applied to the defaults (the per-data defaults on
@@ -17,22 +16,17 @@ use lms_lab::sweep::{print_sweep, Adjust};
 fn variants() -> Vec<(&'static str, Adjust)> {
     vec![
         ("defaults (same-turn windows, τ = 9)", |p| p),
-        ("tau=12", |p| Params { tau: 12.0, ..p }),
-        ("tau=16", |p| Params { tau: 16.0, ..p }),
-        ("tau=25", |p| Params { tau: 25.0, ..p }),
-        ("same_turn_windows=false", |p| Params {
-            same_turn_windows: false,
-            ..p
+        ("tau=12", |p| p.with_tau(12.0)),
+        ("tau=16", |p| p.with_tau(16.0)),
+        ("tau=25", |p| p.with_tau(25.0)),
+        ("same_turn_windows=false", |p| {
+            p.with_same_turn_windows(false)
         }),
-        ("same_turn_windows=false, tau=16", |p| Params {
-            same_turn_windows: false,
-            tau: 16.0,
-            ..p
+        ("same_turn_windows=false, tau=16", |p| {
+            p.with_same_turn_windows(false).with_tau(16.0)
         }),
-        ("same_turn_windows=false, tau=25", |p| Params {
-            same_turn_windows: false,
-            tau: 25.0,
-            ..p
+        ("same_turn_windows=false, tau=25", |p| {
+            p.with_same_turn_windows(false).with_tau(25.0)
         }),
     ]
 }

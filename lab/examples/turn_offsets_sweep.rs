@@ -7,34 +7,26 @@
 //! `cargo run --release -p lms-lab --example turn_offsets_sweep -- [SCANS]`
 
 use anyhow::Result;
-use lms_core::Params;
 use lms_lab::sweep::{print_sweep, Adjust};
 
 fn main() -> Result<()> {
     let scans: usize = std::env::args().nth(1).map_or(Ok(100), |s| s.parse())?;
     let v: Vec<(&'static str, Adjust)> = vec![
-        ("turn_offsets=false, merge_anchor_gate=inf", |p| Params {
-            turn_offsets: false,
-            merge_anchor_gate: f32::INFINITY,
-            ..p
+        ("turn_offsets=false, merge_anchor_gate=inf", |p| {
+            p.with_turn_offsets(false)
+                .with_merge_anchor_gate(f32::INFINITY)
         }),
-        ("turn_offsets=false (anchor gate only)", |p| Params {
-            turn_offsets: false,
-            ..p
+        ("turn_offsets=false (anchor gate only)", |p| {
+            p.with_turn_offsets(false)
         }),
-        ("merge_anchor_gate=inf (turn offsets only)", |p| Params {
-            merge_anchor_gate: f32::INFINITY,
-            ..p
+        ("merge_anchor_gate=inf (turn offsets only)", |p| {
+            p.with_merge_anchor_gate(f32::INFINITY)
         }),
         ("defaults (both)", |p| p),
-        ("same_turn_windows=false", |p| Params {
-            same_turn_windows: false,
-            ..p
+        ("same_turn_windows=false", |p| {
+            p.with_same_turn_windows(false)
         }),
-        ("per_turn=true", |p| Params {
-            per_turn: true,
-            ..p
-        }),
+        ("per_turn=true", |p| p.with_per_turn(true)),
     ];
     print_sweep(&v, 5, scans)
 }

@@ -6,36 +6,26 @@
 use lms_core::Params;
 
 /// The defaults with pairs of lines on a curve kept (`arc_pairs = false`).
-pub const ARC_PAIRS_KEPT: Params = Params {
-    arc_pairs: false,
-    ..Params::DEFAULT
-};
+pub const ARC_PAIRS_KEPT: Params = Params::DEFAULT.with_arc_pairs(false);
 
 /// [`ARC_PAIRS_KEPT`] with no anchor gate on the merges and no per-turn
 /// offsets in the fits' χ² (`merge_anchor_gate = inf`,
 /// `turn_offsets = false`).
-pub const NO_ANCHOR_NO_OFFSETS: Params = Params {
-    merge_anchor_gate: f32::INFINITY,
-    turn_offsets: false,
-    ..ARC_PAIRS_KEPT
-};
+pub const NO_ANCHOR_NO_OFFSETS: Params = ARC_PAIRS_KEPT
+    .with_merge_anchor_gate(f32::INFINITY)
+    .with_turn_offsets(false);
 
 /// [`NO_ANCHOR_NO_OFFSETS`] with windows of consecutive beams in every
 /// mode and no work bound on split before reject
 /// (`same_turn_windows = false`, `split_budget = 0`).
-pub const CONSECUTIVE_WINDOWS: Params = Params {
-    same_turn_windows: false,
-    split_budget: 0,
-    ..NO_ANCHOR_NO_OFFSETS
-};
+pub const CONSECUTIVE_WINDOWS: Params = NO_ANCHOR_NO_OFFSETS
+    .with_same_turn_windows(false)
+    .with_split_budget(0);
 
 /// [`CONSECUTIVE_WINDOWS`] with every line of an arc kept
 /// (`arc_chain = 0`). With the footprint weights and the bridge merge off
 /// too, this is [`Params::V2`].
-pub const ARC_CHAINS_KEPT: Params = Params {
-    arc_chain: 0,
-    ..CONSECUTIVE_WINDOWS
-};
+pub const ARC_CHAINS_KEPT: Params = CONSECUTIVE_WINDOWS.with_arc_chain(0);
 
 /// Name of [`ARC_PAIRS_KEPT`] in the tables.
 pub const ARC_PAIRS_KEPT_NAME: &str = "defaults, arc_pairs=false";
@@ -56,11 +46,7 @@ mod tests {
     /// The chain ends at ALGORITHM.md v2 as the core defines it.
     #[test]
     fn chain_ends_at_v2() {
-        let v2 = Params {
-            footprint: 0.0,
-            bridge_merge: false,
-            ..ARC_CHAINS_KEPT
-        };
+        let v2 = ARC_CHAINS_KEPT.with_footprint(0.0).with_bridge_merge(false);
         assert_eq!(v2, Params::V2);
     }
 }

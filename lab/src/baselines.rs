@@ -266,10 +266,7 @@ pub fn split_and_merge(
     }
     // The peer's merge has no anchor gate (the core's defaults have one):
     // it is the textbook split-and-merge.
-    let peer = Params {
-        merge_anchor_gate: f32::INFINITY,
-        ..*params
-    };
+    let peer = (*params).with_merge_anchor_gate(f32::INFINITY);
     let (lines, corners) = features_from_segments(frame, tables, r, &segments, &peer);
     Extraction {
         segments,

@@ -217,10 +217,7 @@ impl Method {
     /// baselines and variants replicate its back end) with σ, then the
     /// method's changes.
     pub fn params(&self, sigma: f64) -> Params {
-        (self.adjust)(Params {
-            sigma: sigma as f32,
-            ..Params::PAPER
-        })
+        (self.adjust)(Params::PAPER.with_sigma(sigma as f32))
     }
 
     /// Run on `frame`.
@@ -248,10 +245,7 @@ pub const PROPOSED_SPLIT_DEPTH: u8 = 8;
 pub const INFO_GATE_SD_ALPHA: f32 = 5.0 / 3.0 * core::f32::consts::PI / 180.0;
 
 fn no_shared(p: Params) -> Params {
-    Params {
-        fit_shared_points: false,
-        ..p
-    }
+    p.with_fit_shared_points(false)
 }
 
 /// Name of the spec's method in every table.
@@ -308,14 +302,11 @@ pub fn diagnostic_variants() -> Vec<Method> {
         ..o
     };
     vec![
-        Method::with("τ = 4", Kind::Core, |p| Params { tau: 4.0, ..p }),
-        Method::with("τ = 16", Kind::Core, |p| Params { tau: 16.0, ..p }),
-        Method::with("3 passes", Kind::Core, |p| Params { iterations: 3, ..p }),
-        Method::with("100 passes", Kind::Core, |p| Params {
-            iterations: 100,
-            ..p
-        }),
-        Method::with("q = 1e-4 m²", Kind::Core, |p| Params { q: 1e-4, ..p }),
+        Method::with("τ = 4", Kind::Core, |p| p.with_tau(4.0)),
+        Method::with("τ = 16", Kind::Core, |p| p.with_tau(16.0)),
+        Method::with("3 passes", Kind::Core, |p| p.with_iterations(3)),
+        Method::with("100 passes", Kind::Core, |p| p.with_iterations(100)),
+        Method::with("q = 1e-4 m²", Kind::Core, |p| p.with_q(1e-4)),
         Method::new(
             "normalised observation weight",
             Kind::Variant(Options {
@@ -330,15 +321,9 @@ pub fn diagnostic_variants() -> Vec<Method> {
                 ..o
             }),
         ),
-        Method::with("max χ² = 2", Kind::Core, |p| Params {
-            max_chi2: 2.0,
-            ..p
-        }),
-        Method::with("max χ² = 8", Kind::Core, |p| Params {
-            max_chi2: 8.0,
-            ..p
-        }),
-        Method::with("no merge", Kind::Core, |p| Params { merge: false, ..p }),
+        Method::with("max χ² = 2", Kind::Core, |p| p.with_max_chi2(2.0)),
+        Method::with("max χ² = 8", Kind::Core, |p| p.with_max_chi2(8.0)),
+        Method::with("no merge", Kind::Core, |p| p.with_merge(false)),
         Method::new("window stride 2", Kind::Variant(Options { stride: 2, ..o })),
         Method::new("window stride 4", Kind::Variant(Options { stride: 4, ..o })),
         Method::new("split before reject, no arc guard", Kind::Variant(sbr)),

@@ -93,58 +93,45 @@ pub fn methods() -> Vec<Method> {
     let core = |name: &str, adjust| Method::with(name, Kind::Core, adjust);
     // The first method's parameters also define the truth (`score_sample`).
     vec![
-        core("paper (--preset paper)", |p| Params {
-            sigma: p.sigma,
-            ..Params::PAPER
+        core("paper (--preset paper)", |p| {
+            Params::PAPER.with_sigma(p.sigma)
         }),
-        core("defaults", |p| Params {
-            sigma: p.sigma,
-            ..Params::default()
+        core("defaults", |p| Params::default().with_sigma(p.sigma)),
+        core(ablation::ARC_PAIRS_KEPT_NAME, |p| {
+            ablation::ARC_PAIRS_KEPT.with_sigma(p.sigma)
         }),
-        core(ablation::ARC_PAIRS_KEPT_NAME, |p| Params {
-            sigma: p.sigma,
-            ..ablation::ARC_PAIRS_KEPT
+        core(ablation::NO_ANCHOR_NO_OFFSETS_NAME, |p| {
+            ablation::NO_ANCHOR_NO_OFFSETS.with_sigma(p.sigma)
         }),
-        core(ablation::NO_ANCHOR_NO_OFFSETS_NAME, |p| Params {
-            sigma: p.sigma,
-            ..ablation::NO_ANCHOR_NO_OFFSETS
+        core(ablation::CONSECUTIVE_WINDOWS_NAME, |p| {
+            ablation::CONSECUTIVE_WINDOWS.with_sigma(p.sigma)
         }),
-        core(ablation::CONSECUTIVE_WINDOWS_NAME, |p| Params {
-            sigma: p.sigma,
-            ..ablation::CONSECUTIVE_WINDOWS
+        core(ablation::ARC_CHAINS_KEPT_NAME, |p| {
+            ablation::ARC_CHAINS_KEPT.with_sigma(p.sigma)
         }),
-        core(ablation::ARC_CHAINS_KEPT_NAME, |p| Params {
-            sigma: p.sigma,
-            ..ablation::ARC_CHAINS_KEPT
+        core("v2 (--preset v2)", |p| Params::V2.with_sigma(p.sigma)),
+        core("defaults, merge_f_test=20", |p| {
+            Params::default()
+                .with_sigma(p.sigma)
+                .with_merge_f_test(20.0)
         }),
-        core("v2 (--preset v2)", |p| Params {
-            sigma: p.sigma,
-            ..Params::V2
+        core("defaults, grazing_noise=0.5", |p| {
+            Params::default()
+                .with_sigma(p.sigma)
+                .with_grazing_noise(0.5)
         }),
-        core("defaults, merge_f_test=20", |p| Params {
-            sigma: p.sigma,
-            merge_f_test: 20.0,
-            ..Params::default()
+        core("defaults, fit_sigma=1.5σ", |p| {
+            Params::default()
+                .with_sigma(p.sigma)
+                .with_fit_sigma(1.5 * p.sigma)
         }),
-        core("defaults, grazing_noise=0.5", |p| Params {
-            sigma: p.sigma,
-            grazing_noise: 0.5,
-            ..Params::default()
+        core("defaults, fit_sigma=2σ", |p| {
+            Params::default()
+                .with_sigma(p.sigma)
+                .with_fit_sigma(2.0 * p.sigma)
         }),
-        core("defaults, fit_sigma=1.5σ", |p| Params {
-            sigma: p.sigma,
-            fit_sigma: 1.5 * p.sigma,
-            ..Params::default()
-        }),
-        core("defaults, fit_sigma=2σ", |p| Params {
-            sigma: p.sigma,
-            fit_sigma: 2.0 * p.sigma,
-            ..Params::default()
-        }),
-        core("defaults, per_turn=true", |p| Params {
-            sigma: p.sigma,
-            per_turn: true,
-            ..Params::default()
+        core("defaults, per_turn=true", |p| {
+            Params::default().with_sigma(p.sigma).with_per_turn(true)
         }),
         Method::new(crate::SPLIT_MERGE, Kind::SplitMerge { k: crate::SPLIT_K }),
     ]

@@ -113,11 +113,7 @@ pub fn load_with_map(path: &Path, cfg: &TruthConfig) -> Result<LogWithMap> {
 /// ([`no_flag_params`]) and the synthetic scenes' σ₀ differ from
 /// [`Params::DEFAULT`].
 pub fn on_data(preset: Params, data: Params) -> Params {
-    Params {
-        sigma: data.sigma,
-        max_range: data.max_range,
-        ..preset
-    }
+    preset.with_sigma(data.sigma).with_max_range(data.max_range)
 }
 
 /// Which parameters a method starts from.
@@ -179,7 +175,7 @@ impl RealMethod {
             SigmaChoice::ByUnit => crate::real::sigma_for(unit) as f32,
             SigmaChoice::Fixed(s) => s as f32,
         };
-        (self.adjust)(Params { sigma, ..base })
+        (self.adjust)(base.with_sigma(sigma))
     }
 }
 
@@ -243,29 +239,17 @@ pub fn methods() -> Vec<RealMethod> {
         m("defaults, σ = 20 mm", Core, NoFlags, Fixed(0.02)),
         m("defaults, σ = 30 mm", Core, NoFlags, Fixed(0.03)),
         m(SPLIT_MERGE, SplitMerge(4.0), NoFlags, ByUnit),
-        g("defaults, grazing_noise=0.5", |p| Params {
-            grazing_noise: 0.5,
-            ..p
+        g("defaults, grazing_noise=0.5", |p| p.with_grazing_noise(0.5)),
+        g("defaults, fit_sigma=1.5σ", |p| {
+            p.with_fit_sigma(1.5 * p.sigma)
         }),
-        g("defaults, fit_sigma=1.5σ", |p| Params {
-            fit_sigma: 1.5 * p.sigma,
-            ..p
+        g("defaults, fit_sigma=2σ", |p| {
+            p.with_fit_sigma(2.0 * p.sigma)
         }),
-        g("defaults, fit_sigma=2σ", |p| Params {
-            fit_sigma: 2.0 * p.sigma,
-            ..p
-        }),
-        g("defaults, merge_f_test=20", |p| Params {
-            merge_f_test: 20.0,
-            ..p
-        }),
-        g(PER_TURN, |p| Params {
-            per_turn: true,
-            ..p
-        }),
-        g("v2, per_turn=true", |p| Params {
-            per_turn: true,
-            ..on_data(Params::V2, p)
+        g("defaults, merge_f_test=20", |p| p.with_merge_f_test(20.0)),
+        g(PER_TURN, |p| p.with_per_turn(true)),
+        g("v2, per_turn=true", |p| {
+            (on_data(Params::V2, p)).with_per_turn(true)
         }),
         m(ORACLE, Oracle, NoFlags, own),
     ]

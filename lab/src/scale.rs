@@ -83,19 +83,12 @@ pub fn run(args: &EvaluateArgs, bar: &indicatif::ProgressBar) -> Result<Scale> {
                 // Other scans than the main tables' (index offset).
                 let s = scenes::sample(family, 100_000 + k, args.seed, noise)?;
                 let tables = Tables::for_frame(&s.frame);
-                let base = Params {
-                    sigma: sigma as f32,
-                    ..Params::PAPER
-                };
+                let base = Params::PAPER.with_sigma(sigma as f32);
                 let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
                 detectable += truth.pieces.iter().filter(|p| p.detectable).count();
                 scans += 1;
                 for (qi, &q) in QS.iter().enumerate() {
-                    let params = Params {
-                        q,
-                        iterations: last,
-                        ..base
-                    };
+                    let params = base.with_q(q).with_iterations(last);
                     let mut captured: Vec<(u16, Vec<f32>)> = Vec::new();
                     let _ = ex.run_observed(
                         &s.frame,

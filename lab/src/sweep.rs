@@ -70,10 +70,7 @@ pub fn each_scored_scan(
         kappa: model.kappa,
         ..Gates::default()
     };
-    let params = Params {
-        sigma: sigma as f32,
-        ..base
-    };
+    let params = base.with_sigma(sigma as f32);
     let mut ex = Extractor::new();
     for family in Family::ALL {
         for index in 0..scans {
@@ -145,10 +142,7 @@ pub fn print_sweep_with(
         for family in Family::ALL {
             for i in 0..scans {
                 let s = sample(family, i, 1, &model, DELTA)?;
-                let base = Params {
-                    sigma: sigma as f32,
-                    ..Params::default()
-                };
+                let base = Params::default().with_sigma(sigma as f32);
                 let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
                 for (k, t) in tallies.iter_mut().enumerate() {
                     let x = run(k, &mut ex, &s.frame, &base);

@@ -309,10 +309,7 @@ pub fn smooth(frame: &Frame, params: &Params, opts: &Options) -> (Vec<f32>, Vec<
 pub fn segments_strided(d: &[f32], params: &Params, k: usize) -> Vec<lms_core::Segment> {
     // `segments_of` covers i..=m+2: judge min_points on the widened run.
     let extra = 2 * (k.max(1) - 1);
-    let loose = Params {
-        min_points: params.min_points.saturating_sub(extra as u16).max(1),
-        ..*params
-    };
+    let loose = (*params).with_min_points(params.min_points.saturating_sub(extra as u16).max(1));
     let mut segs = segments_of(d, &loose);
     for s in &mut segs {
         s.last = s.last.saturating_add(extra as u16);

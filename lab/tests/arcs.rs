@@ -29,10 +29,7 @@ fn compare(with: Params, without: Params) -> [(lms_lab::metrics::Summary, u32); 
         kappa: model.kappa,
         ..Gates::default()
     };
-    let variants = [with, without].map(|p| Params {
-        sigma: SIGMA as f32,
-        ..p
-    });
+    let variants = [with, without].map(|p| p.with_sigma(SIGMA as f32));
     let mut ex = Extractor::new();
     let mut tallies = [Tally::default(), Tally::default()];
     let mut dropped = [0u32; 2];
@@ -88,10 +85,7 @@ fn assert_gain(on: &lms_lab::metrics::Summary, off: &lms_lab::metrics::Summary, 
 
 #[test]
 fn dropping_arcs_removes_false_lines_and_keeps_the_walls() {
-    let no_arcs = Params {
-        arc_chain: 0,
-        ..ablation::ARC_PAIRS_KEPT
-    };
+    let no_arcs = ablation::ARC_PAIRS_KEPT.with_arc_chain(0);
     let [(on, dropped_on), (off, dropped_off)] = compare(ablation::ARC_PAIRS_KEPT, no_arcs);
     println!("chains dropped {dropped_on} lines");
     assert!(dropped_on > 0 && dropped_off == 0);

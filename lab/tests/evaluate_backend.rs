@@ -24,12 +24,10 @@ fn evaluate_back_end_and_smoothing_replicas_match_the_core_bit_for_bit() {
                     },
                 )
                 .unwrap();
-                let params = Params {
-                    sigma: sigma as f32,
-                    fit_shared_points: shared,
-                    iterations,
-                    ..Params::PAPER
-                };
+                let params = Params::PAPER
+                    .with_sigma(sigma as f32)
+                    .with_fit_shared_points(shared)
+                    .with_iterations(iterations);
                 let tables = Tables::for_frame(&s.frame);
                 let mut trace = lms_core::Trace::new();
                 let f = ex

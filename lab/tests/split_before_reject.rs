@@ -21,18 +21,12 @@ const SIGMA: f64 = 0.02;
 const SCANS_PER_FAMILY: usize = 40;
 
 fn core_split(p: Params) -> Params {
-    Params {
-        fit_shared_points: false,
-        split_depth: PROPOSED_SPLIT_DEPTH,
-        ..p
-    }
+    p.with_fit_shared_points(false)
+        .with_split_depth(PROPOSED_SPLIT_DEPTH)
 }
 
 fn no_shared(p: Params) -> Params {
-    Params {
-        fit_shared_points: false,
-        ..p
-    }
+    p.with_fit_shared_points(false)
 }
 
 #[test]

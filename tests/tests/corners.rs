@@ -237,10 +237,7 @@ fn a_ten_degree_bend_is_an_ill_conditioned_corner() {
     let mut ex = Extractor::new();
 
     // End to end at 0.5°, sigma = 0.5 mm.
-    let params = Params {
-        sigma: 0.0005,
-        ..Params::default()
-    };
+    let params = Params::default().with_sigma(0.0005);
     for seed in 0..5 {
         let mut rng = ChaCha8Rng::seed_from_u64(10 + seed);
         let frame = scan(&walls, 0.0005, &mut rng);

@@ -17,96 +17,44 @@ fn nonsense_parameters_are_refused_with_the_right_error() {
     let frame = Frame::from_metres(Variant::Fov180Res50.geometry(), &[2.0; 361]).unwrap();
     let mut ex = Extractor::new();
     let d = Params::default();
-    let cases: Vec<(Params, ParamError)> = vec![
-        (Params { sigma: 0.0, ..d }, ParamError::Sigma),
-        (Params { sigma: -0.005, ..d }, ParamError::Sigma),
+    // (parameters, the field out of its range)
+    let cases: Vec<(Params, &str)> = vec![
+        (d.with_sigma(0.0), "sigma"),
+        (d.with_sigma(-0.005), "sigma"),
+        (d.with_sigma(f32::NAN), "sigma"),
+        (d.with_sigma(f32::INFINITY), "sigma"),
+        (d.with_q(-1e-6), "q"),
+        (d.with_q(f32::NAN), "q"),
+        (d.with_iterations(0), "iterations"),
+        (d.with_tau(0.0), "tau"),
+        (d.with_tau(-9.0), "tau"),
+        (d.with_tau(f32::NAN), "tau"),
+        (d.with_min_points(2), "min_points"),
+        (d.with_max_chi2(0.0), "max_chi2"),
+        (d.with_max_chi2(f32::NAN), "max_chi2"),
+        (d.with_min_length(-0.1), "min_length"),
+        (d.with_merge_gate(0.0), "merge_gate"),
+        (d.with_corner_gap(f32::NAN), "corner_gap"),
+        (d.with_min_corner_angle_deg(91.0), "min_corner_angle_deg"),
         (
-            Params {
-                sigma: f32::NAN,
-                ..d
-            },
-            ParamError::Sigma,
-        ),
-        (
-            Params {
-                sigma: f32::INFINITY,
-                ..d
-            },
-            ParamError::Sigma,
-        ),
-        (Params { q: -1e-6, ..d }, ParamError::ProcessNoise),
-        (Params { q: f32::NAN, ..d }, ParamError::ProcessNoise),
-        (Params { iterations: 0, ..d }, ParamError::Iterations),
-        (Params { tau: 0.0, ..d }, ParamError::Tau),
-        (Params { tau: -9.0, ..d }, ParamError::Tau),
-        (Params { tau: f32::NAN, ..d }, ParamError::Tau),
-        (Params { min_points: 2, ..d }, ParamError::MinPoints),
-        (Params { max_chi2: 0.0, ..d }, ParamError::MaxChi2),
-        (
-            Params {
-                max_chi2: f32::NAN,
-                ..d
-            },
-            ParamError::MaxChi2,
-        ),
-        (
-            Params {
-                min_length: -0.1,
-                ..d
-            },
-            ParamError::MinLength,
-        ),
-        (
-            Params {
-                merge_gate: 0.0,
-                ..d
-            },
-            ParamError::MergeGate,
-        ),
-        (
-            Params {
-                corner_gap: f32::NAN,
-                ..d
-            },
-            ParamError::CornerGap,
-        ),
-        (
-            Params {
-                min_corner_angle_deg: 91.0,
-                ..d
-            },
-            ParamError::MinCornerAngle,
-        ),
-        (
-            Params {
-                min_corner_angle_deg: f32::NAN,
-                ..d
-            },
-            ParamError::MinCornerAngle,
+            d.with_min_corner_angle_deg(f32::NAN),
+            "min_corner_angle_deg",
         ),
     ];
-    for (params, want) in cases {
+    for (params, name) in cases {
+        let field = lms_core::params::field(name).unwrap();
+        let want = ParamError::OutOfRange {
+            name: field.name,
+            range: field.range,
+        };
         assert_eq!(params.validate(), Err(want), "{params:?}");
         assert_eq!(ValidParams::try_from(params), Err(want), "{params:?}");
     }
     // Several faults: one error, and the run refuses.
-    let bad = Params {
-        sigma: f32::NAN,
-        tau: 0.0,
-        iterations: 0,
-        ..d
-    };
+    let bad = d.with_sigma(f32::NAN).with_tau(0.0).with_iterations(0);
     assert!(bad.validate().is_err());
     // The defaults and the edges of the valid ranges pass.
-    for ok in [
-        d,
-        Params { iterations: 1, ..d },
-        Params {
-            q: 0.0,
-            min_points: 3,
-            ..d
-        },
-    ] {
+    for ok in [d, d.with_iterations(1), d.with_q(0.0).with_min_points(3)] {
         let valid = ok.validate().expect("valid");
         assert_eq!(*valid.get(), ok);
         ex.run(&frame, &valid);
@@ -197,15 +145,7 @@ fn three_beams_and_the_largest_frame_run() {
     );
     assert!(f.segments().is_empty() && f.lines().is_empty());
     assert_eq!(f.stats().short_segments, 1);
-    ex.run(
-        &three,
-        &Params {
-            min_points: 3,
-            ..params
-        }
-        .validate()
-        .unwrap(),
-    );
+    ex.run(&three, &params.with_min_points(3).validate().unwrap());
     let f = ex.features();
     assert_eq!(f.segments().len(), 1);
 
@@ -230,10 +170,7 @@ fn three_beams_and_the_largest_frame_run() {
         .map(|j| if j % 2 == 0 { 1.0 } else { 80.0 })
         .collect();
     let zz = Frame::from_metres(g, &zigzag).unwrap();
-    let spec_windows = Params {
-        same_turn_windows: false,
-        ..params
-    };
+    let spec_windows = params.with_same_turn_windows(false);
     ex.run(&zz, &spec_windows.validate().unwrap());
     let f = ex.features();
     assert!(f.segments().is_empty() && f.lines().is_empty());
@@ -248,12 +185,10 @@ fn three_beams_and_the_largest_frame_run() {
     }
     ex.run(
         &sparse,
-        &Params {
-            iterations: lms_core::params::MAX_ITERATIONS,
-            ..params
-        }
-        .validate()
-        .unwrap(),
+        &params
+            .with_iterations(lms_core::params::MAX_ITERATIONS)
+            .validate()
+            .unwrap(),
     );
     let f = ex.features();
     assert!(f.segments().is_empty());

@@ -236,10 +236,7 @@ fn compare(case: &Case, report: &mut Report) {
     let raw: Vec<f64> = frame.ranges().iter().map(|&r| r as f64).collect();
     let valid: Vec<bool> = frame.beams().iter().map(|b| b.is_valid()).collect();
     for same_turn in window_modes(case) {
-        let params = Params {
-            same_turn_windows: same_turn,
-            ..case.params
-        };
+        let params = case.params.with_same_turn_windows(same_turn);
         let label = if same_turn {
             case.label.clone()
         } else {
@@ -287,11 +284,7 @@ fn compare_windows(
         // are the pieces it fits, not §6's segments; the split is checked
         // against the evaluation's f64 prototype instead
         // (lab/tests/split_before_reject.rs).
-        let run = Params {
-            iterations: passes,
-            split_depth: 0,
-            ..*params
-        };
+        let run = (*params).with_iterations(passes).with_split_depth(0);
         let mut ex = Extractor::new();
         let mut trace = lms_core::Trace::new();
         ex.run_traced(frame, &run.validate().expect("valid params"), &mut trace);
@@ -683,10 +676,7 @@ fn random_scenes_agree_with_the_f64_reference() {
             let variant = variants[seed as usize % variants.len()];
             // Noise at, below and above the filter's sigma.
             let sigma_true = [0.005, 0.002, 0.01, 0.02][seed as usize % 4];
-            let params = Params {
-                q: if seed % 6 == 5 { 1e-4 } else { 0.0 },
-                ..Params::default()
-            };
+            let params = Params::default().with_q(if seed % 6 == 5 { 1e-4 } else { 0.0 });
             random_case(seed, variant, sigma_true, params)
         })
         .collect();
@@ -706,11 +696,7 @@ fn beams_beyond_the_range_limit_agree_with_the_f64_reference() {
     ];
     let cases: Vec<Case> = (12..16u64)
         .map(|seed| {
-            let params = Params {
-                max_range: 9.0,
-                sigma: 0.01,
-                ..Params::default()
-            };
+            let params = Params::default().with_max_range(9.0).with_sigma(0.01);
             random_case(seed, variants[seed as usize % 4], 0.01, params)
         })
         .collect();

@@ -148,10 +148,7 @@ fn noisy_edge_points_are_exactly_the_true_corners_and_jumps_and_converge_with_sc
     let (truth, expected) = room_truth();
     let at_30 = CONSECUTIVE_WINDOWS;
     let (exact_30, false_30) = exact_scans(&truth, &expected, &at_30, 100);
-    let at_100 = Params {
-        iterations: 100,
-        ..CONSECUTIVE_WINDOWS
-    };
+    let at_100 = CONSECUTIVE_WINDOWS.with_iterations(100);
     let (exact_100, false_100) = exact_scans(&truth, &expected, &at_100, 100);
     println!("exact: {exact_30}/100 at 30 passes ({false_30} false edges), {exact_100}/100 at 100 ({false_100})");
     assert!(exact_30 >= 60, "30 passes: only {exact_30}/100 scans exact");

@@ -47,7 +47,7 @@
 //! accepted ≤ 1 per scan on average.
 
 use lms_core::test_support::CONSECUTIVE_WINDOWS;
-use lms_core::{Extractor, Frame, Params, Segment, Variant};
+use lms_core::{Extractor, Frame, Segment, Variant};
 use lms_scene::{seeded_rng, Bearings, NoiseModel, Pose, Scene, TrueScan, WindowTruth};
 use workspace_tests::reference;
 
@@ -135,12 +135,10 @@ fn noise_free_edge_points_are_the_true_corners_and_jumps() {
                 let mut trace = lms_core::Trace::new();
                 ex.run_traced(
                     &frame,
-                    &Params {
-                        iterations,
-                        ..CONSECUTIVE_WINDOWS
-                    }
-                    .validate()
-                    .unwrap(),
+                    &CONSECUTIVE_WINDOWS
+                        .with_iterations(iterations)
+                        .validate()
+                        .unwrap(),
                     &mut trace,
                 );
                 let edges: Vec<usize> = ex.features().edges().iter().map(|e| e as usize).collect();

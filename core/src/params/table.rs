@@ -111,6 +111,46 @@ impl FromText for bool {
     }
 }
 
+/// The values a parameter takes, as [`Params::validate`] checks them one
+/// field at a time (a whole number is compared as its `f32`, exactly).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Range {
+    /// Every value of its type (a switch, or a count without bound).
+    Any,
+    /// Finite and > 0.
+    Positive,
+    /// Finite and ≥ 0.
+    NonNegative,
+    /// > 0, `+inf` included (no limit).
+    PositiveOrInf,
+    /// `lo ≤ x ≤ hi`.
+    Between(f32, f32),
+    /// `x ≥ lo`.
+    AtLeast(f32),
+    /// `x ≤ hi`.
+    AtMost(f32),
+    /// Checked together with other fields by [`Params::validate`] (the
+    /// arcs' rule, [`ParamError::Arc`]); every value on its own.
+    Joint,
+}
+
+impl Range {
+    /// Whether `x` is in the range (NaN never is, but for [`Range::Any`]
+    /// and [`Range::Joint`]).
+    #[inline]
+    pub const fn holds(self, x: f32) -> bool {
+        match self {
+            Range::Any | Range::Joint => true,
+            Range::Positive => x.is_finite() && x > 0.0,
+            Range::NonNegative => x.is_finite() && x >= 0.0,
+            Range::PositiveOrInf => x > 0.0,
+            Range::Between(lo, hi) => x >= lo && x <= hi,
+            Range::AtLeast(lo) => x >= lo,
+            Range::AtMost(hi) => x <= hi,
+        }
+    }
+}
+
 /// One parameter: a field of [`Params`].
 #[derive(Clone, Copy, Debug)]
 pub struct Field {
@@ -118,6 +158,11 @@ pub struct Field {
     pub name: &'static str,
     /// Its unit (`bool` for a switch, `-` for a pure number).
     pub unit: &'static str,
+    /// The values it takes, as text: what an out-of-range value's
+    /// [`ParamError::OutOfRange`] says after "must be".
+    pub range: &'static str,
+    /// The values it takes, as [`Params::validate`] checks them.
+    pub bounds: Range,
     /// What it does, in one line.
     pub meaning: &'static str,
     /// Its value in some parameters.
@@ -127,12 +172,86 @@ pub struct Field {
     pub set: fn(&mut Params, &str) -> Result<(), ParamError>,
 }
 
+/// A range of the declaration as `(Range, text)`.
+macro_rules! range {
+    (any) => {
+        (Range::Any, "any value")
+    };
+    (positive) => {
+        (Range::Positive, "finite and > 0")
+    };
+    (non_negative) => {
+        (Range::NonNegative, "finite and >= 0")
+    };
+    (positive_or_inf) => {
+        (Range::PositiveOrInf, "> 0 or inf")
+    };
+    (between($lo:literal, $hi:literal)) => {
+        (
+            Range::Between($lo as f32, $hi as f32),
+            concat!("between ", stringify!($lo), " and ", stringify!($hi)),
+        )
+    };
+    (at_least($lo:literal)) => {
+        (
+            Range::AtLeast($lo as f32),
+            concat!("at least ", stringify!($lo)),
+        )
+    };
+    (at_most($hi:literal)) => {
+        (
+            Range::AtMost($hi as f32),
+            concat!("at most ", stringify!($hi)),
+        )
+    };
+    (joint($text:literal)) => {
+        (Range::Joint, $text)
+    };
+}
+
+/// Whether the field value `$v` of type `$ty` is in `$range`.
+macro_rules! holds {
+    (bool, $range:expr, $v:expr) => {
+        matches!($range, Range::Any)
+    };
+    (f32, $range:expr, $v:expr) => {
+        $range.holds($v)
+    };
+    ($count:ident, $range:expr, $v:expr) => {
+        $range.holds($v as f32)
+    };
+}
+
+/// A value of the field type `$ty` from the sources.
+macro_rules! take {
+    (f32, $real:ident, $count:ident, $flag:ident) => {
+        $real()
+    };
+    (u16, $real:ident, $count:ident, $flag:ident) => {
+        $count()
+    };
+    (u8, $real:ident, $count:ident, $flag:ident) => {
+        $count() as u8
+    };
+    (bool, $real:ident, $count:ident, $flag:ident) => {
+        $flag()
+    };
+}
+
+/// The one declaration of the parameters: per field its name, the name of
+/// its `const` setter, its type, unit, range, whether only a build with
+/// feature `section10` runs it, and its meaning. Gives [`FIELDS`], the
+/// setters (`Params::with_sigma`, …), the per-field range check and the
+/// check of the host-only options, all in this order.
 macro_rules! fields {
-    ($($name:ident, $unit:literal, $meaning:literal;)+) => {
+    ($($name:ident, $with:ident: $ty:ident, $unit:literal, $range:ident $(($($arg:tt)*))?,
+       $host_only:literal, $meaning:literal;)+) => {
         /// Every field of [`Params`], in declaration order.
         pub const FIELDS: &[Field] = &[$(Field {
             name: stringify!($name),
             unit: $unit,
+            range: range!($range $(($($arg)*))?).1,
+            bounds: range!($range $(($($arg)*))?).0,
             meaning: $meaning,
             get: |p: &Params| Value::from(p.$name),
             set: |p: &mut Params, text: &str| {
@@ -140,41 +259,156 @@ macro_rules! fields {
                 Ok(())
             },
         },)+];
+
+        /// The parameters only a build with feature `section10` runs (the
+        /// host crates; the firmware leaves them out): any other value than
+        /// the default fails validation elsewhere ([`ParamError::NotInBuild`]),
+        /// and the co-processor paths of the host refuse them.
+        pub const HOST_ONLY: &[&str] = {
+            const ALL: [(&str, bool); FIELDS.len()] = [$((stringify!($name), $host_only),)+];
+            const N: usize = {
+                let mut n = 0;
+                let mut i = 0;
+                while i < ALL.len() {
+                    n += ALL[i].1 as usize;
+                    i += 1;
+                }
+                n
+            };
+            const NAMES: [&str; N] = {
+                let mut names = [""; N];
+                let (mut n, mut i) = (0, 0);
+                while i < ALL.len() {
+                    if ALL[i].1 {
+                        names[n] = ALL[i].0;
+                        n += 1;
+                    }
+                    i += 1;
+                }
+                names
+            };
+            &NAMES
+        };
+
+        impl Params {
+            $(
+                #[doc = concat!("These parameters with [`Params::", stringify!($name),
+                                "`] set to `value` (", $unit, "; its range is in [`FIELDS`]).")]
+                #[inline]
+                #[must_use]
+                pub const fn $with(mut self, value: $ty) -> Params {
+                    self.$name = value;
+                    self
+                }
+            )+
+
+            /// Parameters with every field taken from a source of its type, in
+            /// [`FIELDS`] order: `real` for the real numbers, `count` for the
+            /// whole numbers (a field of 8 bits keeps the low 8), `flag` for the
+            /// switches. Not validated. E.g. values an optimiser cannot see,
+            /// or arbitrary ones for a property test.
+            pub fn from_sources(
+                mut real: impl FnMut() -> f32,
+                mut count: impl FnMut() -> u16,
+                mut flag: impl FnMut() -> bool,
+            ) -> Params {
+                let mut p = Params::DEFAULT;
+                $(p.$name = take!($ty, real, count, flag);)+
+                p
+            }
+
+            /// The first field outside its own range (in [`FIELDS`] order),
+            /// as `(name, range)`; the rules across fields are
+            /// [`Params::validate`]'s.
+            pub(super) const fn out_of_range(&self) -> Option<(&'static str, &'static str)> {
+                $(
+                    let (bounds, text) = range!($range $(($($arg)*))?);
+                    if !holds!($ty, bounds, self.$name) {
+                        return Some((stringify!($name), text));
+                    }
+                )+
+                None
+            }
+
+            /// The option of [`HOST_ONLY`] set to another value than its
+            /// default, if any.
+            pub(super) const fn host_only_changed(&self) -> Option<&'static str> {
+                $(
+                    #[allow(clippy::float_cmp)]
+                    let changed = self.$name != Params::DEFAULT.$name;
+                    if $host_only && changed {
+                        return Some(stringify!($name));
+                    }
+                )+
+                None
+            }
+        }
     };
 }
 
 fields! {
-    sigma, "m", "Range noise standard deviation of the smoothing filter and the segmentation";
-    q, "m²", "Process noise of the smoothing filter, the second scale parameter";
-    iterations, "passes", "Smoothing passes, the first scale parameter (1..=1000)";
-    tau, "-", "Segmentation gate on D: a window above it breaks a segment";
-    min_points, "beams", "Smallest segment kept (at least 3)";
-    max_chi2, "-", "Largest chi-square of an accepted line";
-    min_length, "m", "Shortest accepted line, endpoint to endpoint";
-    fit_shared_points, "bool", "Fit a corner beam shared by two segments into both lines";
-    merge, "bool", "Merge consecutive lines that agree";
-    merge_gap_beams, "beams", "Most valid beams between two lines that may merge";
-    merge_gate, "chi2 (2 dof)", "Gate of the merge test";
-    corner_gap, "m", "Largest gap between facing endpoints of two lines made a corner";
-    min_corner_angle_deg, "deg", "Smallest angle between two lines for a well-conditioned corner (0..=90)";
-    split_depth, "levels", "Split before reject: times a segment that is not one line may be split (0 off, at most 16)";
-    max_range, "m", "Largest true range: a beam at or beyond it is invalid (inf: no limit)";
-    merge_collinear, "bool", "Merge touching, nearly collinear lines whose union fits";
-    max_alpha_sd_deg, "deg", "Largest standard deviation of a line's angle; a less certain line is dropped (inf: keep all)";
-    grazing_noise, "-", "Grazing-incidence term of the window noise (0 off; host builds only)";
-    same_turn_windows, "bool", "Windows of one mirror turn's beams in the interleaved 0.5° and 0.25° modes";
-    fit_sigma, "m", "Range noise of the line fits (0: sigma; host builds only)";
-    per_turn, "bool", "Extract each mirror turn alone and fuse their lines (interleaved modes; host builds only)";
-    bridge_merge, "bool", "Merge two accepted lines across the rejected segments between them when their union fits";
-    footprint, "rad", "Beam-footprint term of the fits' range noise, sigma² + (footprint·d·tan θ)² (0 off)";
-    arc_chain, "lines", "Fewest touching lines turning the same way that are dropped as an arc (0 off, else at least 2)";
-    arc_min_turn_deg, "deg", "Smallest turn between consecutive lines of an arc";
-    arc_max_turn_deg, "deg", "Largest turn between consecutive lines of an arc (at most 180)";
-    split_budget, "beams", "Work bound of split before reject per frame, in beams tested (0: no bound)";
-    merge_anchor_gate, "chi2 (2 dof)", "A merge keeps the union line within this of the larger line's own (inf: no test)";
-    turn_offsets, "bool", "Line fits' chi-square allows an offset between interleaved mirror turns";
-    merge_f_test, "F", "Nested-model F test of the merges (0 off; host builds only)";
-    arc_pairs, "bool", "Drop a pair of touching lines that a circle explains better";
+    sigma, with_sigma: f32, "m", positive, false,
+        "Range noise standard deviation of the smoothing filter and the segmentation";
+    q, with_q: f32, "m²", non_negative, false,
+        "Process noise of the smoothing filter, the second scale parameter";
+    iterations, with_iterations: u16, "passes", between(1, 1000), false,
+        "Smoothing passes, the first scale parameter";
+    tau, with_tau: f32, "-", positive, false,
+        "Segmentation gate on D: a window above it breaks a segment";
+    min_points, with_min_points: u16, "beams", at_least(3), false,
+        "Smallest segment kept";
+    max_chi2, with_max_chi2: f32, "-", positive, false,
+        "Largest chi-square of an accepted line";
+    min_length, with_min_length: f32, "m", non_negative, false,
+        "Shortest accepted line, endpoint to endpoint";
+    fit_shared_points, with_fit_shared_points: bool, "bool", any, false,
+        "Fit a corner beam shared by two segments into both lines";
+    merge, with_merge: bool, "bool", any, false,
+        "Merge consecutive lines that agree";
+    merge_gap_beams, with_merge_gap_beams: u16, "beams", any, false,
+        "Most valid beams between two lines that may merge";
+    merge_gate, with_merge_gate: f32, "chi2 (2 dof)", positive, false,
+        "Gate of the merge test";
+    corner_gap, with_corner_gap: f32, "m", non_negative, false,
+        "Largest gap between facing endpoints of two lines made a corner";
+    min_corner_angle_deg, with_min_corner_angle_deg: f32, "deg", between(0, 90), false,
+        "Smallest angle between two lines for a well-conditioned corner";
+    split_depth, with_split_depth: u8, "levels", at_most(16), false,
+        "Split before reject: times a segment that is not one line may be split (0 off)";
+    max_range, with_max_range: f32, "m", positive_or_inf, false,
+        "Largest true range: a beam at or beyond it is invalid (inf: no limit)";
+    merge_collinear, with_merge_collinear: bool, "bool", any, false,
+        "Merge touching, nearly collinear lines whose union fits";
+    max_alpha_sd_deg, with_max_alpha_sd_deg: f32, "deg", positive_or_inf, false,
+        "Largest standard deviation of a line's angle; a less certain line is dropped (inf: keep all)";
+    grazing_noise, with_grazing_noise: f32, "-", non_negative, true,
+        "Grazing-incidence term of the window noise (0 off; host builds only)";
+    same_turn_windows, with_same_turn_windows: bool, "bool", any, false,
+        "Windows of one mirror turn's beams in the interleaved 0.5° and 0.25° modes";
+    fit_sigma, with_fit_sigma: f32, "m", non_negative, true,
+        "Range noise of the line fits (0: sigma; host builds only)";
+    per_turn, with_per_turn: bool, "bool", any, true,
+        "Extract each mirror turn alone and fuse their lines (interleaved modes; host builds only)";
+    bridge_merge, with_bridge_merge: bool, "bool", any, false,
+        "Merge two accepted lines across the rejected segments between them when their union fits";
+    footprint, with_footprint: f32, "rad", non_negative, false,
+        "Beam-footprint term of the fits' range noise, sigma² + (footprint·d·tan θ)² (0 off)";
+    arc_chain, with_arc_chain: u8, "lines", joint("0 (off) or at least 2"), false,
+        "Fewest touching lines turning the same way that are dropped as an arc";
+    arc_min_turn_deg, with_arc_min_turn_deg: f32, "deg", joint("between 0 and arc_max_turn_deg"), false,
+        "Smallest turn between consecutive lines of an arc";
+    arc_max_turn_deg, with_arc_max_turn_deg: f32, "deg", joint("between arc_min_turn_deg and 180"), false,
+        "Largest turn between consecutive lines of an arc";
+    split_budget, with_split_budget: u16, "beams", any, false,
+        "Work bound of split before reject per frame, in beams tested (0: no bound)";
+    merge_anchor_gate, with_merge_anchor_gate: f32, "chi2 (2 dof)", positive_or_inf, false,
+        "A merge keeps the union line within this of the larger line's own (inf: no test)";
+    turn_offsets, with_turn_offsets: bool, "bool", any, false,
+        "Line fits' chi-square allows an offset between interleaved mirror turns";
+    merge_f_test, with_merge_f_test: f32, "F", non_negative, true,
+        "Nested-model F test of the merges (0 off; host builds only)";
+    arc_pairs, with_arc_pairs: bool, "bool", any, false,
+        "Drop a pair of touching lines that a circle explains better";
 }
 
 /// The parameter named `name` (a field of [`Params`]).
@@ -198,17 +432,17 @@ pub struct Preset {
 pub const PRESETS: [Preset; 3] = [
     Preset {
         name: "default",
-        summary: "The defaults: ALGORITHM.md v2 with the measured additions of docs/ALGORITHM.md",
+        summary: "For extraction: ALGORITHM.md v2 with the additions measured in docs/ALGORITHM.md (the defaults)",
         params: Params::DEFAULT,
     },
     Preset {
         name: "v2",
-        summary: "ALGORITHM.md v2 as written, with the collinear merge and the line-angle gate",
+        summary: "For comparison with ALGORITHM.md v2 as written (with the collinear merge and the line-angle gate)",
         params: Params::V2,
     },
     Preset {
         name: "paper",
-        summary: "The seed paper's method, ALGORITHM.md v1",
+        summary: "For reproducing the seed paper: its method, ALGORITHM.md v1",
         params: Params::PAPER,
     },
 ];
@@ -336,6 +570,128 @@ mod tests {
         }
         assert_eq!(p.get("split_depth"), Some(Value::Count(3)));
         assert_eq!(p.get("nope"), None);
+    }
+
+    /// The checks of every field as written out by hand, one by one: the
+    /// table's ranges must accept and refuse exactly these.
+    fn accepted_by_hand(p: &Params) -> bool {
+        let pos = |x: f32| x.is_finite() && x > 0.0;
+        let non_neg = |x: f32| x.is_finite() && x >= 0.0;
+        pos(p.sigma)
+            && non_neg(p.q)
+            && (1..=1000).contains(&p.iterations)
+            && pos(p.tau)
+            && p.min_points >= 3
+            && pos(p.max_chi2)
+            && non_neg(p.min_length)
+            && pos(p.merge_gate)
+            && non_neg(p.corner_gap)
+            && (0.0..=90.0).contains(&p.min_corner_angle_deg)
+            && p.split_depth <= 16
+            && p.max_range > 0.0
+            && p.max_alpha_sd_deg > 0.0
+            && non_neg(p.merge_f_test)
+            && p.merge_anchor_gate > 0.0
+            && non_neg(p.grazing_noise)
+            && non_neg(p.fit_sigma)
+            && non_neg(p.footprint)
+    }
+
+    #[test]
+    fn the_ranges_accept_and_refuse_what_they_say() {
+        let reals = [
+            f32::NAN,
+            f32::NEG_INFINITY,
+            -1.0,
+            -0.0,
+            0.0,
+            1e-30,
+            0.5,
+            2.0,
+            89.9,
+            90.0,
+            90.01,
+            180.0,
+            1e30,
+            f32::INFINITY,
+        ];
+        let counts = [0u16, 1, 2, 3, 16, 17, 255, 256, 1000, 1001, 65535];
+        let mut tried = 0;
+        for f in FIELDS {
+            let values: Vec<String> = match (f.get)(&Params::DEFAULT) {
+                Value::Real(_) => reals.iter().map(|x| x.to_string()).collect(),
+                Value::Count(_) => counts.iter().map(|n| n.to_string()).collect(),
+                Value::Flag(_) => vec!["true".into(), "false".into()],
+            };
+            for v in values {
+                let mut p = Params::DEFAULT;
+                if p.set(f.name, &v).is_err() {
+                    continue; // not a value of the field's type
+                }
+                tried += 1;
+                let out = p.out_of_range();
+                assert_eq!(out.is_none(), accepted_by_hand(&p), "{}={v}", f.name);
+                if let Some((name, range)) = out {
+                    assert_eq!((name, range), (f.name, f.range), "{}={v}", f.name);
+                    let e = p.validate().unwrap_err();
+                    assert_eq!(e, ParamError::OutOfRange { name, range });
+                    assert!(e
+                        .to_string()
+                        .starts_with(&format!("{name} must be {range}")));
+                }
+            }
+        }
+        assert!(tried > 250, "{tried}");
+        let e = Params::DEFAULT.with_sigma(-1.0).validate().unwrap_err();
+        assert_eq!(e.to_string(), "sigma must be finite and > 0 (m)");
+        let e = Params::DEFAULT.with_tau(0.0).validate().unwrap_err();
+        assert_eq!(e.to_string(), "tau must be finite and > 0");
+        let e = Params::DEFAULT.with_iterations(0).validate().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "iterations must be between 1 and 1000 (passes)"
+        );
+    }
+
+    #[test]
+    fn the_setters_set_their_field_only() {
+        let p = Params::DEFAULT
+            .with_iterations(5)
+            .with_tau(7.0)
+            .with_merge(false);
+        let mut q = Params::DEFAULT;
+        q.iterations = 5;
+        q.tau = 7.0;
+        q.merge = false;
+        assert_eq!(p, q);
+        let (mut x, mut n, mut b) = (0.25f32, 0u16, false);
+        let each = Params::from_sources(
+            || {
+                x += 1.5;
+                x
+            },
+            || {
+                n += 1;
+                n
+            },
+            || {
+                b = !b;
+                b
+            },
+        );
+        let mut values: Vec<String> = FIELDS
+            .iter()
+            .filter(|f| !matches!((f.get)(&each), Value::Flag(_)))
+            .map(|f| (f.get)(&each).to_string())
+            .collect();
+        let n = values.len();
+        values.sort();
+        values.dedup();
+        assert_eq!(values.len(), n, "two fields from one source value");
+        assert_eq!(
+            HOST_ONLY,
+            ["grazing_noise", "fit_sigma", "per_turn", "merge_f_test"]
+        );
     }
 
     #[test]

@@ -279,6 +279,18 @@ pub struct EchoedParams {
     pub tau: f32,
 }
 
+impl EchoedParams {
+    /// `base` with the echoed parameters set: what a scan ran with, as far
+    /// as its summary tells.
+    #[must_use]
+    pub const fn over(&self, base: Params) -> Params {
+        base.with_iterations(self.iterations)
+            .with_sigma(self.sigma)
+            .with_q(self.q)
+            .with_tau(self.tau)
+    }
+}
+
 impl From<&Params> for EchoedParams {
     fn from(p: &Params) -> Self {
         EchoedParams {

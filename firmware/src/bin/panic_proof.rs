@@ -111,39 +111,7 @@ fn any_f32() -> f32 {
 
 /// Parameters with every field unknown (`Extractor::run` validates them).
 fn any_params() -> Params {
-    Params {
-        sigma: any_f32(),
-        q: any_f32(),
-        iterations: black_box(30),
-        tau: any_f32(),
-        min_points: black_box(5),
-        max_chi2: any_f32(),
-        min_length: any_f32(),
-        fit_shared_points: black_box(true),
-        merge: black_box(true),
-        merge_gap_beams: black_box(3),
-        merge_gate: any_f32(),
-        corner_gap: any_f32(),
-        min_corner_angle_deg: any_f32(),
-        split_depth: black_box(8),
-        max_range: any_f32(),
-        merge_collinear: black_box(true),
-        max_alpha_sd_deg: any_f32(),
-        grazing_noise: any_f32(),
-        same_turn_windows: black_box(true),
-        fit_sigma: any_f32(),
-        per_turn: black_box(true),
-        bridge_merge: black_box(true),
-        footprint: any_f32(),
-        arc_chain: black_box(3),
-        arc_min_turn_deg: any_f32(),
-        arc_max_turn_deg: any_f32(),
-        split_budget: black_box(1083),
-        merge_anchor_gate: any_f32(),
-        turn_offsets: black_box(true),
-        arc_pairs: black_box(true),
-        merge_f_test: any_f32(),
-    }
+    Params::from_sources(any_f32, || black_box(30), || black_box(true))
 }
 
 #[entry]

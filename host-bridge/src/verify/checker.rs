@@ -4,6 +4,7 @@
 
 use std::fmt;
 
+use lms_core::params::FIELDS;
 use lms_core::telegram::features::{EchoedParams, Summary};
 use lms_core::telegram::{Direction, MeasuredView, RangeBits, Telegram};
 use lms_core::{Extractor, Features, Params};
@@ -66,13 +67,8 @@ impl Checker {
 
     /// The recomputation parameters for a scan's summary.
     fn params(&self, echoed: &EchoedParams) -> Params {
-        Params {
-            iterations: echoed.iterations,
-            sigma: echoed.sigma,
-            q: echoed.q,
-            tau: self.recompute_tau.unwrap_or(echoed.tau),
-            ..self.base
-        }
+        let ran = echoed.over(self.base);
+        ran.with_tau(self.recompute_tau.unwrap_or(ran.tau))
     }
 
     /// Check one scan: its `B0` as the host received it (if one came), its
@@ -87,13 +83,18 @@ impl Checker {
         let counter = summary.scan_counter;
         if self.echoed.is_none() {
             self.echoed = Some(summary.params);
-            let p = summary.params;
-            let b = &self.base;
-            if (p.iterations, p.sigma, p.q, p.tau) != (b.iterations, b.sigma, b.q, b.tau) {
+            let ran = summary.params.over(self.base);
+            // The parameters the echo changes, by name ([`FIELDS`]).
+            let differing: Vec<String> = FIELDS
+                .iter()
+                .filter(|f| (f.get)(&ran) != (f.get)(&self.base))
+                .map(|f| format!("{}={}", f.name, (f.get)(&ran)))
+                .collect();
+            if !differing.is_empty() {
                 eprintln!(
-                    "host-bridge verify: note: the co-processor runs iterations={} sigma={} q={} \
-                     tau={} (echoed in D0), not the command line's; recomputing with those",
-                    p.iterations, p.sigma, p.q, p.tau
+                    "host-bridge verify: note: the co-processor runs {} (echoed in D0), not the \
+                     command line's; recomputing with those",
+                    differing.join(" ")
                 );
             }
         }

@@ -154,6 +154,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, ensure, Context, Result};
+use lms_core::telegram::features::EchoedParams;
 use lms_core::telegram::Baud;
 use lms_core::Params;
 
@@ -204,13 +205,7 @@ fn checked_options(args: &VerifyArgs) -> Result<(Baud, Params)> {
 /// run, and report every scan that differs as a mismatch. Refuse it, naming
 /// the parameters.
 fn ensure_firmware_runs(params: &Params) -> Result<()> {
-    let echoed_only = Params {
-        iterations: params.iterations,
-        sigma: params.sigma,
-        q: params.q,
-        tau: params.tau,
-        ..Params::DEFAULT
-    };
+    let echoed_only = EchoedParams::from(params).over(Params::DEFAULT);
     if *params == echoed_only {
         return Ok(());
     }
@@ -290,17 +285,11 @@ mod tests {
 
     #[test]
     fn the_firmware_refuses_parameters_it_does_not_echo_by_name() {
-        let echoed = Params {
-            sigma: 0.02,
-            iterations: 12,
-            ..Params::DEFAULT
-        };
+        let echoed = Params::DEFAULT.with_sigma(0.02).with_iterations(12);
         assert!(ensure_firmware_runs(&echoed).is_ok());
-        let other = Params {
-            split_depth: 3,
-            merge: !Params::DEFAULT.merge,
-            ..echoed
-        };
+        let other = echoed
+            .with_split_depth(3)
+            .with_merge(!Params::DEFAULT.merge);
         let message = ensure_firmware_runs(&other).unwrap_err().to_string();
         let merge = format!("merge={}", other.merge);
         assert!(message.contains("split_depth=3"), "{message}");

@@ -72,10 +72,7 @@ pub fn log_unit(path: &Path) -> io::Result<Unit> {
 /// Write the bits of every frame of the log at `path` after `iterations`
 /// smoothing passes to `out`; returns the number of frames.
 pub fn write_log_bits(path: &Path, iterations: u16, out: &mut impl Write) -> io::Result<usize> {
-    let params = Params {
-        iterations,
-        ..Params::default()
-    };
+    let params = Params::default().with_iterations(iterations);
     write_log_bits_with(path, &params, out)
 }
 

@@ -33,36 +33,26 @@ use lms_core::Params;
 
 /// The defaults with pairs of lines kept whatever a circle says of them.
 #[cfg(not(feature = "libm-trig"))]
-const ARC_PAIRS_KEPT: Params = Params {
-    arc_pairs: false,
-    ..Params::DEFAULT
-};
+const ARC_PAIRS_KEPT: Params = Params::DEFAULT.with_arc_pairs(false);
 
 /// [`ARC_PAIRS_KEPT`] with no anchor gate on the merges and no turn offsets
 /// in the fits' χ².
 #[cfg(not(feature = "libm-trig"))]
-const NO_ANCHOR_GATE: Params = Params {
-    merge_anchor_gate: f32::INFINITY,
-    turn_offsets: false,
-    ..ARC_PAIRS_KEPT
-};
+const NO_ANCHOR_GATE: Params = ARC_PAIRS_KEPT
+    .with_merge_anchor_gate(f32::INFINITY)
+    .with_turn_offsets(false);
 
 /// [`NO_ANCHOR_GATE`] with the windows of §2–6 (consecutive beams) in every
 /// mode and no work bound on split before reject.
 #[cfg(not(feature = "libm-trig"))]
-const CONSECUTIVE_WINDOWS: Params = Params {
-    same_turn_windows: false,
-    split_budget: 0,
-    ..NO_ANCHOR_GATE
-};
+const CONSECUTIVE_WINDOWS: Params = NO_ANCHOR_GATE
+    .with_same_turn_windows(false)
+    .with_split_budget(0);
 
 /// [`CONSECUTIVE_WINDOWS`] with no lines of arcs dropped; with no footprint
 /// weights and no merge across rejected segments too it is `Params::V2`.
 #[cfg(not(feature = "libm-trig"))]
-const ARCS_KEPT: Params = Params {
-    arc_chain: 0,
-    ..CONSECUTIVE_WINDOWS
-};
+const ARCS_KEPT: Params = CONSECUTIVE_WINDOWS.with_arc_chain(0);
 
 /// (log stem, FNV-1a-64 of the feature bits, frames) at `Params::V2`, 30
 /// passes, without the `rejected_arc` counter.
@@ -249,10 +239,7 @@ fn check_pins(
     without_arc_counter: bool,
 ) -> Vec<String> {
     let mut wrong = Vec::new();
-    let params = Params {
-        iterations: 30,
-        ..*params
-    };
+    let params = (*params).with_iterations(30);
     for &(stem, pin, frames) in pinned {
         let (full, without, n) = digests(&log(stem), &params);
         let d = if without_arc_counter { without } else { full };
@@ -448,10 +435,9 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
     {
         let path = log(stem);
         let params = per_data_params(&path).unwrap();
-        let on_data = |base: Params| Params {
-            sigma: params.sigma,
-            max_range: params.max_range,
-            ..base
+        let on_data = |base: Params| {
+            base.with_sigma(params.sigma)
+                .with_max_range(params.max_range)
         };
         let (pairs, gate, windows, arcs) = (
             on_data(ARC_PAIRS_KEPT),
@@ -459,19 +445,8 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
             on_data(CONSECUTIVE_WINDOWS),
             on_data(ARCS_KEPT),
         );
-        let v2 = Params {
-            bridge_merge: false,
-            footprint: 0.0,
-            ..arcs
-        };
-        assert_eq!(
-            v2,
-            Params {
-                sigma,
-                max_range,
-                ..Params::V2
-            }
-        );
+        let v2 = arcs.with_bridge_merge(false).with_footprint(0.0);
+        assert_eq!(v2, Params::V2.with_sigma(sigma).with_max_range(max_range));
         let (d, _, _) = digests(&path, &params);
         let (d_pairs, _, _) = digests(&path, &pairs);
         let (d_gate, _, _) = digests(&path, &gate);

@@ -36,27 +36,9 @@ fn defaults_on_the_grazing_wall() -> (Frame, Features, Vec<f32>) {
 #[test]
 fn each_option_is_refused_by_name_or_changes_the_result() {
     let options: [(&str, Params); 3] = [
-        (
-            "grazing_noise",
-            Params {
-                grazing_noise: 0.5,
-                ..Params::DEFAULT
-            },
-        ),
-        (
-            "fit_sigma",
-            Params {
-                fit_sigma: 0.02,
-                ..Params::DEFAULT
-            },
-        ),
-        (
-            "per_turn",
-            Params {
-                per_turn: true,
-                ..Params::DEFAULT
-            },
-        ),
+        ("grazing_noise", Params::DEFAULT.with_grazing_noise(0.5)),
+        ("fit_sigma", Params::DEFAULT.with_fit_sigma(0.02)),
+        ("per_turn", Params::DEFAULT.with_per_turn(true)),
     ];
     let (frame, default, default_d) = defaults_on_the_grazing_wall();
     let mut trace = Trace::new();
@@ -88,14 +70,12 @@ fn same_turn_windows_are_in_every_build_and_can_be_switched_off() {
     // bound, no anchor gate, no turn offsets and pairs kept, as
     // `Params::V2` has them) validate in both and change the result.
     const { assert!(Params::DEFAULT.same_turn_windows) };
-    let consecutive_windows = Params {
-        same_turn_windows: false,
-        split_budget: 0,
-        merge_anchor_gate: f32::INFINITY,
-        turn_offsets: false,
-        arc_pairs: false,
-        ..Params::DEFAULT
-    };
+    let consecutive_windows = Params::DEFAULT
+        .with_same_turn_windows(false)
+        .with_split_budget(0)
+        .with_merge_anchor_gate(f32::INFINITY)
+        .with_turn_offsets(false)
+        .with_arc_pairs(false);
     let (frame, default, default_d) = defaults_on_the_grazing_wall();
     let (mut ex, mut trace) = (Extractor::new(), Trace::new());
     let windows = consecutive_windows
