@@ -92,7 +92,8 @@ impl Beam {
 
 /// A field of view and an angular resolution, as the LMS 2xx's telegrams
 /// name a variant ([`Variant::from_fov_res`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FovRes {
     /// Field of view (°).
     pub fov_deg: u16,

@@ -20,7 +20,7 @@ use lms_core::telegram::{
     VariantReply, ACK, MAX_TELEGRAM_LEN, NAK,
 };
 use lms_core::Unit;
-use lms_core::{Beam, Stats, Variant};
+use lms_core::{Beam, FovRes, Stats, Variant};
 use proptest::prelude::*;
 
 fn config() -> ProptestConfig {
@@ -187,7 +187,7 @@ proptest! {
             4 => Request::OneScan,
             5 => Request::Status,
             6 => Request::SensorType,
-            7 => Request::SetVariant { angle_deg: angle, resolution_centideg: resolution },
+            7 => Request::SetVariant(FovRes { fov_deg: angle, res_centideg: resolution }),
             8 => Request::ReadConfig,
             9 => Request::WriteConfig(Config::from_bytes(config)),
             10 => Request::Reset,

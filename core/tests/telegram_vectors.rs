@@ -6,7 +6,7 @@ use lms_core::telegram::{
     SensorStatus, StatusBlock, StatusFields, Telegram, VariantReply, DEFAULT_PASSWORD,
     DEFAULT_STATUS, SENSOR_TYPE_LMS200,
 };
-use lms_core::Variant;
+use lms_core::{FovRes, Variant};
 
 /// Host → sensor vectors of §4 and the request each one is.
 fn request_vectors() -> Vec<(Vec<u8>, Request<'static>)> {
@@ -56,19 +56,19 @@ fn request_vectors() -> Vec<(Vec<u8>, Request<'static>)> {
             vec![
                 0x02, 0x00, 0x05, 0x00, 0x3B, 0xB4, 0x00, 0x32, 0x00, 0x3B, 0x1F,
             ],
-            Request::SetVariant {
-                angle_deg: 180,
-                resolution_centideg: 50,
-            },
+            Request::SetVariant(FovRes {
+                fov_deg: 180,
+                res_centideg: 50,
+            }),
         ),
         (
             vec![
                 0x02, 0x00, 0x05, 0x00, 0x3B, 0x64, 0x00, 0x19, 0x00, 0xE7, 0x72,
             ],
-            Request::SetVariant {
-                angle_deg: 100,
-                resolution_centideg: 25,
-            },
+            Request::SetVariant(FovRes {
+                fov_deg: 100,
+                res_centideg: 25,
+            }),
         ),
         (
             vec![0x02, 0x00, 0x01, 0x00, 0x74, 0x50, 0x12],

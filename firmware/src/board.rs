@@ -29,7 +29,7 @@ use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 use crate::clock;
 use crate::fault::{self, Bor, Cause, FaultRecord, ResetCause};
 use crate::rcc::{self, Clocks};
-use crate::serial::{self, Bd, RxStats, Serial};
+use crate::serial::{self, Bd, Line, RxStats, Serial};
 
 /// Line speed of the host side at power-on (Bd): the co-processor looks like
 /// an LMS 2xx to its client, which starts at 9600 and switches on request
@@ -225,30 +225,33 @@ pub fn init() -> Option<Board> {
     Some(Board {
         host: Serial::new(
             dp.USART1,
-            host.0,
-            host.1,
+            host,
             &HOST.stats,
-            Interrupt::USART1,
-            clocks.pclk2_hz,
-            HOST_BAUD,
+            Line {
+                irq: Interrupt::USART1,
+                pclk_hz: clocks.pclk2_hz,
+                baud: HOST_BAUD,
+            },
         ),
         sensor: Serial::new(
             dp.USART2,
-            sensor.0,
-            sensor.1,
+            sensor,
             &SENSOR.stats,
-            Interrupt::USART2,
-            clocks.pclk1_hz,
-            SENSOR_BAUD,
+            Line {
+                irq: Interrupt::USART2,
+                pclk_hz: clocks.pclk1_hz,
+                baud: SENSOR_BAUD,
+            },
         ),
         control: Serial::new(
             dp.USART3,
-            control.0,
-            control.1,
+            control,
             &CONTROL.stats,
-            Interrupt::USART3,
-            clocks.pclk1_hz,
-            CONTROL_BAUD,
+            Line {
+                irq: Interrupt::USART3,
+                pclk_hz: clocks.pclk1_hz,
+                baud: CONTROL_BAUD,
+            },
         ),
         boot,
     })

@@ -294,30 +294,36 @@ pub struct Serial<U> {
     rx: Consumer<'static, u8>,
     tx: Producer<'static, u8>,
     stats: &'static RxStats,
-    irq: Interrupt,
-    pclk_hz: u32,
-    baud: Bd,
+    line: Line,
+}
+
+/// What a [`Serial`] needs of its USART beyond the registers: its
+/// interrupt, the clock of its bus and its line rate.
+#[derive(Clone, Copy)]
+pub struct Line {
+    /// The USART's interrupt (masked while the main loop changes what the
+    /// handler shares).
+    pub irq: Interrupt,
+    /// The peripheral clock of the USART's bus (Hz).
+    pub pclk_hz: u32,
+    /// The line rate.
+    pub baud: Bd,
 }
 
 impl<U: Deref<Target = RegisterBlock>> Serial<U> {
     /// Wrap a USART configured at `baud` and its queue ends.
     pub fn new(
         usart: U,
-        rx: Consumer<'static, u8>,
-        tx: Producer<'static, u8>,
+        (rx, tx): (Consumer<'static, u8>, Producer<'static, u8>),
         stats: &'static RxStats,
-        irq: Interrupt,
-        pclk_hz: u32,
-        baud: Bd,
+        line: Line,
     ) -> Self {
         Serial {
             usart,
             rx,
             tx,
             stats,
-            irq,
-            pclk_hz,
-            baud,
+            line,
         }
     }
 
@@ -346,8 +352,8 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
     /// QEMU ignores the rate.
     pub fn set_baud(&mut self, baud: Bd) {
         self.drain();
-        self.baud = baud;
-        write_brr(&self.usart, brr(self.pclk_hz, baud));
+        self.line.baud = baud;
+        write_brr(&self.usart, brr(self.line.pclk_hz, baud));
     }
 
     /// Wait until the transmit queue is empty and the last byte has left
@@ -358,7 +364,7 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
     pub fn drain(&mut self) {
         let bits = (self.tx.len() as u64 + 2) * 10;
         let deadline = crate::clock::now_us()
-            + div_u64(2 * bits * 1_000_000, divisor(u64::from(self.baud.0)))
+            + div_u64(2 * bits * 1_000_000, divisor(u64::from(self.line.baud.0)))
             + 2_000;
         let mut queued = self.tx.len();
         while crate::clock::now_us() < deadline {
@@ -382,7 +388,7 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
 
     /// Switch the transmit interrupt on (the queue has bytes) and pend it.
     fn start_tx(&mut self) {
-        start_tx(&self.usart, self.irq);
+        start_tx(&self.usart, self.line.irq);
     }
 
     /// Sleep until the transmit queue has room (see [`wait_for_room`]).
@@ -453,7 +459,7 @@ impl<U: Deref<Target = RegisterBlock>> Read for Serial<U> {
     /// there, then returns what is queued, up to `buf.len()`. The
     /// co-processor reads only after `read_ready`, so it never sleeps here.
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
-        Ok(read_into(&self.usart, &mut self.rx, self.irq, buf))
+        Ok(read_into(&self.usart, &mut self.rx, self.line.irq, buf))
     }
 }
 
@@ -480,7 +486,7 @@ impl<U: Deref<Target = RegisterBlock>> Write for Serial<U> {
     /// full ([`queue_all`]). Overrides the provided method, which has a
     /// panic path for a `write` that returns 0 (this one never does).
     fn write_all(&mut self, buf: &[u8]) -> Result<(), Infallible> {
-        queue_all(&self.usart, &mut self.tx, self.irq, buf);
+        queue_all(&self.usart, &mut self.tx, self.line.irq, buf);
         Ok(())
     }
 
@@ -517,6 +523,6 @@ fn tx_room(tx: &Producer<'static, u8>) -> usize {
 /// The next received byte of a port, if one is there (the console).
 pub fn try_read<U: Deref<Target = RegisterBlock>>(port: &mut Serial<U>) -> Option<u8> {
     let byte = port.rx.dequeue()?;
-    resume_rx(&port.usart, port.irq);
+    resume_rx(&port.usart, port.line.irq);
     Some(byte)
 }

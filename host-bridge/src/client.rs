@@ -125,12 +125,10 @@ pub fn describe(request: &Request<'_>) -> String {
         Request::OneScan => "30 01 (one scan)".into(),
         Request::Status => "31 (status)".into(),
         Request::SensorType => "3A (sensor type)".into(),
-        Request::SetVariant {
-            angle_deg,
-            resolution_centideg,
-        } => format!(
-            "3B (variant {angle_deg}°/{}°)",
-            f64::from(*resolution_centideg) / 100.0
+        Request::SetVariant(asked) => format!(
+            "3B (variant {}°/{}°)",
+            asked.fov_deg,
+            f64::from(asked.res_centideg) / 100.0
         ),
         Request::ReadConfig => "74 (read configuration)".into(),
         Request::WriteConfig(_) => "77 (write configuration)".into(),

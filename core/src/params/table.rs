@@ -209,6 +209,20 @@ macro_rules! range {
     };
 }
 
+/// A range of the declaration below, with its text.
+type RangeOf = (Range, &'static str);
+const ANY: RangeOf = range!(any);
+const POSITIVE: RangeOf = range!(positive);
+const NON_NEGATIVE: RangeOf = range!(non_negative);
+const POSITIVE_OR_INF: RangeOf = range!(positive_or_inf);
+const AT_LEAST_3: RangeOf = range!(at_least(3));
+const AT_MOST_16: RangeOf = range!(at_most(16));
+const DEGREES_0_TO_90: RangeOf = range!(between(0, 90));
+const PASSES_1_TO_1000: RangeOf = range!(between(1, 1000));
+const OFF_OR_AT_LEAST_2: RangeOf = range!(joint("0 (off) or at least 2"));
+const UP_TO_ARC_MAX_TURN: RangeOf = range!(joint("between 0 and arc_max_turn_deg"));
+const ARC_MIN_TURN_TO_180: RangeOf = range!(joint("between arc_min_turn_deg and 180"));
+
 /// Whether the field value `$v` of type `$ty` is in `$range`.
 macro_rules! holds {
     (bool, $range:expr, $v:expr) => {
@@ -244,14 +258,14 @@ macro_rules! take {
 /// setters (`Params::with_sigma`, …), the per-field range check and the
 /// check of the host-only options, all in this order.
 macro_rules! fields {
-    ($($name:ident, $with:ident: $ty:ident, $unit:literal, $range:ident $(($($arg:tt)*))?,
+    ($($name:ident, $with:ident: $ty:ident, $unit:literal, $range:ident,
        $host_only:literal, $meaning:literal;)+) => {
         /// Every field of [`Params`], in declaration order.
         pub const FIELDS: &[Field] = &[$(Field {
             name: stringify!($name),
             unit: $unit,
-            range: range!($range $(($($arg)*))?).1,
-            bounds: range!($range $(($($arg)*))?).0,
+            range: $range.1,
+            bounds: $range.0,
             meaning: $meaning,
             get: |p: &Params| Value::from(p.$name),
             set: |p: &mut Params, text: &str| {
@@ -322,7 +336,7 @@ macro_rules! fields {
             /// [`Params::validate`]'s.
             pub(super) const fn out_of_range(&self) -> Option<(&'static str, &'static str)> {
                 $(
-                    let (bounds, text) = range!($range $(($($arg)*))?);
+                    let (bounds, text) = $range;
                     if !holds!($ty, bounds, self.$name) {
                         return Some((stringify!($name), text));
                     }
@@ -347,67 +361,67 @@ macro_rules! fields {
 }
 
 fields! {
-    sigma, with_sigma: f32, "m", positive, false,
+    sigma, with_sigma: f32, "m", POSITIVE, false,
         "Range noise standard deviation of the smoothing filter and the segmentation";
-    q, with_q: f32, "m²", non_negative, false,
+    q, with_q: f32, "m²", NON_NEGATIVE, false,
         "Process noise of the smoothing filter, the second scale parameter";
-    iterations, with_iterations: u16, "passes", between(1, 1000), false,
+    iterations, with_iterations: u16, "passes", PASSES_1_TO_1000, false,
         "Smoothing passes, the first scale parameter";
-    tau, with_tau: f32, "-", positive, false,
+    tau, with_tau: f32, "-", POSITIVE, false,
         "Segmentation gate on D: a window above it breaks a segment";
-    min_points, with_min_points: u16, "beams", at_least(3), false,
+    min_points, with_min_points: u16, "beams", AT_LEAST_3, false,
         "Smallest segment kept";
-    max_chi2, with_max_chi2: f32, "-", positive, false,
+    max_chi2, with_max_chi2: f32, "-", POSITIVE, false,
         "Largest chi-square of an accepted line";
-    min_length, with_min_length: f32, "m", non_negative, false,
+    min_length, with_min_length: f32, "m", NON_NEGATIVE, false,
         "Shortest accepted line, endpoint to endpoint";
-    fit_shared_points, with_fit_shared_points: bool, "bool", any, false,
+    fit_shared_points, with_fit_shared_points: bool, "bool", ANY, false,
         "Fit a corner beam shared by two segments into both lines";
-    merge, with_merge: bool, "bool", any, false,
+    merge, with_merge: bool, "bool", ANY, false,
         "Merge consecutive lines that agree";
-    merge_gap_beams, with_merge_gap_beams: u16, "beams", any, false,
+    merge_gap_beams, with_merge_gap_beams: u16, "beams", ANY, false,
         "Most valid beams between two lines that may merge";
-    merge_gate, with_merge_gate: f32, "chi2 (2 dof)", positive, false,
+    merge_gate, with_merge_gate: f32, "chi2 (2 dof)", POSITIVE, false,
         "Gate of the merge test";
-    corner_gap, with_corner_gap: f32, "m", non_negative, false,
+    corner_gap, with_corner_gap: f32, "m", NON_NEGATIVE, false,
         "Largest gap between facing endpoints of two lines made a corner";
-    min_corner_angle_deg, with_min_corner_angle_deg: f32, "deg", between(0, 90), false,
+    min_corner_angle_deg, with_min_corner_angle_deg: f32, "deg", DEGREES_0_TO_90, false,
         "Smallest angle between two lines for a well-conditioned corner";
-    split_depth, with_split_depth: u8, "levels", at_most(16), false,
+    split_depth, with_split_depth: u8, "levels", AT_MOST_16, false,
         "Split before reject: times a segment that is not one line may be split (0 off)";
-    max_range, with_max_range: f32, "m", positive_or_inf, false,
+    max_range, with_max_range: f32, "m", POSITIVE_OR_INF, false,
         "Largest true range: a beam at or beyond it is invalid (inf: no limit)";
-    merge_collinear, with_merge_collinear: bool, "bool", any, false,
+    merge_collinear, with_merge_collinear: bool, "bool", ANY, false,
         "Merge touching, nearly collinear lines whose union fits";
-    max_alpha_sd_deg, with_max_alpha_sd_deg: f32, "deg", positive_or_inf, false,
+    max_alpha_sd_deg, with_max_alpha_sd_deg: f32, "deg", POSITIVE_OR_INF, false,
         "Largest standard deviation of a line's angle; a less certain line is dropped (inf: keep all)";
-    grazing_noise, with_grazing_noise: f32, "-", non_negative, true,
+    grazing_noise, with_grazing_noise: f32, "-", NON_NEGATIVE, true,
         "Grazing-incidence term of the window noise (0 off; host builds only)";
-    same_turn_windows, with_same_turn_windows: bool, "bool", any, false,
+    same_turn_windows, with_same_turn_windows: bool, "bool", ANY, false,
         "Windows of one mirror turn's beams in the interleaved 0.5° and 0.25° modes";
-    fit_sigma, with_fit_sigma: f32, "m", non_negative, true,
+    fit_sigma, with_fit_sigma: f32, "m", NON_NEGATIVE, true,
         "Range noise of the line fits (0: sigma; host builds only)";
-    per_turn, with_per_turn: bool, "bool", any, true,
+    per_turn, with_per_turn: bool, "bool", ANY, true,
         "Extract each mirror turn alone and fuse their lines (interleaved modes; host builds only)";
-    bridge_merge, with_bridge_merge: bool, "bool", any, false,
+    bridge_merge, with_bridge_merge: bool, "bool", ANY, false,
         "Merge two accepted lines across the rejected segments between them when their union fits";
-    footprint, with_footprint: f32, "rad", non_negative, false,
+    footprint, with_footprint: f32, "rad", NON_NEGATIVE, false,
         "Beam-footprint term of the fits' range noise, sigma² + (footprint·d·tan θ)² (0 off)";
-    arc_chain, with_arc_chain: u8, "lines", joint("0 (off) or at least 2"), false,
+    arc_chain, with_arc_chain: u8, "lines", OFF_OR_AT_LEAST_2, false,
         "Fewest touching lines turning the same way that are dropped as an arc";
-    arc_min_turn_deg, with_arc_min_turn_deg: f32, "deg", joint("between 0 and arc_max_turn_deg"), false,
+    arc_min_turn_deg, with_arc_min_turn_deg: f32, "deg", UP_TO_ARC_MAX_TURN, false,
         "Smallest turn between consecutive lines of an arc";
-    arc_max_turn_deg, with_arc_max_turn_deg: f32, "deg", joint("between arc_min_turn_deg and 180"), false,
+    arc_max_turn_deg, with_arc_max_turn_deg: f32, "deg", ARC_MIN_TURN_TO_180, false,
         "Largest turn between consecutive lines of an arc";
-    split_budget, with_split_budget: u16, "beams", any, false,
+    split_budget, with_split_budget: u16, "beams", ANY, false,
         "Work bound of split before reject per frame, in beams tested (0: no bound)";
-    merge_anchor_gate, with_merge_anchor_gate: f32, "chi2 (2 dof)", positive_or_inf, false,
+    merge_anchor_gate, with_merge_anchor_gate: f32, "chi2 (2 dof)", POSITIVE_OR_INF, false,
         "A merge keeps the union line within this of the larger line's own (inf: no test)";
-    turn_offsets, with_turn_offsets: bool, "bool", any, false,
+    turn_offsets, with_turn_offsets: bool, "bool", ANY, false,
         "Line fits' chi-square allows an offset between interleaved mirror turns";
-    merge_f_test, with_merge_f_test: f32, "F", non_negative, true,
+    merge_f_test, with_merge_f_test: f32, "F", NON_NEGATIVE, true,
         "Nested-model F test of the merges (0 off; host builds only)";
-    arc_pairs, with_arc_pairs: bool, "bool", any, false,
+    arc_pairs, with_arc_pairs: bool, "bool", ANY, false,
         "Drop a pair of touching lines that a circle explains better";
 }
 

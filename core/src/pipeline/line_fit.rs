@@ -207,6 +207,24 @@ struct Span<'a, B> {
     kappa_per_sigma: f32,
 }
 
+impl<B: BearingTable> RawScan<'_, B> {
+    /// `f(j, d_j, cos(phi_j − α), sin(phi_j − α))` for the valid beams `j`
+    /// of `piece` below `max_range`, in beam order, with `(ca, sa) =
+    /// (cos α, sin α)` (`(1, 0)`: the bearings themselves).
+    #[inline]
+    pub(crate) fn each_valid(
+        &self,
+        piece: Segment,
+        ca: f32,
+        sa: f32,
+        f: impl FnMut(usize, f32, f32, f32),
+    ) {
+        if let Some(span) = Span::new(self, piece) {
+            span.each_valid_beam(ca, sa, f);
+        }
+    }
+}
+
 impl<'a, B: BearingTable> Span<'a, B> {
     /// Weight the beams by the footprint term `footprint` (κ ≥ 0, rad) at
     /// range noise `sigma` (m); κ = 0: off.

@@ -32,7 +32,7 @@ use heapless::Vec;
 use crate::features::{Segment, Stats, MAX_SEGMENTS};
 use crate::params::{Params, MAX_SPLIT_DEPTH};
 use crate::pipeline::line_fit::{
-    fit_piece, offset_turns, residual_dof, BearingTable, RawScan, Sweep, TurnSums,
+    fit_piece, offset_turns, residual_dof, BearingTable, RawScan, TurnSums,
 };
 
 /// Upper 0.1 % quantile of χ² with `nu` degrees of freedom (Wilson–Hilferty:
@@ -171,37 +171,6 @@ fn straightness_bounds<B: BearingTable>(
 const MIN_UPPER_INCIDENCE: f32 = 0.05;
 
 impl<B: BearingTable> RawScan<'_, B> {
-    /// `f(j, d_j, cos(phi_j − α), sin(phi_j − α))` for the valid beams `j`
-    /// of `piece` below `max_range`, in beam order, with `(ca, sa) =
-    /// (cos α, sin α)` (`(1, 0)`: the bearings themselves).
-    #[inline]
-    fn each_valid(
-        &self,
-        piece: Segment,
-        ca: f32,
-        sa: f32,
-        mut f: impl FnMut(usize, f32, f32, f32),
-    ) {
-        let lo = usize::from(piece.first);
-        let hi = usize::from(piece.last) + 1;
-        let ranges = self.ranges.get(lo..hi).unwrap_or_default();
-        let beams = self.beams.get(lo..hi).unwrap_or_default();
-        let max_range = self.max_range;
-        self.bearings.sweep(
-            Sweep {
-                lo,
-                ranges,
-                beams,
-                normal: (ca, sa),
-            },
-            |i, d, b, c, s| {
-                if b.is_valid() && d < max_range {
-                    f(lo + i, d, c, s);
-                }
-            },
-        );
-    }
-
     /// `f(j, x_j, y_j)` for the valid points of `piece` (m), in beam order.
     #[inline]
     fn each_point(&self, piece: Segment, mut f: impl FnMut(usize, f32, f32)) {

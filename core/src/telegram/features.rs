@@ -308,17 +308,14 @@ impl From<&Params> for EchoedParams {
 ///
 /// `beams` is the scan's beam count; `address` the sensor address (the
 /// telegrams carry `0x80 | address`).
-pub fn emit_features<E, F>(
+pub fn emit_features<E>(
     scan_counter: u32,
     beams: u16,
     params: &EchoedParams,
     features: &Features,
     address: u8,
-    send: F,
-) -> Result<u32, E>
-where
-    F: FnMut(&[u8]) -> Result<(), E>,
-{
+    send: impl FnMut(&[u8]) -> Result<(), E>,
+) -> Result<u32, E> {
     let of = FeaturesOf {
         scan: scan_counter,
         beams,

@@ -174,12 +174,7 @@ pub enum Request<'a> {
     /// `3A`: send the type string.
     SensorType,
     /// `3B`: set the variant.
-    SetVariant {
-        /// Scan angle in degrees (100 or 180).
-        angle_deg: u16,
-        /// Angular resolution in 1/100 ° (25, 50 or 100).
-        resolution_centideg: u16,
-    },
+    SetVariant(FovRes),
     /// `74`: read the configuration.
     ReadConfig,
     /// `77` + 34 bytes: write the configuration (installation mode only).
@@ -227,10 +222,10 @@ impl<'a> Request<'a> {
             (code::MEASURED, [code::ONE_SCAN]) => Request::OneScan,
             (code::STATUS, []) => Request::Status,
             (code::SENSOR_TYPE, []) => Request::SensorType,
-            (code::VARIANT, [_, _, _, _]) => Request::SetVariant {
-                angle_deg: le_u16(data, 0),
-                resolution_centideg: le_u16(data, 2),
-            },
+            (code::VARIANT, [_, _, _, _]) => Request::SetVariant(FovRes {
+                fov_deg: le_u16(data, 0),
+                res_centideg: le_u16(data, 2),
+            }),
             (code::READ_CONFIG, []) => Request::ReadConfig,
             (code::WRITE_CONFIG, _) => match Config::from_slice(data) {
                 Some(c) => Request::WriteConfig(c),
@@ -243,10 +238,10 @@ impl<'a> Request<'a> {
 
     /// A `3B` request for a variant.
     pub const fn set_variant(v: Variant) -> Request<'static> {
-        Request::SetVariant {
-            angle_deg: v.fov_deg(),
-            resolution_centideg: v.resolution_centideg(),
-        }
+        Request::SetVariant(FovRes {
+            fov_deg: v.fov_deg(),
+            res_centideg: v.resolution_centideg(),
+        })
     }
 
     /// The command code.
@@ -259,7 +254,7 @@ impl<'a> Request<'a> {
             Request::OneScan => code::MEASURED,
             Request::Status => code::STATUS,
             Request::SensorType => code::SENSOR_TYPE,
-            Request::SetVariant { .. } => code::VARIANT,
+            Request::SetVariant(_) => code::VARIANT,
             Request::ReadConfig => code::READ_CONFIG,
             Request::WriteConfig(_) => code::WRITE_CONFIG,
             Request::Reset => code::RESET,
@@ -275,13 +270,7 @@ impl<'a> Request<'a> {
     /// For a `3B` request: the variant it asks for, if the sensor has it.
     pub fn variant(&self) -> Option<Variant> {
         match *self {
-            Request::SetVariant {
-                angle_deg,
-                resolution_centideg,
-            } => Variant::from_fov_res(FovRes {
-                fov_deg: angle_deg,
-                res_centideg: resolution_centideg,
-            }),
+            Request::SetVariant(asked) => Variant::from_fov_res(asked),
             _ => None,
         }
     }
@@ -311,12 +300,12 @@ impl<'a> Request<'a> {
                 scratch[0] = code::ONE_SCAN;
                 1
             }
-            Request::SetVariant {
-                angle_deg,
-                resolution_centideg,
-            } => {
-                let [a0, a1] = angle_deg.to_le_bytes();
-                let [r0, r1] = resolution_centideg.to_le_bytes();
+            Request::SetVariant(FovRes {
+                fov_deg,
+                res_centideg,
+            }) => {
+                let [a0, a1] = fov_deg.to_le_bytes();
+                let [r0, r1] = res_centideg.to_le_bytes();
                 copy_into(scratch, &[a0, a1, r0, r1]);
                 4
             }

@@ -1,7 +1,7 @@
 //! The emulator's events: counted, and logged with `--verbose`.
 
 use lms_core::device::emulator::{Emulator, Event, Handled, ScanSource};
-use lms_core::{FovRes, Variant};
+use lms_core::Variant;
 
 use super::line::PtyLine;
 use crate::scan::variant_name;
@@ -24,13 +24,10 @@ fn describe(h: Handled) -> String {
         Handled::Extra { command } => format!("{command:02X}: answered by the scan source"),
         Handled::Status => "31: status".into(),
         Handled::SensorType => "3A: sensor type".into(),
-        Handled::SetVariant {
-            angle_deg,
-            resolution_centideg,
-            accepted,
-        } => format!(
-            "3B: variant {angle_deg}°/{}° {}",
-            f64::from(resolution_centideg) / 100.0,
+        Handled::SetVariant { asked, accepted } => format!(
+            "3B: variant {}°/{}° {}",
+            asked.fov_deg,
+            f64::from(asked.res_centideg) / 100.0,
             if accepted { "accepted" } else { "refused" }
         ),
         Handled::ReadConfig => "74: read configuration".into(),
@@ -87,15 +84,11 @@ pub(super) fn handle_events<S: ScanSource>(
 /// stderr (with or without `--verbose`).
 fn refused_variant(h: Handled) {
     if let Handled::SetVariant {
-        angle_deg,
-        resolution_centideg,
+        asked,
         accepted: false,
     } = h
     {
-        if let Some(v) = Variant::from_fov_res(FovRes {
-            fov_deg: angle_deg,
-            res_centideg: resolution_centideg,
-        }) {
+        if let Some(v) = Variant::from_fov_res(asked) {
             eprintln!(
                 "host-bridge simulate: refused variant {}: the scan source \
                  cannot produce it",

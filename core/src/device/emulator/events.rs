@@ -1,40 +1,51 @@
 //! What the emulator reports: requests handled, events, counters.
 
 use super::*;
+use crate::frame::FovRes;
 
 /// A correctly received request and what the emulator made of it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Handled {
-    /// `20 00`: installation mode, entered if the password was right.
-    InstallationMode {
-        /// `true` for the right password (`A0 00`), `false` for `A0 01`.
-        accepted: bool,
-    },
+    // The stream: on, off, or the values of a value mode.
     /// `20 24`: continuous output.
     Continuous,
+    /// `20 2A`: continuous output of partial scans.
+    PartialScans,
     /// `20 25`: values on request (the stream stopped).
     OnRequest,
-    /// `20 4x`: the line switches to this rate after the reply.
-    SetBaud(Baud),
+    /// `20 26`/`27`/`28`: a value mode.
+    ValueMode {
+        /// The mode and its parameters.
+        mode: ValueMode,
+        /// `true` if taken (`A0 00`), `false` for bad parameters (`A0 02`).
+        accepted: bool,
+    },
+    // Replies that carry data.
     /// `30 01`: one scan.
     OneScan,
     /// `31`: status.
     Status,
     /// `3A`: type string.
     SensorType,
+    /// `74`: read the configuration.
+    ReadConfig,
+    // Settings.
+    /// `20 00`: installation mode, entered if the password was right.
+    InstallationMode {
+        /// `true` for the right password (`A0 00`), `false` for `A0 01`.
+        accepted: bool,
+    },
+    /// `20 4x`: the line switches to this rate after the reply.
+    SetBaud(Baud),
     /// `3B`: variant.
     SetVariant {
-        /// Angle asked for (°).
-        angle_deg: u16,
-        /// Resolution asked for (1/100 °).
-        resolution_centideg: u16,
+        /// The field of view and resolution asked for.
+        asked: FovRes,
         /// `true` if taken (`BB 01`).
         accepted: bool,
     },
-    /// `74`: read the configuration.
-    ReadConfig,
     /// `77`: write the configuration.
     WriteConfig {
         /// `true` if taken (`F7 01`): installation mode and a units code of
@@ -43,15 +54,7 @@ pub enum Handled {
     },
     /// `10`: reset.
     Reset,
-    /// `20 26`/`27`/`28`: a value mode.
-    ValueMode {
-        /// The mode and its parameters.
-        mode: ValueMode,
-        /// `true` if taken (`A0 00`), `false` for bad parameters (`A0 02`).
-        accepted: bool,
-    },
-    /// `20 2A`: continuous output of partial scans.
-    PartialScans,
+    // Outside the LMS's table.
     /// A command the LMS does not know, answered by the source
     /// ([`ScanSource::extra_command`]).
     Extra {

@@ -24,13 +24,7 @@ fn detach(request: Request<'_>) -> Request<'static> {
         Request::OneScan => Request::OneScan,
         Request::Status => Request::Status,
         Request::SensorType => Request::SensorType,
-        Request::SetVariant {
-            angle_deg,
-            resolution_centideg,
-        } => Request::SetVariant {
-            angle_deg,
-            resolution_centideg,
-        },
+        Request::SetVariant(asked) => Request::SetVariant(asked),
         Request::ReadConfig => Request::ReadConfig,
         Request::WriteConfig(c) => Request::WriteConfig(c),
         Request::Reset => Request::Reset,
@@ -220,18 +214,9 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
         extra: Option<(u8, usize)>,
         value_mode: Option<ValueMode>,
     ) {
-        if incoming.address != self.settings.address {
-            self.stats.ignored = self.stats.ignored.wrapping_add(1);
-            self.event(Event::IgnoredAddress {
-                address: incoming.address,
-            });
+        if !self.admit(incoming.address) {
             return;
         }
-        if self.pending.is_full() {
-            self.stats.dropped_requests = self.stats.dropped_requests.wrapping_add(1);
-            return;
-        }
-        self.stats.requests = self.stats.requests.wrapping_add(1);
         let (reply, then, handled) = match value_mode {
             Some(mode) => self.value_mode(mode),
             None => self.answer(now_us, incoming.request, data_len, extra),
@@ -273,16 +258,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
                 Handled::Status,
             ),
             Request::SensorType => (ReplyKind::SensorType, Done::Nothing, Handled::SensorType),
-            Request::SetVariant {
-                angle_deg,
-                resolution_centideg,
-            } => self.variant_request(
-                now_us,
-                FovRes {
-                    fov_deg: angle_deg,
-                    res_centideg: resolution_centideg,
-                },
-            ),
+            Request::SetVariant(asked) => self.variant_request(now_us, asked),
             Request::ReadConfig => (
                 ReplyKind::Config(self.config),
                 Done::Nothing,
@@ -314,21 +290,29 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
         }
     }
 
-    /// `20 2A` for this sensor: `A0 00`, then the partial scans (every
-    /// variant has them; at 1° each is the whole scan).
-    fn handle_partial(&mut self, now_us: u64, incoming: Incoming) {
-        if incoming.address != self.settings.address {
+    /// Whether a request for `address` is answered: it is for this sensor
+    /// (else ignored and counted) and the reply queue has room (else
+    /// dropped and counted); an answered request is counted.
+    fn admit(&mut self, address: u8) -> bool {
+        if address != self.settings.address {
             self.stats.ignored = self.stats.ignored.wrapping_add(1);
-            self.event(Event::IgnoredAddress {
-                address: incoming.address,
-            });
-            return;
+            self.event(Event::IgnoredAddress { address });
+            return false;
         }
         if self.pending.is_full() {
             self.stats.dropped_requests = self.stats.dropped_requests.wrapping_add(1);
-            return;
+            return false;
         }
         self.stats.requests = self.stats.requests.wrapping_add(1);
+        true
+    }
+
+    /// `20 2A` for this sensor: `A0 00`, then the partial scans (every
+    /// variant has them; at 1° each is the whole scan).
+    fn handle_partial(&mut self, now_us: u64, incoming: Incoming) {
+        if !self.admit(incoming.address) {
+            return;
+        }
         self.mode = OperatingMode::Partial;
         let reply = ReplyKind::Mode(ModeResult::Ok);
         self.queue(
@@ -386,11 +370,7 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
                 resolution_centideg: self.variant.resolution_centideg(),
             }),
             Done::Nothing,
-            Handled::SetVariant {
-                angle_deg: asked.fov_deg,
-                resolution_centideg: asked.res_centideg,
-                accepted,
-            },
+            Handled::SetVariant { asked, accepted },
         )
     }
 
