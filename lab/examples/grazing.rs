@@ -86,6 +86,7 @@ fn main() -> Result<()> {
             no_flags: base,
             cfg,
             map,
+            ..
         } = lms_lab::realtruth::load_with_map(path, &cfg)?;
         let params = base
             .with_grazing_noise(rho)

@@ -4,13 +4,13 @@
 //! from the map line. The misses are what `TruthConfig::verify` leaves
 //! uncounted (`lab/src/maptruth.rs`, step 4).
 //!
-//! `cargo run --release -p lms-lab --example oracle_misses -- [EVERY]`
+//! `cargo run --release -p lms-lab --example oracle_misses -- [EVERY] [settled]`
 
 use std::path::Path;
 
 use anyhow::Result;
-use lms_lab::maptruth::{frame_truth, TruthConfig};
-use lms_lab::realtruth::{GATE_ALPHA_DEG, GATE_R};
+use lms_lab::maptruth::TruthConfig;
+use lms_lab::realtruth::{gate_offsets, ScoredLine, GATE_ALPHA_DEG, GATE_R};
 
 /// Upper edges of the length bins (m).
 const LENGTH: [f64; 4] = [0.5, 1.0, 2.0, f64::INFINITY];
@@ -22,11 +22,22 @@ fn median(v: &mut [f64]) -> f64 {
 
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
-    // Every piece the map gives, whatever the frame says.
-    let cfg = TruthConfig {
-        verify: false,
-        ..TruthConfig::default()
+    // Every piece the map gives, whatever the frame says; `-- K settled`:
+    // the settled truth (registered poses, leave-one-wall-out, Δr at the
+    // line's middle).
+    let settled = std::env::args().nth(2).as_deref() == Some("settled");
+    let tol: Option<f64> = std::env::args().nth(3).map(|s| s.parse()).transpose()?;
+    let mut cfg = if settled {
+        TruthConfig::settled()
+    } else {
+        TruthConfig {
+            verify: false,
+            ..TruthConfig::default()
+        }
     };
+    if let Some(t) = tol {
+        cfg.beam_tol = t;
+    }
     let dir = Path::new("../shared/data/carmen");
     let mut names: Vec<_> = std::fs::read_dir(dir)?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -37,21 +48,26 @@ fn main() -> Result<()> {
          < 0.5, < 1, < 2, ≥ 2 m | median rms of hits from the map line, matched / missed (mm) |"
     );
     for path in names {
-        let lms_lab::realtruth::LogWithMap { log, cfg, map, .. } =
-            lms_lab::realtruth::load_with_map(&path, &cfg)?;
+        let loaded = lms_lab::realtruth::load_with_map(&path, &cfg)?;
+        let lms_lab::realtruth::LogWithMap { log, .. } = &loaded;
         let (mut n, mut gates) = (0, [0usize; 3]);
         let mut by_len = [(0usize, 0usize); 4];
         let (mut rms_hit, mut rms_miss) = (Vec::new(), Vec::new());
-        for scan in log.scans.iter().step_by(every) {
-            let truth = frame_truth(scan, &map, &cfg);
+        for (k, scan) in log.scans.iter().enumerate().step_by(every) {
+            let truth = loaded.truth(k);
             let (g, rg) = (scan.frame.geometry(), scan.frame.ranges());
             for p in truth.pieces.iter().filter(|p| p.counted) {
                 n += 1;
-                let fa = lms_scene::wrap_angle(p.own_alpha - p.alpha)
-                    .to_degrees()
-                    .abs()
-                    >= GATE_ALPHA_DEG;
-                let fr = (p.own_r - p.r).abs() >= GATE_R;
+                let own = ScoredLine {
+                    alpha: p.own_alpha,
+                    r: p.own_r,
+                    first: p.first,
+                    last: p.last,
+                    middle: p.own_middle,
+                };
+                let (da, dr) = gate_offsets(&own, (p.alpha, p.r), p.gate_at_middle);
+                let fa = da.to_degrees().abs() >= GATE_ALPHA_DEG;
+                let fr = dr.abs() >= GATE_R;
                 let bin = LENGTH.iter().position(|&l| p.length < l).unwrap_or(3);
                 by_len[bin].0 += 1;
                 let e2: Vec<f64> = (p.first..=p.last)

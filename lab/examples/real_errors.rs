@@ -345,6 +345,7 @@ fn log_errors(path: &Path, every: usize, cfg: &TruthConfig) -> Result<Errors> {
         no_flags: params,
         cfg,
         map,
+        ..
     } = lms_lab::realtruth::load_with_map(path, cfg)?;
     let cfg = &cfg;
     let cell = |p: [f64; 2]| {

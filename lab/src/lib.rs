@@ -112,6 +112,30 @@ pub struct TruthArgs {
     /// Synthetic scans per scene family and σ₀ from the realistic sensor model (0: none)
     #[arg(long, value_name = "N", default_value_t = 100)]
     pub synthetic_scans: usize,
+    /// Which truth: `settled` (registered poses, leave-one-wall-out, neutral
+    /// and unexplained lines) or `legacy` (SLAM poses, verified pieces)
+    #[arg(long, value_enum, value_name = "TRUTH", default_value_t = TruthChoice::Settled)]
+    pub truth: TruthChoice,
+}
+
+/// The map truth a run scores against (`lms-lab truth --truth`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum TruthChoice {
+    /// [`maptruth::TruthConfig::settled`], the evaluation's default.
+    #[default]
+    Settled,
+    /// [`maptruth::TruthConfig::legacy`].
+    Legacy,
+}
+
+impl TruthChoice {
+    /// Its settings.
+    pub fn config(self) -> maptruth::TruthConfig {
+        match self {
+            TruthChoice::Settled => maptruth::TruthConfig::settled(),
+            TruthChoice::Legacy => maptruth::TruthConfig::legacy(),
+        }
+    }
 }
 
 /// The real-scan parts of the report (sections 5–7): the map truth, the
@@ -603,7 +627,13 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         .collect();
     let truth_figures =
         (!args.no_plots && report::fonts_available()).then_some(args.output.as_path());
-    let truth = realtruth::run_logs(&readable, args.real_every, truth_figures, &bar)?;
+    let truth = realtruth::run_logs(
+        &readable,
+        args.real_every,
+        &maptruth::TruthConfig::settled(),
+        truth_figures,
+        &bar,
+    )?;
     let fits = sensorfit::run(&readable, SENSOR_FIT_SCANS.min(args.scans))?;
     let realistic = realistic::run(args.scans, args.seed, &bar)?;
     let t3 = Instant::now();

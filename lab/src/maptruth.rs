@@ -43,6 +43,33 @@
 //!    20 % of the pieces with ≥ 10 beams fail, 56 % of those shorter than 1 m
 //!    (`cargo run --release -p lms-lab --example oracle_misses`).
 //!
+//! # The settled truth
+//!
+//! [`TruthConfig::settled`], the evaluation's truth ([`TruthConfig::legacy`]
+//! is the above as it stands):
+//!
+//! * **Registered poses.** Every frame is registered to the map's walls
+//!   ([`register`]: robust point-to-line ICP, a weak prior on the SLAM pose),
+//!   the map is rebuilt from the registered poses and every frame registered
+//!   to it again ([`register_log`], two rounds); each wall of a Hough line
+//!   keeps its own line ([`TruthConfig::wall_own_line`]).
+//! * **Leave-one-wall-out.** A piece's line is its map wall seen from the
+//!   frame's pose registered without the beams on that wall's line
+//!   ([`frame_truth_registered`]): the pose does not absorb the line it
+//!   judges.
+//! * **On-wall band 5 cm** ([`SETTLED_BEAM_TOL`]); a beam on two parallel
+//!   walls of different lines within 15 cm is ambiguous, on neither
+//!   ([`TruthConfig::ambiguous_within`]).
+//! * **Every piece of ≥ 10 beams and ≥ 0.3 m counts** (no verification);
+//!   shorter pieces and ambiguous beams are neutral, and the scoring leaves
+//!   lines on no wall out of FalsePos as *unexplained*
+//!   ([`TruthConfig::neutral_and_unexplained`],
+//!   [`crate::realtruth::classify_lines`]).
+//!
+//! The check of it: a least-squares fit to each counted piece's own beams
+//! (the oracle) matches 0.95 of the pieces over every frame of the shared
+//! logs, 0.89–0.98 per log (`lms-lab truth`, docs/evaluation/real-truth.md).
+//!
 //! What this truth cannot show: walls the SLAM map itself misplaces (pose
 //! error moves a piece's line by ~1–3 cm and ~0.3°, the figure of the
 //! oracle in [`crate::realtruth`]), walls shorter than 0.5 m, and curved
@@ -101,6 +128,29 @@ pub struct TruthConfig {
     /// with a sub-degree α error while lying on the wall ([`gate_offsets`];
     /// docs/DESIGN.md, "Open questions").
     pub range_gate_at_middle: bool,
+    /// Rounds of registering every frame to the map's walls and rebuilding
+    /// the map from the registered poses ([`register_log`]; 0: the SLAM
+    /// poses as they are).
+    pub register_rounds: usize,
+    /// Take each piece's true line through a pose registered without the
+    /// beams on its own map line ([`register`] with `skip`), so that the
+    /// pose does not absorb the line it judges.
+    pub leave_one_wall_out: bool,
+    /// A beam whose ray meets two parallel map walls of different lines
+    /// less than this apart (m) is ambiguous: on neither wall, neutral in
+    /// the scoring (0: no beam is ambiguous).
+    pub ambiguous_within: f64,
+    /// The scoring's rules ([`crate::realtruth::score_frame`]): lines matched
+    /// to uncounted pieces, and unmatched lines mostly on them or on
+    /// ambiguous beams, are neutral; unmatched lines mostly on no wall are
+    /// *unexplained*; both out of FalsePos. Without it every unmatched line
+    /// is false.
+    pub neutral_and_unexplained: bool,
+    /// Each wall of a Hough line on its own line (a consensus fit to its
+    /// cells), not on the line of all of them: runs of one Hough bin may
+    /// differ by a degree or two, which the shared fit passes on to the
+    /// shorter ones.
+    pub wall_own_line: bool,
 }
 
 impl Default for TruthConfig {
@@ -123,11 +173,51 @@ impl Default for TruthConfig {
             verify: true,
             refine_pose: false,
             range_gate_at_middle: false,
+            register_rounds: 0,
+            leave_one_wall_out: false,
+            ambiguous_within: 0.0,
+            neutral_and_unexplained: false,
+            wall_own_line: false,
         }
     }
 }
 
+/// [`TruthConfig::beam_tol`] of the settled truth (m): with the frames
+/// registered, hits on a wall lie within 2–3 cm of its map line; a band of
+/// 0.1 m takes in clutter standing against walls, which tilts the fits of
+/// short pieces (`cargo run --release -p lms-lab --example oracle_misses --
+/// 5 settled 0.1`).
+pub const SETTLED_BEAM_TOL: f64 = 0.05;
+
 impl TruthConfig {
+    /// The truth before registration ([`Default`]): SLAM poses, pieces
+    /// verified against their own hits, Δr at the foot of the normal, every
+    /// unmatched line false (`lms-lab truth --truth legacy`).
+    pub fn legacy() -> Self {
+        Self::default()
+    }
+
+    /// The evaluation's truth: every frame registered to the map's walls and
+    /// the map rebuilt from the registered poses, twice; each piece's line
+    /// through a pose registered without its own wall's beams; every piece
+    /// of ≥ 10 beams and ≥ 0.3 m counted (no verification against its own
+    /// hits); pieces of fewer beams and beams on two parallel walls within
+    /// 15 cm neutral; Δr at the line's middle; unmatched lines mostly on no
+    /// wall unexplained, not false.
+    pub fn settled() -> Self {
+        TruthConfig {
+            verify: false,
+            range_gate_at_middle: true,
+            register_rounds: 2,
+            leave_one_wall_out: true,
+            ambiguous_within: 0.15,
+            neutral_and_unexplained: true,
+            beam_tol: SETTLED_BEAM_TOL,
+            wall_own_line: true,
+            ..Self::default()
+        }
+    }
+
     /// This truth over every range a log's extraction may use: beams up to
     /// `data_max_range` (m), the log's range limit from its data profile
     /// (`lms_core::DataProfile::max_range`: the mode's first error code, or
@@ -205,13 +295,23 @@ type CellSum = ([f64; 2], u32, u32, usize);
 
 /// Step 1: the occupied cells of `scans`.
 pub fn occupied_cells(scans: &[Scan], cfg: &TruthConfig) -> Vec<MapCell> {
+    occupied_cells_at(scans, |k| scans[k].meta.pose, cfg)
+}
+
+/// [`occupied_cells`] with frame `k` seen from the laser pose `pose_of(k)`.
+pub fn occupied_cells_at(
+    scans: &[Scan],
+    pose_of: impl Fn(usize) -> [f64; 3],
+    cfg: &TruthConfig,
+) -> Vec<MapCell> {
     let mut acc: HashMap<(i64, i64), CellSum> = HashMap::new();
     for (k, scan) in scans.iter().enumerate() {
+        let pose = pose_of(k);
         for j in 0..scan.frame.len() {
             if !usable(scan, j, cfg) {
                 continue;
             }
-            let p = world_hit(scan, j);
+            let p = world_hit_at(scan, j, pose);
             let key = (
                 (p[0] / cfg.cell).floor() as i64,
                 (p[1] / cfg.cell).floor() as i64,
@@ -411,12 +511,18 @@ fn runs_to_walls(
     if pts.is_empty() {
         return Vec::new();
     }
-    let (a, rho) = consensus_tls(&pts, 0.5 * cfg.cell);
-    let (ca, sa) = (a.cos(), a.sin());
-    let t = |p: &[f64; 2]| -p[0] * sa + p[1] * ca;
-    let at = |t: f64| [rho * ca - t * sa, rho * sa + t * ca];
+    let shared = consensus_tls(&pts, 0.5 * cfg.cell);
     runs.iter()
         .map(|run| {
+            let (a, rho) = if cfg.wall_own_line && runs.len() > 1 {
+                let own: Vec<[f64; 2]> = run.iter().map(|&(_, i)| cells[i].p).collect();
+                own_wall_line(&own, shared, cfg)
+            } else {
+                shared
+            };
+            let (ca, sa) = (a.cos(), a.sin());
+            let t = |p: &[f64; 2]| -p[0] * sa + p[1] * ca;
+            let at = |t: f64| [rho * ca - t * sa, rho * sa + t * ca];
             let (t0, t1) = run.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &(_, i)| {
                 (lo.min(t(&cells[i].p)), hi.max(t(&cells[i].p)))
             });
@@ -430,6 +536,21 @@ fn runs_to_walls(
             }
         })
         .collect()
+}
+
+/// The line of one wall of a Hough line from its own cells `pts` (a
+/// consensus fit, oriented as `shared`), or `shared` if its cells are too
+/// few to fix a direction ([`TruthConfig::wall_own_line`]).
+fn own_wall_line(pts: &[[f64; 2]], shared: (f64, f64), cfg: &TruthConfig) -> (f64, f64) {
+    if (pts.len() as u32) < cfg.min_votes {
+        return shared;
+    }
+    let (mut a, mut rho) = consensus_tls(pts, 0.5 * cfg.cell);
+    if (a - shared.0).cos() < 0.0 {
+        a += std::f64::consts::PI;
+        rho = -rho;
+    }
+    (lms_scene::wrap_angle(a), rho)
 }
 
 /// Step 2: the walls of the occupied `cells` (see the module docs).
@@ -572,6 +693,13 @@ pub struct FrameTruth {
     pub on_wall: Vec<Option<usize>>,
     /// True pieces in beam order.
     pub pieces: Vec<Piece>,
+    /// Per beam: on two parallel map walls within
+    /// [`TruthConfig::ambiguous_within`] (on neither in `on_wall`); empty
+    /// for none.
+    pub ambiguous: Vec<bool>,
+    /// Score with neutral and unexplained lines
+    /// ([`TruthConfig::neutral_and_unexplained`]).
+    pub neutral_and_unexplained: bool,
 }
 
 /// The wall `w`'s line in the sensor frame at `pose`: `(α, r)`, r ≥ 0.
@@ -631,6 +759,79 @@ fn beam_wall(
         }
     }
     best
+}
+
+/// Parallel map walls (degrees): their normals closer than this.
+const AMBIGUOUS_PARALLEL_DEG: f64 = 5.0;
+
+/// Whether the ray of beam `j` seen from `pose` meets, besides `w`, a wall of
+/// another map line parallel to `w` whose crossing with the ray lies within
+/// [`TruthConfig::ambiguous_within`] of `w`'s line: the map holds one
+/// surface twice there, and which of the two the beam is on is unknowable.
+fn ambiguous_beam(
+    scan: &Scan,
+    j: usize,
+    pose: [f64; 3],
+    walls: &[MapWall],
+    near: &[usize],
+    w: usize,
+    cfg: &TruthConfig,
+) -> bool {
+    if cfg.ambiguous_within <= 0.0 {
+        return false;
+    }
+    let [x, y, th] = pose;
+    let phi = th + f64::from(scan.frame.geometry().bearing(j));
+    let u = [phi.cos(), phi.sin()];
+    let own = &walls[w];
+    near.iter().any(|&v| {
+        let other = &walls[v];
+        if other.line == own.line {
+            return false;
+        }
+        let da = lms_scene::wrap_angle(2.0 * (other.alpha - own.alpha)).abs() / 2.0;
+        if da > AMBIGUOUS_PARALLEL_DEG.to_radians() {
+            return false;
+        }
+        let Some(t) = ray_hit([x, y], u, other, 0.5 * cfg.cell) else {
+            return false;
+        };
+        let q = [x + t * u[0], y + t * u[1]];
+        (q[0] * own.alpha.cos() + q[1] * own.alpha.sin() - own.rho).abs() < cfg.ambiguous_within
+    })
+}
+
+/// Per beam of `scan`, the walls of `near` its ray may meet near its hit
+/// while the pose moves by up to a few decimetres from `pose`: what
+/// [`beam_wall`] need look at during a registration.
+fn beam_candidates(
+    scan: &Scan,
+    pose: [f64; 3],
+    walls: &[MapWall],
+    near: &[usize],
+    cfg: &TruthConfig,
+) -> Vec<Vec<usize>> {
+    const SLACK: f64 = 0.3;
+    let [x, y, th] = pose;
+    (0..scan.frame.len())
+        .map(|j| {
+            if !usable(scan, j, cfg) {
+                return Vec::new();
+            }
+            let phi = th + f64::from(scan.frame.geometry().bearing(j));
+            let u = [phi.cos(), phi.sin()];
+            let p = world_hit_at(scan, j, pose);
+            near.iter()
+                .copied()
+                .filter(|&w| {
+                    let wall = &walls[w];
+                    let e = p[0] * wall.alpha.cos() + p[1] * wall.alpha.sin() - wall.rho;
+                    e.abs() <= cfg.beam_tol.max(cfg.ambiguous_within) + SLACK
+                        && ray_hit([x, y], u, wall, 0.5 * cfg.cell + SLACK).is_some()
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// Registration: a hit's scatter about its wall (m), the scale of the
@@ -721,8 +922,166 @@ pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
     } else {
         scan.meta.pose
     };
+    truth_at(scan, map, cfg, pose, |_| &near, |_| pose)
+}
+
+/// The laser pose of `scan` registered to `walls` by robust point-to-line
+/// ICP: from `start`, Gauss–Newton steps on the hits' distances to the
+/// walls their beams are on (re-assigned at each step among `cands`, the
+/// beams on two parallel walls left out), each hit Cauchy-weighted at
+/// 3 cm, with `prior` (the SLAM pose) a weak prior of 0.1 m and 2° so
+/// that what the frame does not constrain stays where SLAM put it. With
+/// `skip`, the beams on that map line are left out: the pose that judges
+/// that line does not absorb it.
+pub fn register(
+    scan: &Scan,
+    walls: &[MapWall],
+    cands: &[Vec<usize>],
+    cfg: &TruthConfig,
+    (prior, start): ([f64; 3], [f64; 3]),
+    skip: Option<usize>,
+) -> [f64; 3] {
+    let g = scan.frame.geometry();
+    let mut pose = start;
+    let info = [
+        REFINE_PRIOR_XY.powi(-2),
+        REFINE_PRIOR_XY.powi(-2),
+        REFINE_PRIOR_TH.powi(-2),
+    ];
+    for _ in 0..REFINE_STEPS {
+        let mut h = [[0.0f64; 3]; 3];
+        let mut b = [0.0f64; 3];
+        for k in 0..3 {
+            h[k][k] = info[k];
+            b[k] = -info[k] * (pose[k] - prior[k]);
+        }
+        b[2] = -info[2] * lms_scene::wrap_angle(pose[2] - prior[2]);
+        for (j, near) in cands.iter().enumerate() {
+            let Some((w, e)) = beam_wall(scan, j, pose, walls, near, cfg) else {
+                continue;
+            };
+            if skip == Some(walls[w].line) || ambiguous_beam(scan, j, pose, walls, near, w, cfg) {
+                continue;
+            }
+            let (ca, sa) = (walls[w].alpha.cos(), walls[w].alpha.sin());
+            let d = f64::from(scan.frame.ranges()[j]);
+            let phi = pose[2] + f64::from(g.bearing(j));
+            let jac = [ca, sa, d * (-phi.sin() * ca + phi.cos() * sa)];
+            let wgt = 1.0 / (1.0 + (e / REFINE_SCATTER).powi(2)) / REFINE_SCATTER.powi(2);
+            for r in 0..3 {
+                for c in 0..3 {
+                    h[r][c] += wgt * jac[r] * jac[c];
+                }
+                b[r] -= wgt * jac[r] * e;
+            }
+        }
+        let Some(step) = crate::variants::solve3(h, b) else {
+            break;
+        };
+        for k in 0..3 {
+            pose[k] += step[k];
+        }
+        if step[0].hypot(step[1]) < 1e-5 && step[2].abs() < 1e-6 {
+            break;
+        }
+    }
+    pose
+}
+
+/// The walls near `pose` and, per beam, the walls it may be on
+/// ([`register`]'s `cands`).
+pub fn candidates_at(
+    scan: &Scan,
+    walls: &[MapWall],
+    pose: [f64; 3],
+    cfg: &TruthConfig,
+) -> Vec<Vec<usize>> {
+    let near = walls_near(walls, [pose[0], pose[1]], cfg.max_range);
+    beam_candidates(scan, pose, walls, &near, cfg)
+}
+
+/// Every frame of `scans` registered to `map` ([`register`], the SLAM pose
+/// the prior, `start` the first guess), and the map rebuilt from the
+/// registered poses, [`TruthConfig::register_rounds`] times; the map is
+/// rebuilt after each round but the last. Returns the map and the poses
+/// registered to it.
+pub fn register_log(scans: &[Scan], map: Map, cfg: &TruthConfig) -> (Map, Vec<[f64; 3]>) {
+    let mut poses: Vec<[f64; 3]> = scans.iter().map(|s| s.meta.pose).collect();
+    let mut map = map;
+    for round in 0..cfg.register_rounds {
+        if round > 0 {
+            let cells = occupied_cells_at(scans, |k| poses[k], cfg);
+            let walls = extract_walls(&cells, cfg);
+            map = Map { cells, walls };
+        }
+        poses = scans
+            .iter()
+            .zip(&poses)
+            .map(|(scan, &start)| {
+                let cands = candidates_at(scan, &map.walls, start, cfg);
+                register(scan, &map.walls, &cands, cfg, (scan.meta.pose, start), None)
+            })
+            .collect();
+    }
+    (map, poses)
+}
+
+/// Step 3 for `scan` seen from the registered `pose`: the beams assigned at
+/// `pose`, and with [`TruthConfig::leave_one_wall_out`] each piece's line
+/// taken through the pose registered without its own map line's beams.
+pub fn frame_truth_registered(
+    scan: &Scan,
+    map: &Map,
+    pose: [f64; 3],
+    cfg: &TruthConfig,
+) -> FrameTruth {
+    let cands = candidates_at(scan, &map.walls, pose, cfg);
+    let mut cache: HashMap<usize, [f64; 3]> = HashMap::new();
+    truth_at(
+        scan,
+        map,
+        cfg,
+        pose,
+        |j| &cands[j],
+        |line| {
+            if !cfg.leave_one_wall_out {
+                return pose;
+            }
+            *cache.entry(line).or_insert_with(|| {
+                register(
+                    scan,
+                    &map.walls,
+                    &cands,
+                    cfg,
+                    (scan.meta.pose, pose),
+                    Some(line),
+                )
+            })
+        },
+    )
+}
+
+/// Step 3 at `pose`: beam `j` looks for its wall among `near_of(j)`; a
+/// piece's line is the map line seen from `line_pose(line)`.
+fn truth_at<'a>(
+    scan: &Scan,
+    map: &Map,
+    cfg: &TruthConfig,
+    pose: [f64; 3],
+    near_of: impl Fn(usize) -> &'a [usize],
+    mut line_pose: impl FnMut(usize) -> [f64; 3],
+) -> FrameTruth {
+    let mut ambiguous = vec![false; scan.frame.len()];
     let walls: Vec<Option<usize>> = (0..scan.frame.len())
-        .map(|j| beam_wall(scan, j, pose, &map.walls, &near, cfg).map(|(w, _)| w))
+        .map(|j| {
+            let near = near_of(j);
+            let (w, _) = beam_wall(scan, j, pose, &map.walls, near, cfg)?;
+            if ambiguous_beam(scan, j, pose, &map.walls, near, w, cfg) {
+                ambiguous[j] = true;
+                return None;
+            }
+            Some(w)
+        })
         .collect();
     let on_wall: Vec<Option<usize>> = walls.iter().map(|w| w.map(|w| map.walls[w].line)).collect();
     let mut pieces = Vec::new();
@@ -746,7 +1105,7 @@ pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
             k += 1;
         }
         let wall = &map.walls[w];
-        let (alpha, r) = line_in_sensor(wall, pose);
+        let (alpha, r) = line_in_sensor(wall, line_pose(wall.line));
         let t = |p: [f64; 2]| -p[0] * wall.alpha.sin() + p[1] * wall.alpha.cos();
         let length = (t(world_hit_at(scan, last, pose)) - t(world_hit_at(scan, first, pose))).abs();
         let (own_alpha, own_r, own_middle) = own_fit(scan, &on_wall, wall.line, (first, last));
@@ -776,5 +1135,15 @@ pub fn frame_truth(scan: &Scan, map: &Map, cfg: &TruthConfig) -> FrameTruth {
         });
         j = last + 1;
     }
-    FrameTruth { on_wall, pieces }
+    let ambiguous = if ambiguous.contains(&true) {
+        ambiguous
+    } else {
+        Vec::new()
+    };
+    FrameTruth {
+        on_wall,
+        pieces,
+        ambiguous,
+        neutral_and_unexplained: cfg.neutral_and_unexplained,
+    }
 }

@@ -10,7 +10,7 @@ use lms_core::Extractor;
 use plotters::prelude::*;
 
 use crate::baselines::Tables;
-use crate::maptruth::{frame_truth, FrameTruth, Map, TruthConfig};
+use crate::maptruth::{FrameTruth, Map};
 use crate::realtruth::{extract, score_frame, RealMethod, RealTally, ScoredLine};
 
 const TRUTH: RGBColor = RGBColor(0x33, 0xA0, 0x2C);
@@ -51,7 +51,7 @@ pub fn draw(
     scans: &[&Scan],
     map: &Map,
     methods: &[RealMethod],
-    cfg: &TruthConfig,
+    truth_of: &dyn Fn(usize) -> FrameTruth,
     counted_per_frame: &[usize],
 ) -> Result<String> {
     host_bridge::plot::ensure_font()?;
@@ -65,7 +65,7 @@ pub fn draw(
     let Some(scan) = scans.get(k) else {
         return Err(anyhow!("{name}: no frame to draw"));
     };
-    let truth = frame_truth(scan, map, cfg);
+    let truth = truth_of(k);
     let stem = name.trim_end_matches(".gz").trim_end_matches(".log");
     let file = format!("truth-{stem}-{}.svg", scan.index);
     let mut text = String::new();

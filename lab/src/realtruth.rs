@@ -13,7 +13,12 @@
 //! # Figures
 //! * **TruePos** = matched counted pieces / counted pieces (≥ 10 beams on
 //!   the wall); also over the counted pieces of 1 m or more.
-//! * **FalsePos** = lines matched to no piece (counted or not) / lines.
+//! * **FalsePos** = lines matched to no piece (counted or not) / lines;
+//!   with the truth's `neutral_and_unexplained` rules
+//!   ([`crate::maptruth::TruthConfig::settled`]), false / (false + true)
+//!   lines, unexplained and neutral lines apart ([`classify_lines`]).
+//! * **Unexplained**: unmatched lines with at least half of their beams on
+//!   no map wall or invalid, as a share of the lines.
 //! * **On no wall**: lines with fewer than half of the valid beams of
 //!   their range on a map wall, as a share of the lines (clutter, glass,
 //!   walls under 0.5 m: things the map does not hold); *FalsePos on walls*
@@ -57,7 +62,9 @@ use lms_core::{Extractor, Line, Params};
 
 use crate::ablation;
 use crate::baselines::{self, run_core, Extraction, Tables};
-use crate::maptruth::{build_map, frame_truth, FrameTruth, Map, TruthConfig};
+use crate::maptruth::{
+    build_map, frame_truth, frame_truth_registered, register_log, FrameTruth, Map, TruthConfig,
+};
 use crate::metrics::{mean, std_dev};
 
 /// Matching gate on |Δα| (degrees).
@@ -89,8 +96,23 @@ pub struct LogWithMap {
     pub no_flags: Params,
     /// The truth's settings over the log's ranges ([`TruthConfig::for_data`]).
     pub cfg: TruthConfig,
-    /// Its map (steps 1–2 of [`crate::maptruth`]).
+    /// Its map (steps 1–2 of [`crate::maptruth`]; with
+    /// [`TruthConfig::register_rounds`], rebuilt from the registered poses).
     pub map: Map,
+    /// Per frame, the laser pose registered to `map` (empty: the SLAM poses).
+    pub poses: Vec<[f64; 3]>,
+}
+
+impl LogWithMap {
+    /// The truth of frame `k` of the log: at its registered pose where
+    /// there is one ([`frame_truth_registered`]), else [`frame_truth`].
+    pub fn truth(&self, k: usize) -> FrameTruth {
+        let scan = &self.log.scans[k];
+        match self.poses.get(k) {
+            Some(&pose) => frame_truth_registered(scan, &self.map, pose, &self.cfg),
+            None => frame_truth(scan, &self.map, &self.cfg),
+        }
+    }
 }
 
 /// Read the log at `path`, its no-flag parameters, and build its map with
@@ -100,11 +122,17 @@ pub fn load_with_map(path: &Path, cfg: &TruthConfig) -> Result<LogWithMap> {
     let no_flags = no_flag_params(path)?;
     let cfg = cfg.for_data(no_flags.max_range);
     let map = build_map(&log.scans, &cfg);
+    let (map, poses) = if cfg.register_rounds > 0 {
+        register_log(&log.scans, map, &cfg)
+    } else {
+        (map, Vec::new())
+    };
     Ok(LogWithMap {
         log,
         no_flags,
         cfg,
         map,
+        poses,
     })
 }
 
@@ -278,6 +306,32 @@ pub struct RealTally {
     pub lines_no_wall_false: usize,
     /// Unmatched lines with half their range on a piece (fragments, off lines).
     pub lines_on_piece: usize,
+    /// Counted pieces of 0.5 m to 1 m.
+    pub pieces_mid: usize,
+    /// Of those, matched.
+    pub matched_mid: usize,
+    /// Counted pieces under 0.5 m.
+    pub pieces_short: usize,
+    /// Of those, matched.
+    pub matched_short: usize,
+    /// True lines: matched to a counted piece (with the truth's
+    /// `neutral_and_unexplained` rules; else every matched line).
+    pub lines_true: usize,
+    /// False lines (with those rules: unmatched, neither unexplained nor
+    /// neutral; else every unmatched line).
+    pub lines_false: usize,
+    /// Of the false lines, fragments: at least half of their beams on one
+    /// counted piece they do not match (those rules only).
+    pub lines_fragment: usize,
+    /// Of those, on a piece another line matches (a wall reported twice).
+    pub lines_fragment_dup: usize,
+    /// Unmatched lines with at least half of their beams on no map wall or
+    /// invalid.
+    pub lines_unexplained: usize,
+    /// Neutral lines (those rules only): matched to an uncounted piece, or
+    /// unmatched with at least half of their beams on uncounted pieces or
+    /// ambiguous.
+    pub lines_neutral: usize,
     /// Counted pieces with two or more candidate lines.
     pub fragmented: usize,
     /// On-wall beams of counted pieces.
@@ -305,8 +359,20 @@ pub struct RealSummary {
     pub true_pos: f64,
     /// TruePos on pieces ≥ 1 m.
     pub true_pos_1m: f64,
-    /// FalsePos.
+    /// TruePos on pieces of 0.5 m to 1 m.
+    pub true_pos_mid: f64,
+    /// TruePos on pieces under 0.5 m.
+    pub true_pos_short: f64,
+    /// FalsePos: false / (false + true) lines.
     pub false_pos: f64,
+    /// Unexplained lines / lines.
+    pub unexplained: f64,
+    /// Neutral lines / lines.
+    pub neutral: f64,
+    /// Fragments among the false lines.
+    pub fragments: f64,
+    /// Of the fragments, those on a piece another line matches.
+    pub fragments_dup: f64,
     /// Lines on no map wall / lines.
     pub no_wall: f64,
     /// FalsePos among the lines on a map wall (clutter the map lacks left out).
@@ -350,6 +416,16 @@ impl RealTally {
         self.lines_no_wall += o.lines_no_wall;
         self.lines_no_wall_false += o.lines_no_wall_false;
         self.lines_on_piece += o.lines_on_piece;
+        self.pieces_mid += o.pieces_mid;
+        self.matched_mid += o.matched_mid;
+        self.pieces_short += o.pieces_short;
+        self.matched_short += o.matched_short;
+        self.lines_true += o.lines_true;
+        self.lines_false += o.lines_false;
+        self.lines_unexplained += o.lines_unexplained;
+        self.lines_fragment += o.lines_fragment;
+        self.lines_fragment_dup += o.lines_fragment_dup;
+        self.lines_neutral += o.lines_neutral;
         self.fragmented += o.fragmented;
         self.wall_beams += o.wall_beams;
         self.covered_beams += o.covered_beams;
@@ -379,7 +455,13 @@ impl RealTally {
         RealSummary {
             true_pos: ratio(self.matched, self.pieces),
             true_pos_1m: ratio(self.matched_1m, self.pieces_1m),
-            false_pos: ratio(self.lines - self.lines_matched, self.lines),
+            true_pos_mid: ratio(self.matched_mid, self.pieces_mid),
+            true_pos_short: ratio(self.matched_short, self.pieces_short),
+            false_pos: ratio(self.lines_false, self.lines_false + self.lines_true),
+            unexplained: ratio(self.lines_unexplained, self.lines),
+            neutral: ratio(self.lines_neutral, self.lines),
+            fragments: ratio(self.lines_fragment, self.lines_false),
+            fragments_dup: ratio(self.lines_fragment_dup, self.lines_fragment),
             no_wall: ratio(self.lines_no_wall, self.lines),
             // A matched line may be "on no wall" too (its piece's beams are
             // mostly off the map line): count only unmatched ones here.
@@ -510,6 +592,7 @@ pub fn score_frame(
     t.frames += 1;
     t.lines += lines.len();
     t.lines_matched += used.iter().filter(|&&u| u).count();
+    classify_lines(truth, lines, valid, &line_of, t);
     for (i, l) in lines.iter().enumerate() {
         let in_range = (l.first..=l.last.min(valid.len().saturating_sub(1)))
             .filter(|&j| valid[j])
@@ -538,6 +621,9 @@ pub fn score_frame(
         t.pieces += 1;
         let long = p.length >= 1.0;
         t.pieces_1m += usize::from(long);
+        let (mid, short) = (!long && p.length >= 0.5, p.length < 0.5);
+        t.pieces_mid += usize::from(mid);
+        t.pieces_short += usize::from(short);
         let beams: Vec<usize> = (p.first..=p.last)
             .filter(|&j| truth.on_wall[j] == Some(p.line))
             .collect();
@@ -550,6 +636,8 @@ pub fn score_frame(
         if let Some((i, da, dr)) = line_of[k] {
             t.matched += 1;
             t.matched_1m += usize::from(long);
+            t.matched_mid += usize::from(mid);
+            t.matched_short += usize::from(short);
             let l = &lines[i];
             t.covered_beams += beams
                 .iter()
@@ -561,6 +649,103 @@ pub fn score_frame(
         }
     }
     (walls, used)
+}
+
+/// Each line of a frame as true, false, unexplained or neutral, added to
+/// `t`; `line_of[k]` is the line matched to piece `k`.
+///
+/// A line matched to a counted piece is true. An unmatched line with at
+/// least half of the beams of its range on no map wall or invalid is
+/// unexplained (clutter, people, structure the map holds as no wall).
+/// With the truth's `neutral_and_unexplained` rules, a line matched to an
+/// uncounted piece is neutral; an unmatched line with at least half of its
+/// beams on one counted piece's line is false (a fragment of a true line
+/// it does not match); else one with at least half of its beams on
+/// uncounted pieces or ambiguous is neutral; else it is false (across walls
+/// or corners). Without those rules every matched line is true and every
+/// unmatched one false (the unexplained ones among them).
+pub fn classify_lines(
+    truth: &FrameTruth,
+    lines: &[ScoredLine],
+    valid: &[bool],
+    line_of: &[Option<(usize, f64, f64)>],
+    t: &mut RealTally,
+) {
+    let n = valid.len().min(truth.on_wall.len());
+    let mut piece_of = vec![None; lines.len()];
+    for (k, m) in line_of.iter().enumerate() {
+        if let Some((i, _, _)) = m {
+            piece_of[*i] = Some(k);
+        }
+    }
+    // Per beam: the piece it is on (on the piece's line).
+    let mut beam_piece = vec![None; n];
+    for (k, p) in truth.pieces.iter().enumerate() {
+        for (j, b) in beam_piece
+            .iter_mut()
+            .enumerate()
+            .take((p.last + 1).min(n))
+            .skip(p.first)
+        {
+            if truth.on_wall[j] == Some(p.line) {
+                *b = Some(k);
+            }
+        }
+    }
+    let ambiguous = |j: usize| truth.ambiguous.get(j).copied().unwrap_or(false);
+    for (i, l) in lines.iter().enumerate() {
+        let range = l.first.min(n)..(l.last + 1).min(n);
+        let beams = range.len().max(1);
+        let half = |c: usize| 2 * c >= beams;
+        if let Some(k) = piece_of[i] {
+            if truth.pieces[k].counted || !truth.neutral_and_unexplained {
+                t.lines_true += 1;
+            } else {
+                t.lines_neutral += 1;
+            }
+            continue;
+        }
+        let off = range
+            .clone()
+            .filter(|&j| !valid[j] || (truth.on_wall[j].is_none() && !ambiguous(j)))
+            .count();
+        if half(off) {
+            t.lines_unexplained += 1;
+            if !truth.neutral_and_unexplained {
+                t.lines_false += 1;
+            }
+            continue;
+        }
+        if !truth.neutral_and_unexplained {
+            t.lines_false += 1;
+            continue;
+        }
+        let mut on_piece: HashMap<usize, usize> = HashMap::new();
+        let mut neutral = 0;
+        for j in range {
+            match beam_piece[j] {
+                Some(k) if valid[j] => {
+                    if truth.pieces[k].counted {
+                        *on_piece.entry(k).or_default() += 1;
+                    } else {
+                        neutral += 1;
+                    }
+                }
+                _ if valid[j] && ambiguous(j) => neutral += 1,
+                _ => {}
+            }
+        }
+        let fragment = on_piece.iter().find(|(_, &c)| half(c)).map(|(&k, _)| k);
+        if fragment.is_none() && half(neutral) {
+            t.lines_neutral += 1;
+        } else {
+            t.lines_false += 1;
+            if let Some(k) = fragment {
+                t.lines_fragment += 1;
+                t.lines_fragment_dup += usize::from(line_of[k].is_some());
+            }
+        }
+    }
 }
 
 /// The oracle's lines: a TLS fit to each counted piece's on-wall hits in
@@ -622,6 +807,8 @@ pub struct LogTruth {
     pub tallies: Vec<RealTally>,
     /// Figure file, if drawn.
     pub figure: Option<String>,
+    /// The truth's settings (over the log's ranges).
+    pub truth: TruthConfig,
 }
 
 /// Evaluate one log: map, truth per frame, every method.
@@ -632,13 +819,15 @@ pub fn run_log(
     cfg: &TruthConfig,
     figures: Option<&Path>,
 ) -> Result<LogTruth> {
+    let loaded = load_with_map(path, cfg)?;
     let LogWithMap {
         log,
         no_flags,
         cfg,
         map,
-    } = load_with_map(path, cfg)?;
-    let cfg = &cfg;
+        ..
+    } = &loaded;
+    let no_flags = *no_flags;
     let name = path
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
@@ -648,8 +837,9 @@ pub fn run_log(
     let mut counted_per_frame = Vec::new();
     let (mut long_enough, mut verified) = (0usize, 0usize);
     let scans: Vec<&Scan> = log.scans.iter().step_by(every.max(1)).collect();
-    for scan in &scans {
-        let truth = frame_truth(scan, &map, cfg);
+    let indices: Vec<usize> = (0..log.scans.len()).step_by(every.max(1)).collect();
+    for (scan, &index) in scans.iter().zip(&indices) {
+        let truth = loaded.truth(index);
         let counted: HashSet<usize> = truth
             .pieces
             .iter()
@@ -685,11 +875,11 @@ pub fn run_log(
         Some(dir) => Some(crate::realfigures::draw(
             dir,
             &name,
-            (&log, &no_flags),
+            (log, &no_flags),
             &scans,
-            &map,
+            map,
             methods,
-            cfg,
+            &|k| loaded.truth(indices[k]),
             &counted_per_frame,
         )?),
         None => None,
@@ -706,6 +896,7 @@ pub fn run_log(
         verified_share: ratio(verified, long_enough),
         tallies,
         figure,
+        truth: *cfg,
     })
 }
 
@@ -761,15 +952,15 @@ pub fn pooled_table(names: &[&str], pooled: &[RealTally]) -> String {
 pub fn run_logs(
     logs: &[PathBuf],
     every: usize,
+    cfg: &TruthConfig,
     figures: Option<&Path>,
     bar: &indicatif::ProgressBar,
 ) -> Result<Vec<LogTruth>> {
     let methods = methods();
-    let cfg = TruthConfig::default();
     let mut out = Vec::new();
     for path in logs {
         bar.set_message(format!("map truth, {}", path.display()));
-        out.push(run_log(path, &methods, every, &cfg, figures)?);
+        out.push(run_log(path, &methods, every, cfg, figures)?);
         bar.inc(1);
     }
     Ok(out)
@@ -787,24 +978,19 @@ fn f(x: f64, d: usize) -> String {
 pub fn markdown(logs: &[LogTruth], every: usize) -> String {
     let mut md = String::new();
     let names: Vec<&str> = methods().iter().map(|m| m.name).collect();
-    let _ = writeln!(
-        md,
-        "## 5. Real scans against map-derived truth\n\n{} of each log; true lines from the \
-         log's SLAM map (`lab/src/maptruth.rs`: walls of the accumulated map, ray-cast into \
-         each frame; pieces with ≥ 10 beams on a wall, ≥ 0.3 m, whose own hits' fit agrees with \
-         the map line within the gates below are counted; an unverified piece is matched \
-         against its own fit and not counted). Matching one-to-one, \
-         |Δα| < 3°, |Δr| < 0.1 m, ≥ 50 % of the line's beams on the piece \
-         (`lab/src/realtruth.rs`). *No flags* is `host-bridge extract LOG` without options. \
-         The oracle fits each true piece's own beams: its TruePos is 1 by construction of \
-         the verified truth, its σ the truth's own error; *verified* is the share of the \
-         long-enough pieces the frame confirms (the unverified truth's ceiling).\n",
-        if every == 1 {
-            "Every frame".to_string()
-        } else {
-            format!("Every {every}-th frame")
-        }
-    );
+    let frames = if every == 1 {
+        "Every frame".to_string()
+    } else {
+        format!("Every {every}-th frame")
+    };
+    if logs
+        .first()
+        .is_some_and(|l| l.truth.neutral_and_unexplained)
+    {
+        settled_intro(&mut md, &frames);
+    } else {
+        legacy_intro(&mut md, &frames);
+    }
     let _ = writeln!(
         md,
         "| log | frames | map walls | counted pieces / frame | verified |\n|:---|---:|---:|---:|---:|"
@@ -830,7 +1016,8 @@ pub fn markdown(logs: &[LogTruth], every: usize) -> String {
         }
         table_row(&mut md, n, &t.summary());
     }
-    let _ = writeln!(md, "\n### Per log\n");
+    settled_tables(&mut md, logs);
+    let _ = writeln!(md, "\n### Per log, every method\n");
     table_header(&mut md, "log · method");
     for l in logs {
         for (k, n) in names.iter().enumerate() {
@@ -856,6 +1043,112 @@ pub fn markdown(logs: &[LogTruth], every: usize) -> String {
         }
     }
     md
+}
+
+/// The section's first paragraph for [`TruthConfig::settled`].
+fn settled_intro(md: &mut String, frames: &str) {
+    let _ = writeln!(
+        md,
+        "## 5. Real scans against map-derived truth\n\n{frames} of each log, against the \
+         settled truth (`TruthConfig::settled`, `lab/src/maptruth.rs`): every frame registered to \
+         the walls of the log's accumulated map by robust point-to-line ICP with a weak prior \
+         on the SLAM pose, the map rebuilt from the registered poses and every frame registered \
+         again; the walls ray-cast into each frame, a beam on a wall if its hit is within 5 cm \
+         of the wall's line, on neither of two parallel walls of different lines within 15 cm \
+         (ambiguous); each piece's line taken through a pose registered without that wall's \
+         own beams (leave-one-wall-out). Pieces with ≥ 10 beams and ≥ 0.3 m are counted, \
+         shorter ones are neutral. Matching one-to-one, |Δα| < 3°, |Δr| < 0.1 m at the line's \
+         middle, ≥ 50 % of the line's beams on the piece (`lab/src/realtruth.rs`). A line \
+         matched to a counted piece is true; an unmatched line with ≥ 50 % of its beams on no \
+         wall or invalid is *unexplained*; a line matched to a neutral piece, or unmatched \
+         with ≥ 50 % of its beams on neutral pieces or ambiguous, is *neutral*; every other \
+         line is false (a fragment of a true line it does not match, or a line across walls \
+         or corners): FalsePos = false / (false + true). *No flags* is `host-bridge extract \
+         LOG` without options. The oracle is a least-squares fit to each counted piece's own \
+         beams: its TruePos is the check of the truth itself; *verified* is the share of the \
+         counted pieces whose own fit agrees with their map line. `--truth legacy` gives the \
+         truth at the SLAM poses with unverified pieces left out.\n"
+    );
+}
+
+/// The section's first paragraph for [`TruthConfig::legacy`].
+fn legacy_intro(md: &mut String, frames: &str) {
+    let _ = writeln!(
+        md,
+        "## 5. Real scans against map-derived truth\n\n{frames} of each log; true lines from the \
+         log's SLAM map (`lab/src/maptruth.rs`: walls of the accumulated map, ray-cast into \
+         each frame; pieces with ≥ 10 beams on a wall, ≥ 0.3 m, whose own hits' fit agrees with \
+         the map line within the gates below are counted; an unverified piece is matched \
+         against its own fit and not counted). Matching one-to-one, \
+         |Δα| < 3°, |Δr| < 0.1 m, ≥ 50 % of the line's beams on the piece \
+         (`lab/src/realtruth.rs`). *No flags* is `host-bridge extract LOG` without options. \
+         The oracle fits each true piece's own beams: its TruePos is 1 by construction of \
+         the verified truth, its σ the truth's own error; *verified* is the share of the \
+         long-enough pieces the frame confirms (the unverified truth's ceiling).\n"
+    );
+}
+
+/// Methods of the per-log summary tables.
+const SUMMARY_METHODS: [&str; 3] = [NO_FLAGS, SPLIT_MERGE, ORACLE];
+
+/// Per log and pooled, for the defaults, split-and-merge and the oracle:
+/// TruePos overall and by piece length, FalsePos, unexplained and neutral
+/// lines, coverage, walls fragmented in > 5 % of their sightings.
+fn settled_tables(md: &mut String, logs: &[LogTruth]) {
+    let all = methods();
+    let _ = writeln!(
+        md,
+        "\n### Per log: the defaults, split-and-merge and the oracle\n\n\
+         TruePos over the counted pieces, and over those ≥ 1 m, 0.5–1 m and < 0.5 m \
+         long (the part of the wall the frame sees); FalsePos = false / (false + true) lines; \
+         *unexplained* and *neutral* as shares of all lines; *fragments* the share of the \
+         false lines that lie on a true piece they do not match, *on a matched piece* the \
+         share of those whose piece another line matches (a wall reported twice); *walls fragmented*: walls \
+         with ≥ {MIN_SIGHTINGS} counted sightings reported as two or more lines in more than \
+         5 % of them.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| log | method | TruePos | ≥ 1 m | 0.5–1 m | < 0.5 m | FalsePos | unexplained | \
+         neutral | fragments | on a matched piece | coverage | walls fragmented |\n\
+         |:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    let row = |md: &mut String, log: &str, name: &str, t: &RealTally| {
+        let s = t.summary();
+        let (bad, of) = s.walls_fragmented;
+        let _ = writeln!(
+            md,
+            "| {log} | {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {bad} of {of} ({}) |",
+            f(s.true_pos, 3),
+            f(s.true_pos_1m, 3),
+            f(s.true_pos_mid, 3),
+            f(s.true_pos_short, 3),
+            f(s.false_pos, 3),
+            f(s.unexplained, 3),
+            f(s.neutral, 3),
+            f(s.fragments, 2),
+            f(s.fragments_dup, 2),
+            f(s.coverage, 3),
+            f(ratio(bad, of), 3),
+        );
+    };
+    let short = |n: &str| n.split(" (").next().unwrap_or(n).to_string();
+    for l in logs {
+        for m in SUMMARY_METHODS {
+            if let Some(k) = all.iter().position(|x| x.name == m) {
+                row(md, &l.name, &short(m), &l.tallies[k]);
+            }
+        }
+    }
+    for m in SUMMARY_METHODS {
+        if let Some(k) = all.iter().position(|x| x.name == m) {
+            let mut t = RealTally::default();
+            for l in logs {
+                t.merge(&l.tallies[k]);
+            }
+            row(md, "**all logs**", &short(m), &t);
+        }
+    }
 }
 
 fn table_header(md: &mut String, first: &str) {
@@ -898,7 +1191,7 @@ pub fn run_standalone(args: &crate::TruthArgs) -> Result<PathBuf> {
         .with_context(|| format!("cannot create {}", output.display()))?;
     let figures = (!args.no_plots && crate::report::fonts_available()).then_some(output);
     let bar = crate::progress(logs.len() as u64);
-    let truth = run_logs(&logs, args.every, figures, &bar)?;
+    let truth = run_logs(&logs, args.every, &args.truth.config(), figures, &bar)?;
     let fits = crate::sensorfit::run(&logs, crate::SENSOR_FIT_SCANS)?;
     let realistic = if args.synthetic_scans > 0 {
         crate::realistic::run(args.synthetic_scans, 1, &bar)?

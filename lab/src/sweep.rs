@@ -176,6 +176,7 @@ pub fn print_sweep_with(
             no_flags: params,
             cfg,
             map,
+            ..
         } = load_with_map(&path, &cfg)?;
         // Per log, then pooled: wall ids are per log.
         let mut tallies = vec![RealTally::default(); names.len()];

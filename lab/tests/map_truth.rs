@@ -195,6 +195,7 @@ fn scoring_counts_matches_fragments_and_lines_on_no_wall() {
     let truth = FrameTruth {
         on_wall,
         pieces: vec![piece(10, 39, 0.3, 2.0), piece(50, 79, -1.0, 3.0)],
+        ..FrameTruth::default()
     };
     let line = |first, last, alpha, r| ScoredLine {
         alpha,
@@ -356,6 +357,7 @@ fn an_unverified_piece_is_not_counted_and_its_own_fit_is_not_false() {
     let truth = FrameTruth {
         on_wall,
         pieces: vec![p],
+        ..FrameTruth::default()
     };
     let valid = vec![true; 100];
     let on_map = ScoredLine {
