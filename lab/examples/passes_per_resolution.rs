@@ -1,0 +1,215 @@
+//! The smoothing passes per angular resolution (docs/DESIGN.md,
+//! "Parameters"): the three-beam mask iterated `iterations` times spreads over
+//! about √iterations beams, so 30 passes at 1° smooth over twice the angle
+//! they do at 0.5°; a quarter of the passes (≈ 8) matches the 0.5° scale.
+//! Per log of the settled truth (`lms-lab truth`: the no-flag parameters,
+//! σ and range limit per data, only `iterations` changed) for 30, 20, 15,
+//! 12, 10, 8 and 6 passes: TruePos overall and by piece length, FalsePos,
+//! unexplained lines, coverage, fragmentation; then pooled per resolution,
+//! all logs with 30 passes at 0.5° and each count at 1°; τ, `min_points`
+//! and the σ_α gate on the 1° logs instead; and the realistic synthetic
+//! scenes (0.5°, `SCANS` per family and σ₀) for the passes. Every frame
+//! (`EVERY` = 1, the default) runs in about half a minute.
+//!
+//! `cargo run --release -p lms-lab --example passes_per_resolution -- [EVERY] [SCANS]`
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::Result;
+use host_bridge::carmen::{self, UnitMode};
+use lms_core::{Extractor, Params};
+use lms_lab::maptruth::TruthConfig;
+use lms_lab::metrics::{scan_truth, Gates, Tally};
+use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
+use lms_lab::realtruth::{run_log, Base, RealKind, RealMethod, RealTally, SigmaChoice};
+use lms_lab::scenes::Family;
+use lms_lab::sweep::Adjust;
+
+/// The variants: the defaults (30 passes) and fewer passes.
+fn variants() -> Vec<(&'static str, Adjust)> {
+    vec![
+        ("30 (defaults)", |p| p),
+        ("20", |p| p.with_iterations(20)),
+        ("15", |p| p.with_iterations(15)),
+        ("12", |p| p.with_iterations(12)),
+        ("10", |p| p.with_iterations(10)),
+        ("8", |p| p.with_iterations(8)),
+        ("6", |p| p.with_iterations(6)),
+    ]
+}
+
+/// Other settings a 1° scan might want instead: the segmentation gate, the
+/// shortest segment, and the σ_α gate scaled by √2 (half the beams on a
+/// wall at 1°).
+fn others() -> Vec<(&'static str, Adjust)> {
+    vec![
+        ("tau=7", |p| p.with_tau(7.0)),
+        ("tau=12", |p| p.with_tau(12.0)),
+        ("min_points=4", |p| p.with_min_points(4)),
+        ("max_alpha_sd_deg=2.36 (√2·5/3)", |p| {
+            p.with_max_alpha_sd_deg(2.36)
+        }),
+        ("12 passes, max_alpha_sd_deg=2.36", |p| {
+            p.with_iterations(12).with_max_alpha_sd_deg(2.36)
+        }),
+    ]
+}
+
+fn f(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.3}")
+    } else {
+        "—".into()
+    }
+}
+
+fn header(md: &mut String, setting: &str) {
+    let _ = writeln!(
+        md,
+        "| log | {setting} | TruePos | ≥ 1 m | 0.5–1 m (pieces) | < 0.5 m | FalsePos | \
+         unexplained | coverage | fragmented | walls fragmented | lines / frame |\n\
+         |:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+}
+
+fn row(md: &mut String, log: &str, name: &str, t: &RealTally) {
+    let s = t.summary();
+    let (bad, of) = s.walls_fragmented;
+    let _ = writeln!(
+        md,
+        "| {log} | {name} | {} | {} | {} ({}) | {} | {} | {} | {} | {} | {bad} of {of} | {:.2} |",
+        f(s.true_pos),
+        f(s.true_pos_1m),
+        f(s.true_pos_mid),
+        t.pieces_mid,
+        f(s.true_pos_short),
+        f(s.false_pos),
+        f(s.unexplained),
+        f(s.coverage),
+        f(s.fragmented),
+        s.lines_per_frame,
+    );
+}
+
+/// The realistic synthetic scenes (0.5°), as `lms_lab::sweep` prints them.
+fn synthetic(names: &[&str], adjust: &[Adjust], scans: usize) -> Result<String> {
+    let mut md = String::from(
+        "| σ₀ | iterations | TruePos | FalsePos | off arcs | σΔα/CRB | σΔr/CRB | gross | \
+         lines/scan | corners found | corners false |\n\
+         |:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    let mut ex = Extractor::new();
+    for sigma in SIGMAS {
+        let model = realistic_model(sigma);
+        let gates = Gates {
+            kappa: model.kappa,
+            ..Gates::default()
+        };
+        let mut tallies = vec![Tally::default(); names.len()];
+        for family in Family::ALL {
+            for i in 0..scans {
+                let s = sample(family, i, 1, &model, DELTA)?;
+                let base = Params::default().with_sigma(sigma as f32);
+                let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
+                for (k, t) in tallies.iter_mut().enumerate() {
+                    let x = lms_lab::baselines::run_core(&mut ex, &s.frame, &(adjust[k])(base));
+                    let (ls, cs) = lms_lab::score(&truth, &x, &s.frame, sigma, &gates);
+                    t.add(&ls, &cs, x.segments.len(), 0.0);
+                }
+            }
+        }
+        for (name, t) in names.iter().zip(&tallies) {
+            let s = t.summary();
+            let _ = writeln!(
+                md,
+                "| {} mm | {name} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.3} | {:.2} | {:.3} | {:.3} |",
+                sigma * 1e3,
+                s.true_pos,
+                s.false_pos,
+                s.false_pos_no_arc,
+                s.crb_alpha,
+                s.crb_r,
+                s.outliers,
+                s.lines_per_scan,
+                s.corner_rate,
+                s.corner_false_pos
+            );
+        }
+    }
+    Ok(md)
+}
+
+fn main() -> Result<()> {
+    let every: usize = std::env::args().nth(1).map_or(Ok(1), |s| s.parse())?;
+    let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
+    let vs = variants();
+    let names: Vec<&str> = vs.iter().map(|v| v.0).collect();
+    let adjust: Vec<Adjust> = vs.iter().map(|v| v.1).collect();
+    let n = vs.len();
+    let all: Vec<_> = vs.iter().chain(&others()).copied().collect();
+    let all_names: Vec<&str> = all.iter().map(|v| v.0).collect();
+    let methods: Vec<RealMethod> = all
+        .iter()
+        .map(|&(name, adjust)| RealMethod {
+            name,
+            kind: RealKind::Core,
+            base: Base::NoFlags,
+            sigma: SigmaChoice::Base,
+            adjust,
+        })
+        .collect();
+    let cfg = TruthConfig::settled();
+    // Pooled: [0] 1° logs, [1] 0.5° logs; per variant.
+    let mut pooled = vec![vec![RealTally::default(); all.len()]; 2];
+    let (mut md, mut other) = (String::new(), String::new());
+    header(&mut md, "iterations");
+    header(&mut other, "setting");
+    for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
+        let beams = carmen::read_log(&path, UnitMode::Auto)?
+            .scans
+            .first()
+            .map_or(0, |s| s.frame.len());
+        let coarse = beams <= 181;
+        let r = run_log(&path, &methods, every, &cfg, None)?;
+        let name = r.name.trim_end_matches("-corrected.log.gz");
+        let label = format!("{name} ({}°, {beams})", if coarse { "1" } else { "0.5" });
+        for (k, t) in r.tallies.iter().enumerate() {
+            if k < n {
+                row(&mut md, &label, all_names[k], t);
+            } else if coarse {
+                row(&mut other, &label, all_names[k], t);
+            }
+            pooled[usize::from(!coarse)][k].merge(t);
+        }
+        eprintln!("{label}: {} frames", r.frames);
+    }
+    println!("Settled truth, every {every}. frame, per log:\n\n{md}");
+    let mut md = String::new();
+    header(&mut md, "iterations");
+    for (g, label) in [(0, "1° logs"), (1, "0.5° logs")] {
+        for (k, t) in pooled[g].iter().enumerate().take(n) {
+            row(&mut md, &format!("**{label}**"), all_names[k], t);
+        }
+        for (k, t) in pooled[g].iter().enumerate().skip(n) {
+            row(&mut other, &format!("**{label}**"), all_names[k], t);
+        }
+    }
+    for (k, t) in pooled[0].iter().enumerate().take(n) {
+        let mut all = pooled[1][0].clone();
+        all.merge(t);
+        row(
+            &mut md,
+            "**all logs, 30 at 0.5°**",
+            &format!("{} at 1°", names[k]),
+            &all,
+        );
+    }
+    println!("Pooled:\n\n{md}");
+    println!("Other settings, 30 passes unless named (1° logs, then pooled):\n\n{other}");
+    println!(
+        "Realistic synthetic scenes (0.5°), {scans} scans per family and σ₀:\n\n{}",
+        synthetic(&names, &adjust, scans)?
+    );
+    Ok(())
+}
