@@ -95,7 +95,10 @@ fn verify_knows_the_firmware_sensor_queue() {
         value.replace('_', "").parse().unwrap()
     };
     let slots = constant("firmware/src/board.rs", "SENSOR_RX_SLOTS");
-    let queue = constant("host-bridge/src/verify/session.rs", "FIRMWARE_SENSOR_QUEUE");
+    let queue = constant(
+        "host-bridge/src/verify/sensor_side.rs",
+        "FIRMWARE_SENSOR_QUEUE",
+    );
     // A heapless::spsc queue of N slots holds N − 1 bytes.
     assert_eq!(queue, slots - 1);
 }

@@ -24,7 +24,7 @@ pub(super) struct Recovery {
     /// selection resumes then).
     pub(super) first_back_us: Option<u64>,
     /// MCU reset: wall time the sensor waited, until that first scan, for
-    /// QEMU's UART to take what it had sent (see `Session::qemu_intake`);
+    /// QEMU's UART to take what it had sent (see `Recoveries::qemu_intake`);
     /// not on the sensor clock.
     pub(super) waited_for_qemu: Duration,
 }
