@@ -18,13 +18,10 @@ use std::path::Path;
 
 use anyhow::Result;
 use host_bridge::carmen::{self, UnitMode};
-use lms_core::{Extractor, Params};
+use lms_lab::baselines::run_core;
 use lms_lab::maptruth::TruthConfig;
-use lms_lab::metrics::{scan_truth, Gates, Tally};
-use lms_lab::realistic::{realistic_model, sample, DELTA, SIGMAS};
 use lms_lab::realtruth::{run_log, Base, RealKind, RealMethod, RealTally, SigmaChoice};
-use lms_lab::scenes::Family;
-use lms_lab::sweep::Adjust;
+use lms_lab::sweep::{synthetic_table, Adjust};
 
 /// The variants: the defaults (30 passes) and fewer passes.
 fn variants() -> Vec<(&'static str, Adjust)> {
@@ -90,54 +87,6 @@ fn row(md: &mut String, log: &str, name: &str, t: &RealTally) {
         f(s.fragmented),
         s.lines_per_frame,
     );
-}
-
-/// The realistic synthetic scenes (0.5°), as `lms_lab::sweep` prints them.
-fn synthetic(names: &[&str], adjust: &[Adjust], scans: usize) -> Result<String> {
-    let mut md = String::from(
-        "| σ₀ | iterations | TruePos | FalsePos | off arcs | σΔα/CRB | σΔr/CRB | gross | \
-         lines/scan | corners found | corners false |\n\
-         |:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-    );
-    let mut ex = Extractor::new();
-    for sigma in SIGMAS {
-        let model = realistic_model(sigma);
-        let gates = Gates {
-            kappa: model.kappa,
-            ..Gates::default()
-        };
-        let mut tallies = vec![Tally::default(); names.len()];
-        for family in Family::ALL {
-            for i in 0..scans {
-                let s = sample(family, i, 1, &model, DELTA)?;
-                let base = Params::default().with_sigma(sigma as f32);
-                let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
-                for (k, t) in tallies.iter_mut().enumerate() {
-                    let x = lms_lab::baselines::run_core(&mut ex, &s.frame, &(adjust[k])(base));
-                    let (ls, cs) = lms_lab::score(&truth, &x, &s.frame, sigma, &gates);
-                    t.add(&ls, &cs, x.segments.len(), 0.0);
-                }
-            }
-        }
-        for (name, t) in names.iter().zip(&tallies) {
-            let s = t.summary();
-            let _ = writeln!(
-                md,
-                "| {} mm | {name} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.3} | {:.2} | {:.3} | {:.3} |",
-                sigma * 1e3,
-                s.true_pos,
-                s.false_pos,
-                s.false_pos_no_arc,
-                s.crb_alpha,
-                s.crb_r,
-                s.outliers,
-                s.lines_per_scan,
-                s.corner_rate,
-                s.corner_false_pos
-            );
-        }
-    }
-    Ok(md)
 }
 
 fn main() -> Result<()> {
@@ -209,7 +158,9 @@ fn main() -> Result<()> {
     println!("Other settings, 30 passes unless named (1° logs, then pooled):\n\n{other}");
     println!(
         "Realistic synthetic scenes (0.5°), {scans} scans per family and σ₀:\n\n{}",
-        synthetic(&names, &adjust, scans)?
+        synthetic_table(&names, scans, &|k, ex, frame, base| {
+            run_core(ex, frame, &(adjust[k])(*base))
+        })?
     );
     Ok(())
 }

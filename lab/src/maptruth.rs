@@ -856,8 +856,29 @@ const REFINE_STEPS: usize = 5;
 /// numbers from hundreds of hits — removes without fitting any one piece.
 pub fn refine_pose(scan: &Scan, walls: &[MapWall], near: &[usize], cfg: &TruthConfig) -> [f64; 3] {
     let prior = scan.meta.pose;
+    let beams = 0..scan.frame.len();
+    gauss_newton(scan, walls, (prior, prior), false, |pose| {
+        beams
+            .clone()
+            .filter_map(move |j| beam_wall(scan, j, pose, walls, near, cfg).map(|(w, e)| (j, w, e)))
+            .collect()
+    })
+}
+
+/// Gauss–Newton steps of a registration from `start` with `prior` as a
+/// prior (`REFINE_PRIOR_XY`, `REFINE_PRIOR_TH`; the heading's difference
+/// wrapped with `wrap`): `hits(pose)` gives the beams used at a pose as
+/// `(beam, wall, signed distance)`, each Cauchy-weighted at
+/// `REFINE_SCATTER`.
+fn gauss_newton(
+    scan: &Scan,
+    walls: &[MapWall],
+    (prior, start): ([f64; 3], [f64; 3]),
+    wrap: bool,
+    mut hits: impl FnMut([f64; 3]) -> Vec<(usize, usize, f64)>,
+) -> [f64; 3] {
     let g = scan.frame.geometry();
-    let mut pose = prior;
+    let mut pose = start;
     let info = [
         REFINE_PRIOR_XY.powi(-2),
         REFINE_PRIOR_XY.powi(-2),
@@ -870,10 +891,10 @@ pub fn refine_pose(scan: &Scan, walls: &[MapWall], near: &[usize], cfg: &TruthCo
             h[k][k] = info[k];
             b[k] = -info[k] * (pose[k] - prior[k]);
         }
-        for j in 0..scan.frame.len() {
-            let Some((w, e)) = beam_wall(scan, j, pose, walls, near, cfg) else {
-                continue;
-            };
+        if wrap {
+            b[2] = -info[2] * lms_scene::wrap_angle(pose[2] - prior[2]);
+        }
+        for (j, w, e) in hits(pose) {
             let (ca, sa) = (walls[w].alpha.cos(), walls[w].alpha.sin());
             let d = f64::from(scan.frame.ranges()[j]);
             let phi = pose[2] + f64::from(g.bearing(j));
@@ -941,21 +962,8 @@ pub fn register(
     (prior, start): ([f64; 3], [f64; 3]),
     skip: Option<usize>,
 ) -> [f64; 3] {
-    let g = scan.frame.geometry();
-    let mut pose = start;
-    let info = [
-        REFINE_PRIOR_XY.powi(-2),
-        REFINE_PRIOR_XY.powi(-2),
-        REFINE_PRIOR_TH.powi(-2),
-    ];
-    for _ in 0..REFINE_STEPS {
-        let mut h = [[0.0f64; 3]; 3];
-        let mut b = [0.0f64; 3];
-        for k in 0..3 {
-            h[k][k] = info[k];
-            b[k] = -info[k] * (pose[k] - prior[k]);
-        }
-        b[2] = -info[2] * lms_scene::wrap_angle(pose[2] - prior[2]);
+    gauss_newton(scan, walls, (prior, start), true, |pose| {
+        let mut hits = Vec::new();
         for (j, near) in cands.iter().enumerate() {
             let Some((w, e)) = beam_wall(scan, j, pose, walls, near, cfg) else {
                 continue;
@@ -963,29 +971,10 @@ pub fn register(
             if skip == Some(walls[w].line) || ambiguous_beam(scan, j, pose, walls, near, w, cfg) {
                 continue;
             }
-            let (ca, sa) = (walls[w].alpha.cos(), walls[w].alpha.sin());
-            let d = f64::from(scan.frame.ranges()[j]);
-            let phi = pose[2] + f64::from(g.bearing(j));
-            let jac = [ca, sa, d * (-phi.sin() * ca + phi.cos() * sa)];
-            let wgt = 1.0 / (1.0 + (e / REFINE_SCATTER).powi(2)) / REFINE_SCATTER.powi(2);
-            for r in 0..3 {
-                for c in 0..3 {
-                    h[r][c] += wgt * jac[r] * jac[c];
-                }
-                b[r] -= wgt * jac[r] * e;
-            }
+            hits.push((j, w, e));
         }
-        let Some(step) = crate::variants::solve3(h, b) else {
-            break;
-        };
-        for k in 0..3 {
-            pose[k] += step[k];
-        }
-        if step[0].hypot(step[1]) < 1e-5 && step[2].abs() < 1e-6 {
-            break;
-        }
-    }
-    pose
+        hits
+    })
 }
 
 /// The walls near `pose` and, per beam, the walls it may be on

@@ -2,6 +2,7 @@
 //! realistic synthetic scenes and the real logs' map truth — for a list of
 //! extraction variants.
 
+use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Result;
@@ -127,47 +128,8 @@ pub fn print_sweep_with(
     scans: usize,
     run: &RunVariant<'_>,
 ) -> Result<()> {
+    print!("{}", synthetic_table(names, scans, run)?);
     let mut ex = Extractor::new();
-    println!(
-        "| σ₀ | method | TruePos | FalsePos | off arcs | σΔα/CRB | σΔr/CRB | gross | lines/scan | corners found | corners false |"
-    );
-    println!("|:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    for sigma in SIGMAS {
-        let model = realistic_model(sigma);
-        let gates = Gates {
-            kappa: model.kappa,
-            ..Gates::default()
-        };
-        let mut tallies = vec![Tally::default(); names.len()];
-        for family in Family::ALL {
-            for i in 0..scans {
-                let s = sample(family, i, 1, &model, DELTA)?;
-                let base = Params::default().with_sigma(sigma as f32);
-                let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
-                for (k, t) in tallies.iter_mut().enumerate() {
-                    let x = run(k, &mut ex, &s.frame, &base);
-                    let (ls, cs) = crate::score(&truth, &x, &s.frame, sigma, &gates);
-                    t.add(&ls, &cs, x.segments.len(), 0.0);
-                }
-            }
-        }
-        for (name, t) in names.iter().zip(&tallies) {
-            let s = t.summary();
-            println!(
-                "| {} mm | {name} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.3} | {:.2} | {:.3} | {:.3} |",
-                sigma * 1e3,
-                s.true_pos,
-                s.false_pos,
-                s.false_pos_no_arc,
-                s.crb_alpha,
-                s.crb_r,
-                s.outliers,
-                s.lines_per_scan,
-                s.corner_rate,
-                s.corner_false_pos
-            );
-        }
-    }
     let cfg = TruthConfig::default();
     let mut pooled = vec![RealTally::default(); names.len()];
     for path in crate::real::find_logs(Path::new("../shared/data/carmen"))? {
@@ -190,4 +152,53 @@ pub fn print_sweep_with(
     println!("\nReal logs, every {every}. frame, pooled:\n");
     print!("{}", pooled_table(names, &pooled));
     Ok(())
+}
+
+/// The realistic synthetic scenes' table of [`print_sweep_with`] (Markdown):
+/// `run(k, …)` extracts variant `k` (named `names[k]`), `scans` per family
+/// and σ₀.
+pub fn synthetic_table(names: &[&str], scans: usize, run: &RunVariant<'_>) -> Result<String> {
+    let mut ex = Extractor::new();
+    let mut md = String::from(
+        "| σ₀ | method | TruePos | FalsePos | off arcs | σΔα/CRB | σΔr/CRB | gross | lines/scan | corners found | corners false |\n\
+         |:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for sigma in SIGMAS {
+        let model = realistic_model(sigma);
+        let gates = Gates {
+            kappa: model.kappa,
+            ..Gates::default()
+        };
+        let mut tallies = vec![Tally::default(); names.len()];
+        for family in Family::ALL {
+            for i in 0..scans {
+                let s = sample(family, i, 1, &model, DELTA)?;
+                let base = Params::default().with_sigma(sigma as f32);
+                let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
+                for (k, t) in tallies.iter_mut().enumerate() {
+                    let x = run(k, &mut ex, &s.frame, &base);
+                    let (ls, cs) = crate::score(&truth, &x, &s.frame, sigma, &gates);
+                    t.add(&ls, &cs, x.segments.len(), 0.0);
+                }
+            }
+        }
+        for (name, t) in names.iter().zip(&tallies) {
+            let s = t.summary();
+            let _ = writeln!(
+                md,
+                "| {} mm | {name} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.3} | {:.2} | {:.3} | {:.3} |",
+                sigma * 1e3,
+                s.true_pos,
+                s.false_pos,
+                s.false_pos_no_arc,
+                s.crb_alpha,
+                s.crb_r,
+                s.outliers,
+                s.lines_per_scan,
+                s.corner_rate,
+                s.corner_false_pos
+            );
+        }
+    }
+    Ok(md)
 }
