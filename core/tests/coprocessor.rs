@@ -111,16 +111,7 @@ impl Bench {
     fn ask(&mut self, command: u8, data: &[u8], us: u64) -> Vec<u8> {
         self.host.tx.clear();
         let mut buf = [0u8; 64];
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0,
-                command,
-            },
-            data,
-            None,
-        )
-        .unwrap();
+        let n = emit_telegram(&mut buf, Head::to_sensor(command), data, None).unwrap();
         self.host.rx.extend(&buf[..n]);
         self.run(us);
         let reply = std::mem::take(&mut self.host.tx);

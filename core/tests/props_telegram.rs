@@ -52,16 +52,7 @@ enum Piece {
 
 fn telegram_bytes(command: u8, data: &[u8]) -> Vec<u8> {
     let mut buf = vec![0u8; MAX_TELEGRAM_LEN];
-    let n = emit_telegram(
-        &mut buf,
-        Head {
-            address: 0x80,
-            command,
-        },
-        data,
-        Some(0x10),
-    )
-    .expect("fits");
+    let n = emit_telegram(&mut buf, Head::from_sensor(command), data, Some(0x10)).expect("fits");
     buf.truncate(n);
     buf
 }

@@ -185,16 +185,7 @@ impl Bench {
     /// A request from the client (into the co-processor's receive side).
     fn send(&mut self, command: u8, data: &[u8]) {
         let mut buf = [0u8; 128];
-        let n = emit_telegram(
-            &mut buf,
-            Head {
-                address: 0,
-                command,
-            },
-            data,
-            None,
-        )
-        .unwrap();
+        let n = emit_telegram(&mut buf, Head::to_sensor(command), data, None).unwrap();
         self.host.rx.extend(&buf[..n]);
     }
 

@@ -23,10 +23,7 @@ fuzz_target!(|data: &[u8]| {
             let mut buf = [0u8; MAX_TELEGRAM_LEN];
             if let Ok(n) = emit_telegram(
                 &mut buf,
-                Head {
-                    address: 0x80,
-                    command,
-                },
+                Head::from_sensor(command),
                 body,
                 Some(0x10),
             ) {

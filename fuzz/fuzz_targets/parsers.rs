@@ -79,10 +79,7 @@ fuzz_target!(|data: &[u8]| {
         let mut buf = [0u8; MAX_TELEGRAM_LEN + 8];
         match emit_telegram(
             &mut buf,
-            Head {
-                address: 0x80,
-                command,
-            },
+            Head::from_sensor(command),
             body,
             status,
         ) {

@@ -649,6 +649,35 @@ pub struct Piece {
 }
 
 impl Piece {
+    /// A counted, verified piece of the beams `beams` on the map line
+    /// `(alpha, r)` (rad, m), its own fit on that line, `length` m long:
+    /// for hand-made cases.
+    pub fn hand_made(
+        beams: std::ops::RangeInclusive<usize>,
+        (alpha, r): (f64, f64),
+        length: f64,
+    ) -> Piece {
+        let (first, last) = (*beams.start(), *beams.end());
+        Piece {
+            wall: first,
+            line: first,
+            alpha,
+            r,
+            first,
+            last,
+            beams: last - first + 1,
+            length,
+            own_alpha: alpha,
+            own_r: r,
+            own_middle: [r * alpha.cos(), r * alpha.sin()],
+            gate_at_middle: false,
+            verified: true,
+            counted: true,
+        }
+    }
+}
+
+impl Piece {
     /// The line a method's line is matched against: the map's where the
     /// frame confirms it or the piece is counted anyway (without
     /// [`TruthConfig::verify`]), else the frame's own hits' fit.

@@ -129,22 +129,7 @@ fn the_map_of_a_known_room_holds_its_walls_and_each_frames_lines() {
 }
 
 fn piece(first: usize, last: usize, alpha: f64, r: f64) -> Piece {
-    Piece {
-        wall: first,
-        line: first,
-        alpha,
-        r,
-        first,
-        last,
-        beams: last - first + 1,
-        length: 2.0,
-        own_alpha: alpha,
-        own_r: r,
-        own_middle: [r * alpha.cos(), r * alpha.sin()],
-        gate_at_middle: false,
-        verified: true,
-        counted: true,
-    }
+    Piece::hand_made(first..=last, (alpha, r), 2.0)
 }
 
 /// A wall seen at grazing incidence, far from the foot of its normal: a

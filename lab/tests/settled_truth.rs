@@ -38,20 +38,8 @@ fn ranges(scene: &Scene, pose: Pose) -> Vec<Option<f64>> {
 
 fn piece(first: usize, last: usize, alpha: f64, r: f64, counted: bool) -> Piece {
     Piece {
-        wall: first,
-        line: first,
-        alpha,
-        r,
-        first,
-        last,
-        beams: last - first + 1,
-        length: 1.5,
-        own_alpha: alpha,
-        own_r: r,
-        own_middle: [r * alpha.cos(), r * alpha.sin()],
-        gate_at_middle: false,
-        verified: true,
         counted,
+        ..Piece::hand_made(first..=last, (alpha, r), 1.5)
     }
 }
 
@@ -199,10 +187,12 @@ fn beams_on_two_parallel_map_walls_within_15_cm_are_ambiguous() {
     assert!(counted[0].beams > 50);
 }
 
-#[test]
-fn leave_one_wall_out_does_not_absorb_an_offset_of_the_wall_it_judges() {
-    // The room with a box from 24 poses; in frame 5 the hits on the wall
-    // with the most beams lie 3 cm behind it.
+/// A log's frames: each pose's ranges (`None`: no return) and the pose.
+type Frames = Vec<(Vec<Option<f64>>, Pose)>;
+
+/// The room with a box seen from 24 poses on an ellipse: the scene, the
+/// poses and each pose's noise-free ranges.
+fn room_on_a_circle() -> (Scene, Vec<Pose>, Frames) {
     let scene = Scene::room_with_box();
     let poses: Vec<Pose> = (0..24)
         .map(|k| {
@@ -210,7 +200,15 @@ fn leave_one_wall_out_does_not_absorb_an_offset_of_the_wall_it_judges() {
             Pose::new(0.3 + 0.4 * t.cos(), 0.1 + 0.3 * t.sin(), t)
         })
         .collect();
-    let frames: Vec<_> = poses.iter().map(|p| (ranges(&scene, *p), *p)).collect();
+    let frames = poses.iter().map(|p| (ranges(&scene, *p), *p)).collect();
+    (scene, poses, frames)
+}
+
+#[test]
+fn leave_one_wall_out_does_not_absorb_an_offset_of_the_wall_it_judges() {
+    // The room with a box from 24 poses; in frame 5 the hits on the wall
+    // with the most beams lie 3 cm behind it.
+    let (scene, poses, frames) = room_on_a_circle();
     let clean = log_of(&frames);
     let cfg = TruthConfig::settled().for_data(81.83);
     let map = build_map(&clean, &cfg);
@@ -267,14 +265,7 @@ fn leave_one_wall_out_does_not_absorb_an_offset_of_the_wall_it_judges() {
 
 #[test]
 fn on_a_noise_free_log_registration_keeps_the_poses_and_the_oracle_finds_every_piece() {
-    let scene = Scene::room_with_box();
-    let poses: Vec<Pose> = (0..24)
-        .map(|k| {
-            let t = k as f64 / 24.0 * std::f64::consts::TAU;
-            Pose::new(0.3 + 0.4 * t.cos(), 0.1 + 0.3 * t.sin(), t)
-        })
-        .collect();
-    let frames: Vec<_> = poses.iter().map(|p| (ranges(&scene, *p), *p)).collect();
+    let (_, poses, frames) = room_on_a_circle();
     let scans = log_of(&frames);
     let cfg = TruthConfig::settled().for_data(81.83);
     let (map, registered) = register_log(&scans, build_map(&scans, &cfg), &cfg);

@@ -227,10 +227,7 @@ mod tests {
         let data = vec![0u8; data_len];
         let n = lms_core::telegram::emit_telegram(
             &mut buf,
-            lms_core::telegram::Head {
-                address: 0x80,
-                command,
-            },
+            lms_core::telegram::Head::from_sensor(command),
             &data,
             Some(0x10),
         )
