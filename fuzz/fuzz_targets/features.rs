@@ -21,12 +21,7 @@ fuzz_target!(|data: &[u8]| {
             let len = usize::from(input.u16()) % 820;
             let body = input.bytes(len);
             let mut buf = [0u8; MAX_TELEGRAM_LEN];
-            if let Ok(n) = emit_telegram(
-                &mut buf,
-                Head::from_sensor(command),
-                body,
-                Some(0x10),
-            ) {
+            if let Ok(n) = emit_telegram(&mut buf, Head::from_sensor(command), body, Some(0x10)) {
                 let t = Telegram::new_checked(&buf[..n], Direction::SensorToHost).unwrap();
                 if let Ok(Assembled::Complete(summary, f)) = asm.push(&t) {
                     let _ = (summary.counts, f.lines().len());

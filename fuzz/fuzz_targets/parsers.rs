@@ -77,12 +77,7 @@ fuzz_target!(|data: &[u8]| {
         (Some(0x10), Direction::SensorToHost),
     ] {
         let mut buf = [0u8; MAX_TELEGRAM_LEN + 8];
-        match emit_telegram(
-            &mut buf,
-            Head::from_sensor(command),
-            body,
-            status,
-        ) {
+        match emit_telegram(&mut buf, Head::from_sensor(command), body, status) {
             Ok(n) => {
                 let t =
                     Telegram::new_checked(&buf[..n], direction).expect("emitted telegram checks");
