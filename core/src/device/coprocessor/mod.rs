@@ -137,8 +137,12 @@ use crate::{Frame, Variant};
 pub use host_line::{HostLine, WriteRoom, HOST_TX_MIN_ROOM};
 pub use sensor_link::{LinkEvent, SensorLink, SensorSetup, Step};
 
-/// Bytes read from a port per call.
+/// Bytes handed to the host port per call.
 const CHUNK: usize = 256;
+
+/// Bytes read from a port per call: a poll usually finds a byte or two, and
+/// the buffer is cleared at every read.
+const READ_CHUNK: usize = 64;
 
 /// Bytes kept of a relayed request's reply (`BA` of `3A`: 28; `A0`: 10).
 pub const RELAY_REPLY_CAPACITY: usize = 48;
@@ -678,20 +682,18 @@ impl CoProcessor {
         if self.setup == Setup::Unconfigured {
             return Ok(outcome);
         }
-        let mut buf = [0u8; MAX_TELEGRAM_LEN];
-
         // 1. Host requests into the emulator; its replies out.
         self.read_host(host, now_us, &mut outcome)?;
         self.drain_host(host, now_us, &mut outcome)?;
 
         // 2. Sensor bytes: bring-up replies and scans.
         while sensor.read_ready().map_err(PollError::Sensor)? {
-            let mut chunk = [0u8; CHUNK];
+            let mut chunk = [0u8; READ_CHUNK];
             let n = sensor.read(&mut chunk).map_err(PollError::Sensor)?;
             if n == 0 {
                 break;
             }
-            let mut input = &chunk[..n.min(CHUNK)];
+            let mut input = &chunk[..n.min(READ_CHUNK)];
             loop {
                 let (event, rest) = self.link.feed(input, now_us);
                 input = rest;
@@ -726,15 +728,27 @@ impl CoProcessor {
         self.hand_to_sensor(now_us);
         // 4. The next bring-up request, if one is due (none in a poll that
         // switches the sensor UART: the board switches after it returns).
-        let due = match outcome.sensor_baud {
-            Some(_) => None,
-            None => self.link.due_request(now_us, &mut buf),
-        };
-        if let Some(request) = due.and_then(|n| buf.get(..n)) {
-            sensor.write_all(request).map_err(PollError::Sensor)?;
+        if outcome.sensor_baud.is_none() && self.link.may_request() {
+            self.send_due_request(sensor, now_us)?;
         }
         self.sync_counters();
         Ok(outcome)
+    }
+
+    /// The sensor link's due request, if it has one, to the sensor port
+    /// (the buffer is cleared only when a request may be due: a streaming
+    /// poll costs no 818-byte clear).
+    fn send_due_request<S: Write, E>(
+        &mut self,
+        sensor: &mut S,
+        now_us: u64,
+    ) -> Result<(), PollError<S::Error, E>> {
+        let mut buf = [0u8; MAX_TELEGRAM_LEN];
+        let due = self.link.due_request(now_us, &mut buf);
+        if let Some(request) = due.and_then(|n| buf.get(..n)) {
+            sensor.write_all(request).map_err(PollError::Sensor)?;
+        }
+        Ok(())
     }
 
     /// Every request the host port has ready, into the face; the events of
@@ -746,13 +760,13 @@ impl CoProcessor {
         outcome: &mut PollOutcome,
     ) -> Result<(), PollError<E, H::Error>> {
         while host.read_ready().map_err(PollError::Host)? {
-            let mut chunk = [0u8; CHUNK];
+            let mut chunk = [0u8; READ_CHUNK];
             let n = host.read(&mut chunk).map_err(PollError::Host)?;
             if n == 0 {
                 break;
             }
             // `min`: a port that claims more than it was given is not trusted.
-            self.host.receive(now_us, &chunk[..n.min(CHUNK)]);
+            self.host.receive(now_us, &chunk[..n.min(READ_CHUNK)]);
             while let Some(event) = self.host.next_event() {
                 self.on_host_event(event, now_us, outcome);
             }

@@ -614,11 +614,11 @@ impl SensorLink {
     /// refused with `NAK`), written into `buf`; returns its length. Call it
     /// every poll, after [`poll`](SensorLink::poll).
     pub fn due_request(&mut self, now_us: u64, buf: &mut [u8]) -> Option<usize> {
-        if self.step == Step::Streaming && self.forward == Forward::Due && !self.switch_due {
-            return self.send_forward(now_us, buf);
-        }
-        if self.step == Step::Streaming || self.switch_due {
+        if !self.may_request() {
             return None;
+        }
+        if self.step == Step::Streaming {
+            return self.send_forward(now_us, buf);
         }
         if self.requested {
             let searching = self.step == Step::StopStream;
@@ -643,6 +643,16 @@ impl SensorLink {
         self.nak = false;
         self.client.mark_sent(now_us);
         Some(n)
+    }
+
+    /// Whether [`SensorLink::due_request`] may have a request: while the
+    /// stream runs only a forwarded one, and none while a rate switch is
+    /// due.
+    pub fn may_request(&self) -> bool {
+        if self.switch_due {
+            return false;
+        }
+        self.step != Step::Streaming || self.forward == Forward::Due
     }
 
     /// The forwarded request into `buf`, sent at `now_us`.

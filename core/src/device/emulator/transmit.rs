@@ -158,10 +158,8 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             return self.tx_len;
         }
         // elapsed < 818 bytes at 9600 Bd < 10⁶ µs: no overflow.
-        let bits = div_u64(
-            elapsed.saturating_mul(u64::from(self.baud.bits_per_second())),
-            divisor(1_000_000),
-        );
+        let (us, per) = us_per_bits(self.baud);
+        let bits = div_u64(elapsed.saturating_mul(per), divisor(us));
         usize::try_from(div_u64(bits, divisor(BITS_PER_BYTE)))
             .unwrap_or(usize::MAX)
             .min(self.tx_len)
