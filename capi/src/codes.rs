@@ -187,9 +187,9 @@ const fn field_message(name: &str) -> [u8; MESSAGE_LEN] {
     let mut at = put(&mut out, 0, name);
     at = put(&mut out, at, " must be ");
     at = put(&mut out, at, field.range);
-    if !same(field.unit, "-") && !same(field.unit, "bool") {
+    if let Some(unit) = field.shown_unit() {
         at = put(&mut out, at, " (");
-        at = put(&mut out, at, field.unit);
+        at = put(&mut out, at, unit);
         at = put(&mut out, at, ")");
     }
     assert!(

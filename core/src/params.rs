@@ -383,9 +383,9 @@ impl fmt::Display for ParamError {
         match self {
             ParamError::OutOfRange { name, range } => {
                 write!(f, "{name} must be {range}")?;
-                match field(name).map(|field| field.unit) {
-                    Some(unit) if unit != "-" && unit != "bool" => write!(f, " ({unit})"),
-                    _ => Ok(()),
+                match field(name).and_then(Field::shown_unit) {
+                    Some(unit) => write!(f, " ({unit})"),
+                    None => Ok(()),
                 }
             }
             ParamError::BadValue { name, expected } => write!(f, "{name} must be {expected}"),

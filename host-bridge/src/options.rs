@@ -143,10 +143,9 @@ fn param_help(name: &str, per_log: Option<&str>) -> String {
     let Some(field) = core_params::field(name) else {
         return format!("the parameter {name}");
     };
-    let unit = match field.unit {
-        "-" | "bool" => String::new(),
-        unit => format!("{unit}; "),
-    };
+    let unit = field
+        .shown_unit()
+        .map_or(String::new(), |unit| format!("{unit}; "));
     let default = Params::DEFAULT
         .get(name)
         .map(|v| v.to_string())

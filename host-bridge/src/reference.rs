@@ -12,10 +12,10 @@ use std::io::{self, Write};
 use anyhow::{anyhow, Result};
 use clap::Args;
 use lms_core::params::{Preset, FIELDS, PRESETS};
-
-use crate::options::flagged_parameters;
 use lms_core::telegram::features::{CounterKind, Counters};
 use lms_core::{Params, Stats};
+
+use crate::options::flagged_parameters;
 
 /// The command that writes `docs/reference/parameters.md`.
 pub const PARAMETERS_COMMAND: &str =

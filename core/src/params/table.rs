@@ -172,6 +172,17 @@ pub struct Field {
     pub set: fn(&mut Params, &str) -> Result<(), ParamError>,
 }
 
+impl Field {
+    /// The unit as messages and help texts name it: none for a pure number
+    /// (`-`) or a switch (`bool`).
+    pub const fn shown_unit(&self) -> Option<&'static str> {
+        match self.unit.as_bytes() {
+            b"-" | b"bool" => None,
+            _ => Some(self.unit),
+        }
+    }
+}
+
 /// A range of the declaration as `(Range, text)`.
 macro_rules! range {
     (any) => {

@@ -185,23 +185,31 @@ pub const MIN_TX_CAPACITY: usize = 1 + HEADER_LEN + 1 + STATUS_BLOCK_LEN + 1 + C
 /// 38400 Bd.
 pub const fn line_time_us(bytes: usize, baud: Baud) -> u64 {
     let bits = (bytes as u64).saturating_mul(BITS_PER_BYTE);
-    let (us, per) = us_per_bits(baud);
-    crate::maths::div_ceil_u64(bits.saturating_mul(us), divisor(per))
+    crate::maths::div_ceil_u64(
+        bits.saturating_mul(US_PER_HUNDRED_BITS),
+        divisor(hundred_bps(baud)),
+    )
 }
 
-/// µs per second and the rate `baud` in bits per second, with their common
-/// factor 100 taken out when the rate has it (every LMS rate does): `µs /
-/// per` is `10⁶ / bps` exactly, but a scan's bits times `µs` stay within 32
-/// bits, which the Cortex-M4 divides in hardware
+/// µs per second over 100: with [`hundred_bps`], `US_PER_HUNDRED_BITS /
+/// hundred_bps` is `10⁶ / bps` exactly, and a scan's bits times it stay
+/// within 32 bits, which the Cortex-M4 divides in hardware
 /// ([`crate::maths::div_rem_u64`]).
-pub(crate) const fn us_per_bits(baud: Baud) -> (u64, u64) {
-    let bps = baud.bits_per_second();
-    if bps % 100 == 0 {
-        (10_000, (bps / 100) as u64)
-    } else {
-        (1_000_000, bps as u64)
-    }
+pub(crate) const US_PER_HUNDRED_BITS: u64 = 10_000;
+
+/// The rate `baud` in hundreds of bits per second (every LMS rate is a
+/// whole number of hundreds: checked below).
+pub(crate) const fn hundred_bps(baud: Baud) -> u64 {
+    (baud.bits_per_second() / 100) as u64
 }
+
+const _: () = {
+    let mut i = 0;
+    while i < Baud::ALL.len() {
+        assert!(Baud::ALL[i].bits_per_second() % 100 == 0);
+        i += 1;
+    }
+};
 
 /// Mirror turns per complete scan: 1 at 1°, 2 at 0.5° and 4 at 0.25°
 /// (interlaced turns, PROTOCOL.md §3).

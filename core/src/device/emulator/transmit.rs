@@ -158,8 +158,10 @@ impl<S: ScanSource, const TX: usize> Emulator<S, TX> {
             return self.tx_len;
         }
         // elapsed < 818 bytes at 9600 Bd < 10⁶ µs: no overflow.
-        let (us, per) = us_per_bits(self.baud);
-        let bits = div_u64(elapsed.saturating_mul(per), divisor(us));
+        let bits = div_u64(
+            elapsed.saturating_mul(hundred_bps(self.baud)),
+            divisor(US_PER_HUNDRED_BITS),
+        );
         usize::try_from(div_u64(bits, divisor(BITS_PER_BYTE)))
             .unwrap_or(usize::MAX)
             .min(self.tx_len)
