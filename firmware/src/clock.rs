@@ -41,6 +41,11 @@ fn SysTick() {
     });
 }
 
+/// Milliseconds since [`start`]: the SysTick count.
+pub fn millis() -> u64 {
+    critical_section::with(|cs| MILLIS.borrow(cs).get())
+}
+
 /// Microseconds since [`start`] (monotonic, 1 µs resolution).
 pub fn now_us() -> u64 {
     critical_section::with(|cs| {

@@ -28,7 +28,7 @@ use core::panic::PanicInfo;
 
 use cortex_m_rt::entry;
 
-use lms_core::device::coprocessor::PollError;
+use lms_core::device::coprocessor::{PollError, READ_CHUNK};
 
 use crate::control::{Command, Report};
 use crate::serial::Bd;
@@ -134,13 +134,18 @@ fn main() -> ! {
         boot_stack.peak
     );
     let mut watch = Watch::default();
+    let mut pace = Pace::default();
+    let mut due = true;
     loop {
         fault::feed();
-        poll(app, &mut board, &mut watch);
-        watch.sensor_queue(app, &board);
-        watch.bring_up(app);
+        if due {
+            pace.polled_ms = clock::millis();
+            poll(app, &mut board, &mut watch);
+            watch.sensor_queue(app, &board);
+            watch.bring_up(app);
+        }
         serve_console(app, &mut board, &watch);
-        sleep_until_input(&board);
+        due = pace.sleep_unless_due(&board);
     }
 }
 
@@ -270,18 +275,38 @@ fn log_report(r: &Report) {
     );
 }
 
-/// Sleep until the next interrupt (at the latest the next SysTick, 1 ms)
-/// unless bytes are already waiting. Interrupts are masked while deciding,
-/// so one that arrives in between still wakes WFI.
-fn sleep_until_input(board: &board::Board) {
-    critical_section::with(|_| {
-        if board.host.rx_pending() == 0
-            && board.sensor.rx_pending() == 0
-            && board.control.rx_pending() == 0
-        {
-            cortex_m::asm::wfi();
-        }
-    });
+/// When the loop runs the application: not on every interrupt (a byte
+/// from the sensor, a byte sent to the host), but once a read chunk of
+/// sensor bytes waits, a host or console byte waits, or a SysTick has
+/// passed since the last poll. A telegram's last bytes wait at most 1 ms;
+/// the sensor queue holds 20 ms of a 500 kBd stream.
+#[derive(Default)]
+struct Pace {
+    /// [`clock::millis`] at the last poll.
+    polled_ms: u64,
+}
+
+impl Pace {
+    fn due(&self, board: &board::Board) -> bool {
+        clock::millis() != self.polled_ms
+            || board.sensor.rx_pending() >= READ_CHUNK
+            || board.host.rx_pending() > 0
+            || board.control.rx_pending() > 0
+    }
+
+    /// Whether the application is due; if not, sleep until the next
+    /// interrupt (at the latest the next SysTick, 1 ms) and say no: the
+    /// next round asks again. Interrupts are masked while deciding, so one
+    /// that arrives in between still wakes WFI.
+    fn sleep_unless_due(&self, board: &board::Board) -> bool {
+        critical_section::with(|_| {
+            let due = self.due(board);
+            if !due {
+                cortex_m::asm::wfi();
+            }
+            due
+        })
+    }
 }
 
 /// Take the application out of its static and switch it on.

@@ -2,7 +2,7 @@
 //! contains no reachable panic.
 //!
 //! Built for the firmware's target with the firmware's release profile (LTO,
-//! `opt-level = "s"`, one codegen unit) and the core's firmware features,
+//! its per-package opt-levels, one codegen unit) and the core's firmware features,
 //! this program drives every entry point of `lms-core` that the firmware
 //! reaches — the co-processor's `poll` over two serial ports, and directly
 //! the framer, the telegram parsers and emitters, `B0` decoding, the feature

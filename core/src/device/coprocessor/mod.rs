@@ -140,9 +140,10 @@ pub use sensor_link::{LinkEvent, SensorLink, SensorSetup, Step};
 /// Bytes handed to the host port per call.
 const CHUNK: usize = 256;
 
-/// Bytes read from a port per call: a poll usually finds a byte or two, and
-/// the buffer is cleared at every read.
-const READ_CHUNK: usize = 64;
+/// Bytes read from a port per call (the buffer is cleared at every read).
+/// A board that polls only once this many sensor bytes wait (or a tick has
+/// passed) reads a chunk per call.
+pub const READ_CHUNK: usize = 64;
 
 /// Bytes kept of a relayed request's reply (`BA` of `3A`: 28; `A0`: 10).
 pub const RELAY_REPLY_CAPACITY: usize = 48;
