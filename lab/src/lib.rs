@@ -92,6 +92,11 @@ pub struct EvaluateArgs {
     /// Write no figures (tables only)
     #[arg(long)]
     pub no_plots: bool,
+    /// Which truth the real scans are scored against (section 5): `settled`
+    /// (registered poses, leave-one-wall-out, neutral and unexplained
+    /// lines) or `legacy` (SLAM poses, verified pieces)
+    #[arg(long, value_enum, value_name = "TRUTH", default_value_t = TruthChoice::Settled)]
+    pub truth: TruthChoice,
 }
 
 /// Options of `lms-lab truth`.
@@ -118,7 +123,8 @@ pub struct TruthArgs {
     pub truth: TruthChoice,
 }
 
-/// The map truth a run scores against (`lms-lab truth --truth`).
+/// The map truth a run scores against (`--truth` of `lms-lab truth` and
+/// `lms-lab evaluate`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum TruthChoice {
     /// [`maptruth::TruthConfig::settled`], the evaluation's default.
@@ -630,7 +636,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let truth = realtruth::run_logs(
         &readable,
         args.real_every,
-        &maptruth::TruthConfig::settled(),
+        &args.truth.config(),
         truth_figures,
         &bar,
     )?;

@@ -974,7 +974,9 @@ fn f(x: f64, d: usize) -> String {
     }
 }
 
-/// The Markdown section of the report (heading level `##`).
+/// The Markdown section of the report (heading level `##`): the same text
+/// for `lms-lab truth` (real-truth.md) and `lms-lab evaluate` (README.md),
+/// with the columns of the truth the logs were scored against.
 pub fn markdown(logs: &[LogTruth], every: usize) -> String {
     let mut md = String::new();
     let names: Vec<&str> = methods().iter().map(|m| m.name).collect();
@@ -983,48 +985,34 @@ pub fn markdown(logs: &[LogTruth], every: usize) -> String {
     } else {
         format!("Every {every}-th frame")
     };
-    if logs
+    let settled = logs
         .first()
-        .is_some_and(|l| l.truth.neutral_and_unexplained)
-    {
+        .is_some_and(|l| l.truth.neutral_and_unexplained);
+    if settled {
         settled_intro(&mut md, &frames);
     } else {
         legacy_intro(&mut md, &frames);
     }
-    let _ = writeln!(
-        md,
-        "| log | frames | map walls | counted pieces / frame | verified |\n|:---|---:|---:|---:|---:|"
-    );
-    for l in logs {
-        let _ = writeln!(
-            md,
-            "| {} ({}) | {} | {} | {} | {} |",
-            l.name,
-            l.unit,
-            l.frames,
-            l.walls,
-            f(l.pieces_per_frame, 1),
-            f(l.verified_share, 3)
-        );
-    }
+    log_table(&mut md, logs, settled);
     let _ = writeln!(md, "\n### All logs pooled\n");
-    table_header(&mut md, "method");
+    table_header(&mut md, "method", settled);
     for (k, n) in names.iter().enumerate() {
         let mut t = RealTally::default();
         for l in logs {
             t.merge(&l.tallies[k]);
         }
-        table_row(&mut md, n, &t.summary());
+        table_row(&mut md, n, &t.summary(), settled);
     }
     settled_tables(&mut md, logs);
     let _ = writeln!(md, "\n### Per log, every method\n");
-    table_header(&mut md, "log · method");
+    table_header(&mut md, "log · method", settled);
     for l in logs {
         for (k, n) in names.iter().enumerate() {
             table_row(
                 &mut md,
                 &format!("{} · {n}", l.name),
                 &l.tallies[k].summary(),
+                settled,
             );
         }
     }
@@ -1045,6 +1033,40 @@ pub fn markdown(logs: &[LogTruth], every: usize) -> String {
     md
 }
 
+/// Per log: frames, map walls, counted pieces per frame and, for the
+/// legacy truth, the share of the long-enough pieces the frame verifies
+/// (the settled truth verifies nothing: its check is the oracle's row).
+fn log_table(md: &mut String, logs: &[LogTruth], settled: bool) {
+    if settled {
+        let _ = writeln!(
+            md,
+            "| log | frames | map walls | counted pieces / frame |\n|:---|---:|---:|---:|"
+        );
+    } else {
+        let _ = writeln!(
+            md,
+            "| log | frames | map walls | counted pieces / frame | verified |\n\
+             |:---|---:|---:|---:|---:|"
+        );
+    }
+    for l in logs {
+        let verified = if settled {
+            String::new()
+        } else {
+            format!(" {} |", f(l.verified_share, 3))
+        };
+        let _ = writeln!(
+            md,
+            "| {} ({}) | {} | {} | {} |{verified}",
+            l.name,
+            l.unit,
+            l.frames,
+            l.walls,
+            f(l.pieces_per_frame, 1),
+        );
+    }
+}
+
 /// The section's first paragraph for [`TruthConfig::settled`].
 fn settled_intro(md: &mut String, frames: &str) {
     let _ = writeln!(
@@ -1056,18 +1078,26 @@ fn settled_intro(md: &mut String, frames: &str) {
          again; the walls ray-cast into each frame, a beam on a wall if its hit is within 5 cm \
          of the wall's line, on neither of two parallel walls of different lines within 15 cm \
          (ambiguous); each piece's line taken through a pose registered without that wall's \
-         own beams (leave-one-wall-out). Pieces with ≥ 10 beams and ≥ 0.3 m are counted, \
-         shorter ones are neutral. Matching one-to-one, |Δα| < 3°, |Δr| < 0.1 m at the line's \
-         middle, ≥ 50 % of the line's beams on the piece (`lab/src/realtruth.rs`). A line \
-         matched to a counted piece is true; an unmatched line with ≥ 50 % of its beams on no \
-         wall or invalid is *unexplained*; a line matched to a neutral piece, or unmatched \
-         with ≥ 50 % of its beams on neutral pieces or ambiguous, is *neutral*; every other \
-         line is false (a fragment of a true line it does not match, or a line across walls \
-         or corners): FalsePos = false / (false + true). *No flags* is `host-bridge extract \
+         own beams (leave-one-wall-out). Pieces with ≥ 10 beams and ≥ 0.3 m are counted; \
+         pieces with fewer beams or shorter are neutral. Matching one-to-one, |Δα| < 3°, \
+         |Δr| < 0.1 m at the line's middle, ≥ 50 % of the line's beams on the piece \
+         (`lab/src/realtruth.rs`). A line matched to a counted piece is true; an unmatched line \
+         with ≥ 50 % of its beams on no wall or invalid is *unexplained*; an unmatched line \
+         with ≥ 50 % of its beams on one counted piece it does not match is false (a \
+         fragment); a line matched to a neutral piece, or unmatched with ≥ 50 % of its beams \
+         on neutral pieces or ambiguous, is *neutral*; every other line is false (across \
+         walls or corners). In the tables: TruePos = matched / counted pieces, overall and \
+         over the pieces ≥ 1 m, 0.5–1 m and < 0.5 m long (the part of the wall the frame \
+         sees); FalsePos = false / (false + true) lines; *unexplained* and *neutral* as \
+         shares of all lines; coverage = on-wall beams of counted pieces inside their \
+         matched line / all of them; σΔα, σΔr over the matched pieces; repeatability = of \
+         the walls matched in a frame and counted in the next, the share matched there too; \
+         *walls > 5 % fragmented*: walls with ≥ {MIN_SIGHTINGS} counted sightings reported \
+         as two or more lines in more than 5 % of them. *No flags* is `host-bridge extract \
          LOG` without options. The oracle is a least-squares fit to each counted piece's own \
-         beams: its TruePos is the check of the truth itself; *verified* is the share of the \
-         counted pieces whose own fit agrees with their map line. `--truth legacy` gives the \
-         truth at the SLAM poses with unverified pieces left out.\n"
+         beams: its TruePos is the check of the truth itself, its σ the truth's own error. \
+         `--truth legacy` scores against the truth at the SLAM poses with unverified pieces \
+         left out and every unmatched line false.\n"
     );
 }
 
@@ -1151,30 +1181,68 @@ fn settled_tables(md: &mut String, logs: &[LogTruth]) {
     }
 }
 
-fn table_header(md: &mut String, first: &str) {
-    let _ = writeln!(
-        md,
-        "| {first} | TruePos | TruePos ≥ 1 m | FalsePos | on no wall | FalsePos on walls | \
-         coverage | σΔα (°) | σΔr (mm) | repeatability | fragmented | walls > 5 % fragmented | \
-         lines / frame | ms / frame |\n\
-         |:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
+/// The header of the tables of every method: with the settled truth, TruePos
+/// by piece length and FalsePos = false / (false + true) beside the
+/// unexplained and neutral lines; with the legacy truth, FalsePos = unmatched
+/// / all lines beside the lines on no map wall.
+fn table_header(md: &mut String, first: &str, settled: bool) {
+    if settled {
+        let _ = writeln!(
+            md,
+            "| {first} | TruePos | ≥ 1 m | 0.5–1 m | < 0.5 m | FalsePos | unexplained | neutral | \
+             coverage | σΔα (°) | σΔr (mm) | repeatability | walls > 5 % fragmented | \
+             lines / frame | ms / frame |\n\
+             |:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        );
+    } else {
+        let _ = writeln!(
+            md,
+            "| {first} | TruePos | TruePos ≥ 1 m | FalsePos | on no wall | FalsePos on walls | \
+             coverage | σΔα (°) | σΔr (mm) | repeatability | fragmented | walls > 5 % fragmented | \
+             lines / frame | ms / frame |\n\
+             |:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        );
+    }
 }
 
-fn table_row(md: &mut String, name: &str, s: &RealSummary) {
+/// A row of [`table_header`]'s table.
+fn table_row(md: &mut String, name: &str, s: &RealSummary, settled: bool) {
+    let detection = if settled {
+        [
+            s.true_pos,
+            s.true_pos_1m,
+            s.true_pos_mid,
+            s.true_pos_short,
+            s.false_pos,
+            s.unexplained,
+            s.neutral,
+            s.coverage,
+        ]
+        .map(|x| f(x, 3))
+        .join(" | ")
+    } else {
+        [
+            s.true_pos,
+            s.true_pos_1m,
+            s.false_pos,
+            s.no_wall,
+            s.false_pos_on_walls,
+            s.coverage,
+        ]
+        .map(|x| f(x, 3))
+        .join(" | ")
+    };
+    let fragmented = if settled {
+        String::new()
+    } else {
+        format!("{} | ", f(s.fragmented, 3))
+    };
     let _ = writeln!(
         md,
-        "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} of {} | {} | {} |",
-        f(s.true_pos, 3),
-        f(s.true_pos_1m, 3),
-        f(s.false_pos, 3),
-        f(s.no_wall, 3),
-        f(s.false_pos_on_walls, 3),
-        f(s.coverage, 3),
+        "| {name} | {detection} | {} | {} | {} | {fragmented}{} of {} | {} | {} |",
         f(s.sd_alpha_deg, 2),
         f(s.sd_r_mm, 1),
         f(s.repeatability, 3),
-        f(s.fragmented, 3),
         s.walls_fragmented.0,
         s.walls_fragmented.1,
         f(s.lines_per_frame, 2),

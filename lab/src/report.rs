@@ -1016,18 +1016,23 @@ fn reproduce(md: &mut String, ctx: &Ctx, timing: &Timing) {
     let _ = writeln!(md, "## Reproduce\n");
     let _ = writeln!(
         md,
-        "```sh\ncargo run --release -p lms-lab -- evaluate -o docs/evaluation{}\n```\n",
+        "```sh\ncargo run --release -p lms-lab -- evaluate -o docs/evaluation{}{}\n```\n",
         if a.scans == 400 && a.scale_scans == 100 {
             String::new()
         } else {
             format!(" --scans {} --scale-scans {}", a.scans, a.scale_scans)
+        },
+        if a.truth == crate::TruthChoice::Legacy {
+            " --truth legacy"
+        } else {
+            ""
         }
     );
     let _ = writeln!(
         md,
         "Options: `--scans N` (per family and σ), `--sigmas 0.005,0.01,0.02,0.03`, `--dropout P`, \
          `--seed S`, `--scale-scans N`, `--data DIR` (CARMEN logs), `--real-every K`, `--no-real`, \
-         `--no-plots`. This run: {:.0} s in total. The definitions are in the module docs of \
+         `--no-plots`, `--truth settled|legacy` (section 5's truth). This run: {:.0} s in total. The definitions are in the module docs of \
          `lab/src/metrics.rs`; the scenes in `scenes.rs`; the baselines in `baselines.rs`; the \
          experimental variants in `variants.rs`.",
         timing.total

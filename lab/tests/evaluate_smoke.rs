@@ -100,12 +100,27 @@ fn evaluate_a_tiny_evaluation_writes_the_report() {
     );
     if have_log {
         assert!(md.contains("| csail-corrected.log.gz | 5 × 361 (cm) | spec (--preset paper) |"));
-        // The map-derived truth: the map from all 406 frames, 5 scored.
+        // The map-derived truth: the map from all 406 frames, 5 scored,
+        // against the settled truth by default (no `verified` column, the
+        // settled columns in the method tables).
         assert!(md.contains("## 5. Real scans against map-derived truth"));
+        assert!(md.contains("against the settled truth (`TruthConfig::settled`"));
+        assert!(
+            md.contains("| log | frames | map walls | counted pieces / frame |\n"),
+            "truth table"
+        );
         assert!(
             md.contains("| csail-corrected.log.gz (cm) | 5 |"),
             "truth table"
         );
+        assert!(md.contains(
+            "| method | TruePos | ≥ 1 m | 0.5–1 m | < 0.5 m | FalsePos | unexplained | neutral |"
+        ));
+        assert!(
+            !md.contains("| verified |"),
+            "a legacy column under the settled truth"
+        );
+        assert!(!md.contains("| FalsePos on walls |"), "a legacy column");
         assert!(md.contains(&format!(
             "| csail-corrected.log.gz · {} |",
             lms_lab::realtruth::NO_FLAGS
@@ -162,12 +177,33 @@ fn the_committed_report_links_the_hand_written_findings() {
 }
 
 #[test]
+fn evaluate_with_the_legacy_truth_says_so_in_reproduce() {
+    let out = scratch("legacy");
+    let o = Command::new(BIN)
+        .args(["evaluate", "--scans", "1", "--scale-scans", "1"])
+        .args(["--sigmas", "0.02", "--no-real", "--no-plots"])
+        .args(["--truth", "legacy", "-o"])
+        .arg(&out)
+        .output()
+        .expect("cannot start lms-lab");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(out.join("README.md")).unwrap();
+    assert!(
+        md.contains("evaluate -o docs/evaluation --scans 1 --scale-scans 1 --truth legacy\n"),
+        "{}",
+        &md[md.find("## Reproduce").unwrap_or(0)..]
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
 fn evaluate_bad_options_fail_with_a_message() {
     let out = scratch("bad");
     for (args, want) in [
         (vec!["--scans", "0"], "--scans"),
         (vec!["--sigmas", "-0.01"], "--sigmas"),
         (vec!["--dropout", "2"], "--dropout"),
+        (vec!["--truth", "slam"], "--truth"),
     ] {
         let o = Command::new(BIN)
             .arg("evaluate")
