@@ -59,7 +59,7 @@ pub fn accuracy_vs_sigma(path: &Path, syn: &Synthetic, methods: &[&str]) -> Resu
         .y_range(0.4, 1.02)
         .legend(Legend::LowerLeft),
         Panel::new(
-            "FalsePos (all lines)",
+            "FalsePos (neutral lines left out)",
             "σ (mm)",
             "FalsePos",
             series(|s| s.false_pos, 0.02, "goal 0.02"),

@@ -280,6 +280,9 @@ fn no_shared(p: Params) -> Params {
 
 /// Name of the spec's method in every table.
 pub const SPEC: &str = "spec (--preset paper)";
+/// Name of the defaults' method ([`Params::DEFAULT`] with σ, no flags) in
+/// every table.
+pub const DEFAULTS: &str = "defaults";
 /// Name of the `fit_shared_points = false` method.
 pub const NO_SHARED: &str = "fit_shared_points = false";
 /// Name of the split-and-merge baseline.
@@ -302,6 +305,7 @@ pub fn main_methods() -> Vec<Method> {
     };
     vec![
         Method::new(SPEC, Kind::Core),
+        defaults_method(),
         Method::with(NO_SHARED, Kind::Core, no_shared),
         Method::new(SPLIT_MERGE, Kind::SplitMerge { k: SPLIT_K }),
         Method::new(
@@ -320,6 +324,13 @@ pub fn main_methods() -> Vec<Method> {
             no_shared,
         ),
     ]
+}
+
+/// The defaults: [`Params::DEFAULT`] with the scan's σ, no flags.
+pub fn defaults_method() -> Method {
+    Method::with(DEFAULTS, Kind::Core, |p| {
+        Params::DEFAULT.with_sigma(p.sigma)
+    })
 }
 
 /// The diagnostic variants (run at [`VARIANT_SIGMAS`]): one change each

@@ -20,11 +20,21 @@
 //! line on part of a wall counts; how much of the piece it covers is
 //! reported as *coverage*. Pairs are taken one-to-one, greedily by
 //! `(Δα/5°)² + (Δr/0.1 m)²`. TruePos = matched resolvable pieces / resolvable
-//! pieces; FalsePos = (extracted − matched) / extracted, where a line matched
-//! to any piece (resolvable or not) is not false. Unmatched lines are
-//! classified ([`LineScore`]): on an arc, a split/duplicate of a matched
-//! piece, off (on a piece but outside the gates), or mixed (no piece holds
-//! half of its beams).
+//! pieces. An unmatched line with half of its beams or more on arcs (curved
+//! walls, pillars) is **neutral** — neither true nor false — if the
+//! noise-free curve over its beams lies within χ²₁ 95 % of a straight line:
+//! with the orthogonal least-squares line (α, r) through the noise-free hits
+//! of its valid beams, every beam's range deviation `d_j − r / cos(φ_j − α)`
+//! satisfies `(deviation / σ_j)² ≤ 3.841` ([`NEUTRAL_CHI2`]), σ_j the range
+//! noise of the beam (σ, or with [`Gates::kappa`] > 0 the realistic model's
+//! `√(σ² + (κ·d_j·tan θ_j)²)`, θ_j the incidence on the true surface): no
+//! test on the beams can tell such a line from a wall. Beyond that it is
+//! false. FalsePos = (extracted − matched − neutral) / (extracted −
+//! neutral), where a line matched to any piece (resolvable or not) is not
+//! false. Unmatched lines are classified ([`LineScore`]): neutral on an
+//! arc, false on an arc, a split/duplicate of a matched piece, off (on a
+//! piece but outside the gates), or mixed (no piece holds half of its
+//! beams).
 //!
 //! # Errors against the Cramér–Rao bound
 //! For each matched pair the CRB is `σ²(JᵀJ)⁻¹` of the *true* line over the
@@ -122,7 +132,17 @@ pub struct ScanTruth {
     pub on_arc: Vec<bool>,
     /// Beam bearings (rad).
     pub bearings: Vec<f64>,
+    /// Per beam: the noise-free range (m), `None` without a hit.
+    pub ranges: Vec<Option<f64>>,
+    /// Per beam: the incidence on the surface hit (rad, from its normal;
+    /// 0 without a hit).
+    pub incidence: Vec<f64>,
 }
+
+/// χ²₁ 95 %: an unmatched line on arcs whose noise-free hits lie within
+/// this of a straight line (each beam's squared range deviation over its
+/// σ²) is neutral.
+pub const NEUTRAL_CHI2: f64 = 3.841;
 
 /// `σ²(JᵀJ)⁻¹` of the line `(alpha, r)` seen at `bearings` with the range
 /// model `d = r / cos(φ − α)`, as `[αα, αr, rr]`; `None` if singular.
@@ -205,17 +225,61 @@ pub fn scan_truth(
     gates: &Gates,
 ) -> ScanTruth {
     let bearings: Vec<f64> = truth.bearings.iter().collect();
+    let on_arc: Vec<bool> = truth
+        .hits
+        .iter()
+        .map(|h| h.is_some_and(|h| matches!(scene.surface(h.surface), Some(Surface::Arc(_)))))
+        .collect();
+    let ranges = truth.hits.iter().map(|h| h.map(|h| h.range)).collect();
+    let incidence = truth
+        .hits
+        .iter()
+        .zip(&bearings)
+        .map(|(h, &phi)| h.map_or(0.0, |h| hit_incidence(truth, scene, &h, phi)))
+        .collect();
+    let pieces = true_pieces(truth, scene, params, &bearings, sigma, gates);
+    ScanTruth {
+        pieces,
+        corners: true_corners(truth, params),
+        on_arc,
+        bearings,
+        ranges,
+        incidence,
+    }
+}
+
+/// The incidence of the beam at bearing `phi` on the surface of its
+/// noise-free `hit` (rad, between the beam and the surface normal).
+fn hit_incidence(truth: &TrueScan, scene: &Scene, hit: &lms_scene::Hit, phi: f64) -> f64 {
+    let normal = match scene.surface(hit.surface) {
+        Some(Surface::Wall(w)) => {
+            let e = truth.pose.to_sensor(w.b) - truth.pose.to_sensor(w.a);
+            lms_scene::Point::new(-e.y, e.x)
+        }
+        Some(Surface::Arc(a)) => hit.point - truth.pose.to_sensor(a.center),
+        None => return 0.0,
+    };
+    let n = normal.norm().max(1e-12);
+    let dir = lms_scene::Point::polar(1.0, phi);
+    (dir.dot(normal) / n).abs().min(1.0).acos()
+}
+
+/// The true lines: runs of consecutive beams on one wall's line, pieces of
+/// one line at most `merge_gap_beams` apart merged (§7.6).
+fn true_pieces(
+    truth: &TrueScan,
+    scene: &Scene,
+    params: &Params,
+    bearings: &[f64],
+    sigma: f64,
+    gates: &Gates,
+) -> Vec<TruePiece> {
     let line_of = |id| match scene.surface(id) {
         Some(Surface::Wall(w)) => {
             PolarLine::through(truth.pose.to_sensor(w.a), truth.pose.to_sensor(w.b))
         }
         _ => None,
     };
-    let on_arc: Vec<bool> = truth
-        .hits
-        .iter()
-        .map(|h| h.is_some_and(|h| matches!(scene.surface(h.surface), Some(Surface::Arc(_)))))
-        .collect();
     let same = |a: &PolarLine, b: &PolarLine| {
         wrap_angle(a.alpha - b.alpha).abs() < 1e-9 && (a.r - b.r).abs() < 1e-9
     };
@@ -258,38 +322,53 @@ pub fn scan_truth(
             merged.push((l, beams));
         }
     }
-    let pieces = merged
+    merged
         .into_iter()
-        .map(|(l, beams)| {
-            let (first, last) = (beams[0], beams[beams.len() - 1]);
-            let point = |j: usize| truth.hits[j].map(|h| h.point).unwrap_or_default();
-            let length = point(first).distance(point(last));
-            let detectable =
-                beams.len() >= params.min_points as usize && length >= params.min_length as f64;
-            let resolvable = detectable
-                && crb_footprint(
-                    l.alpha,
-                    l.r,
-                    beams.iter().map(|&j| bearings[j]),
-                    sigma,
-                    gates.kappa,
-                )
-                .is_some_and(|c| 3.0 * c[0].sqrt() < gates.alpha && 3.0 * c[2].sqrt() < gates.r);
-            TruePiece {
-                alpha: l.alpha,
-                r: l.r,
-                first,
-                last,
-                beams: beams.len(),
-                length,
-                detectable,
-                resolvable,
-            }
-        })
-        .collect();
+        .map(|(l, beams)| piece_of(truth, params, bearings, sigma, gates, l, &beams))
+        .collect()
+}
 
+/// The piece of line `l` hit by `beams`.
+fn piece_of(
+    truth: &TrueScan,
+    params: &Params,
+    bearings: &[f64],
+    sigma: f64,
+    gates: &Gates,
+    l: PolarLine,
+    beams: &[usize],
+) -> TruePiece {
+    let (first, last) = (beams[0], beams[beams.len() - 1]);
+    let point = |j: usize| truth.hits[j].map(|h| h.point).unwrap_or_default();
+    let length = point(first).distance(point(last));
+    let detectable =
+        beams.len() >= params.min_points as usize && length >= params.min_length as f64;
+    let resolvable = detectable
+        && crb_footprint(
+            l.alpha,
+            l.r,
+            beams.iter().map(|&j| bearings[j]),
+            sigma,
+            gates.kappa,
+        )
+        .is_some_and(|c| 3.0 * c[0].sqrt() < gates.alpha && 3.0 * c[2].sqrt() < gates.r);
+    TruePiece {
+        alpha: l.alpha,
+        r: l.r,
+        first,
+        last,
+        beams: beams.len(),
+        length,
+        detectable,
+        resolvable,
+    }
+}
+
+/// The true corners counted: visible, at least `min_corner_angle`, both
+/// walls hit by at least `min_points` beams.
+fn true_corners(truth: &TrueScan, params: &Params) -> Vec<CornerTruth> {
     let min_points = params.min_points as usize;
-    let corners = truth
+    truth
         .corners
         .iter()
         .filter(|c| {
@@ -305,13 +384,7 @@ pub fn scan_truth(
             angle_deg: c.angle_deg,
             beam: c.beam,
         })
-        .collect();
-    ScanTruth {
-        pieces,
-        corners,
-        on_arc,
-        bearings,
-    }
+        .collect()
 }
 
 /// The corner evidence of a scan: for each true corner, the largest `D`
@@ -385,7 +458,12 @@ pub struct LineScore {
     pub extracted: usize,
     /// Extracted lines matched to any piece.
     pub matched: usize,
-    /// Unmatched lines with half their beams or more on arcs.
+    /// Unmatched lines with half their beams or more on arcs whose
+    /// noise-free hits lie within χ²₁ 95 % of a straight line (neutral:
+    /// neither true nor false; left out of FalsePos).
+    pub neutral_arc: usize,
+    /// Unmatched lines with half their beams or more on arcs, not neutral
+    /// (false).
     pub fp_arc: usize,
     /// Unmatched lines on a piece matched to another line (over-segmentation).
     pub fp_split: usize,
@@ -434,26 +512,9 @@ pub fn score_lines(
         extracted: lines.len(),
         ..LineScore::default()
     };
-    let mut candidates: Vec<(f64, usize, usize)> = Vec::new();
-    for (e, l) in lines.iter().enumerate() {
-        let le = (l.first as usize, l.last as usize);
-        for (t, p) in truth.pieces.iter().enumerate() {
-            let lt = (p.first, p.last);
-            let o = overlap(le, lt) as f64;
-            if o < gates.overlap * span(le) as f64 {
-                continue;
-            }
-            let da = wrap_angle(l.alpha as f64 - p.alpha);
-            let dr = l.r as f64 - p.r;
-            if da.abs() <= gates.alpha && dr.abs() <= gates.r {
-                candidates.push(((da / gates.alpha).powi(2) + (dr / gates.r).powi(2), e, t));
-            }
-        }
-    }
-    candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut line_taken = vec![false; lines.len()];
     let mut piece_taken = vec![false; truth.pieces.len()];
-    for &(_, e, t) in &candidates {
+    for (_, e, t) in candidates(truth, lines, gates) {
         if line_taken[e] || piece_taken[t] {
             continue;
         }
@@ -484,38 +545,164 @@ pub fn score_lines(
             resolvable: p.resolvable,
         });
     }
-    s.piece_matched = piece_taken.clone();
-    // Classify the unmatched lines.
     for (e, l) in lines.iter().enumerate() {
-        if line_taken[e] {
-            continue;
-        }
-        let le = (l.first as usize, l.last as usize);
-        let n = span(le) as f64;
-        let arc = truth
-            .on_arc
-            .get(le.0..=le.1)
-            .map_or(0, |a| a.iter().filter(|&&x| x).count());
-        let holder = truth
-            .pieces
-            .iter()
-            .enumerate()
-            .find(|(_, p)| overlap(le, (p.first, p.last)) as f64 >= 0.5 * n);
-        if arc as f64 >= 0.5 * n {
-            s.fp_arc += 1;
-        } else if let Some((t, p)) = holder {
-            if piece_taken[t] {
-                s.fp_split += 1;
-            } else if p.resolvable {
-                s.fp_off += 1;
-            } else {
-                s.fp_unresolvable += 1;
-            }
-        } else {
-            s.fp_mixed += 1;
+        if !line_taken[e] {
+            let c = classify_unmatched(truth, l, beams, &piece_taken, sigma, gates);
+            *s.count_of(c) += 1;
         }
     }
+    s.piece_matched = piece_taken;
     s
+}
+
+/// The candidate pairs `(cost, line, piece)` within the gates, cheapest first.
+fn candidates(truth: &ScanTruth, lines: &[Line], gates: &Gates) -> Vec<(f64, usize, usize)> {
+    let mut out: Vec<(f64, usize, usize)> = Vec::new();
+    for (e, l) in lines.iter().enumerate() {
+        let le = (l.first as usize, l.last as usize);
+        for (t, p) in truth.pieces.iter().enumerate() {
+            let o = overlap(le, (p.first, p.last)) as f64;
+            if o < gates.overlap * span(le) as f64 {
+                continue;
+            }
+            let da = wrap_angle(l.alpha as f64 - p.alpha);
+            let dr = l.r as f64 - p.r;
+            if da.abs() <= gates.alpha && dr.abs() <= gates.r {
+                out.push(((da / gates.alpha).powi(2) + (dr / gates.r).powi(2), e, t));
+            }
+        }
+    }
+    out.sort_by(|a, b| a.0.total_cmp(&b.0));
+    out
+}
+
+/// What an unmatched line is (see [`LineScore`]'s counts).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unmatched {
+    /// On arcs, within χ²₁ 95 % of a straight line: neutral.
+    NeutralArc,
+    /// On arcs, beyond it: false.
+    Arc,
+    /// On a piece matched to another line.
+    Split,
+    /// On an unmatched resolvable piece, outside the gates.
+    Off,
+    /// On a piece that is not resolvable.
+    Unresolvable,
+    /// No piece holds half of its beams.
+    Mixed,
+}
+
+impl LineScore {
+    /// The count of unmatched lines of class `c`.
+    pub fn count_of(&mut self, c: Unmatched) -> &mut usize {
+        match c {
+            Unmatched::NeutralArc => &mut self.neutral_arc,
+            Unmatched::Arc => &mut self.fp_arc,
+            Unmatched::Split => &mut self.fp_split,
+            Unmatched::Off => &mut self.fp_off,
+            Unmatched::Unresolvable => &mut self.fp_unresolvable,
+            Unmatched::Mixed => &mut self.fp_mixed,
+        }
+    }
+}
+
+/// Classify the unmatched line `l` (`piece_taken`: the pieces matched).
+pub fn classify_unmatched(
+    truth: &ScanTruth,
+    l: &Line,
+    beams: &[Beam],
+    piece_taken: &[bool],
+    sigma: f64,
+    gates: &Gates,
+) -> Unmatched {
+    let le = (l.first as usize, l.last as usize);
+    let n = span(le) as f64;
+    let arc = truth
+        .on_arc
+        .get(le.0..=le.1)
+        .map_or(0, |a| a.iter().filter(|&&x| x).count());
+    if arc as f64 >= 0.5 * n {
+        let used = (le.0..=le.1).filter(|&j| beams.get(j).is_some_and(|b| b.is_valid()));
+        let chi2 = straightness_chi2(truth, used, sigma, gates.kappa);
+        return if chi2.is_some_and(|c| c <= NEUTRAL_CHI2) {
+            Unmatched::NeutralArc
+        } else {
+            Unmatched::Arc
+        };
+    }
+    let holder = truth
+        .pieces
+        .iter()
+        .enumerate()
+        .find(|(_, p)| overlap(le, (p.first, p.last)) as f64 >= 0.5 * n);
+    match holder {
+        Some((t, _)) if piece_taken.get(t).copied().unwrap_or(false) => Unmatched::Split,
+        Some((_, p)) if p.resolvable => Unmatched::Off,
+        Some(_) => Unmatched::Unresolvable,
+        None => Unmatched::Mixed,
+    }
+}
+
+/// How far the noise-free hits of `beams` are from a straight line: the
+/// largest `(d_j − r / cos(φ_j − α))² / σ_j²` over the beams with a hit,
+/// (α, r) the orthogonal least-squares line through the hits, σ_j² =
+/// `σ² + (κ·d_j·tan θ_j)²` (θ_j the incidence, at most 85°; κ = `kappa`).
+/// `None` with fewer than two hits; infinite if a beam runs parallel to
+/// the line.
+pub fn straightness_chi2(
+    truth: &ScanTruth,
+    beams: impl Iterator<Item = usize>,
+    sigma: f64,
+    kappa: f64,
+) -> Option<f64> {
+    let hits: Vec<(usize, f64, f64)> = beams
+        .filter_map(|j| Some((j, *truth.bearings.get(j)?, (*truth.ranges.get(j)?)?)))
+        .collect();
+    if hits.len() < 2 {
+        return None;
+    }
+    let (alpha, r) = orthogonal_fit(
+        hits.iter()
+            .map(|&(_, phi, d)| (d * phi.cos(), d * phi.sin())),
+    );
+    let mut worst: f64 = 0.0;
+    for &(j, phi, d) in &hits {
+        let c = (phi - alpha).cos();
+        if c <= 1e-6 {
+            return Some(f64::INFINITY);
+        }
+        let theta = truth
+            .incidence
+            .get(j)
+            .map_or(0.0, |t| t.abs().min(lms_scene::lms::MAX_INCIDENCE));
+        let var = sigma * sigma + (kappa * d * theta.tan()).powi(2);
+        worst = worst.max((d - r / c).powi(2) / var);
+    }
+    Some(worst)
+}
+
+/// The orthogonal least-squares line `x·cos α + y·sin α = r` (r ≥ 0)
+/// through `points` (at least two).
+pub fn orthogonal_fit(points: impl Iterator<Item = (f64, f64)>) -> (f64, f64) {
+    let p: Vec<(f64, f64)> = points.collect();
+    let n = p.len().max(1) as f64;
+    let mx = p.iter().map(|q| q.0).sum::<f64>() / n;
+    let my = p.iter().map(|q| q.1).sum::<f64>() / n;
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for &(x, y) in &p {
+        let (dx, dy) = (x - mx, y - my);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    let alpha = 0.5 * (-2.0 * sxy).atan2(syy - sxx);
+    let r = mx * alpha.cos() + my * alpha.sin();
+    if r < 0.0 {
+        (wrap_angle(alpha + std::f64::consts::PI), -r)
+    } else {
+        (alpha, r)
+    }
 }
 
 /// Classify the resolvable pieces no line matched, from the `segments`
@@ -612,6 +799,21 @@ pub fn score_corners(truth: &ScanTruth, corners: &[Corner], gates: &Gates) -> Co
     s
 }
 
+/// The synthetic goal on TruePos (σ = 10 and 20 mm).
+pub const TRUE_POS_GOAL: f64 = 0.95;
+/// The synthetic goal on σΔα / CRB and σΔr / CRB.
+pub const CRB_GOAL: f64 = 1.2;
+
+/// The synthetic goal on FalsePos at range noise `sigma` (m): 0.02 up to
+/// σ = 10 mm (below 15 mm), 0.05 from σ = 20 mm (15 mm and above).
+pub fn false_pos_goal(sigma: f64) -> f64 {
+    if sigma < 0.015 {
+        0.02
+    } else {
+        0.05
+    }
+}
+
 /// A normalised squared error above this (χ²₁ 99.9 %) is a gross error.
 pub const OUTLIER: f64 = 10.83;
 
@@ -651,6 +853,7 @@ impl Tally {
         t.matched_resolvable += l.matched_resolvable;
         t.extracted += l.extracted;
         t.matched += l.matched;
+        t.neutral_arc += l.neutral_arc;
         t.fp_arc += l.fp_arc;
         t.fp_split += l.fp_split;
         t.fp_off += l.fp_off;
@@ -705,8 +908,15 @@ impl Tally {
             scans: self.scans,
             true_pos: ratio(l.matched_resolvable, l.true_resolvable),
             true_pos_detectable: ratio(l.matched_detectable, l.true_detectable),
-            false_pos: ratio(l.extracted - l.matched, l.extracted),
-            false_pos_no_arc: ratio(l.extracted - l.matched - l.fp_arc, l.extracted - l.fp_arc),
+            false_pos: ratio(
+                l.extracted - l.matched - l.neutral_arc,
+                l.extracted - l.neutral_arc,
+            ),
+            neutral: ratio(l.neutral_arc, l.extracted),
+            false_pos_no_arc: ratio(
+                l.extracted - l.matched - l.neutral_arc - l.fp_arc,
+                l.extracted - l.neutral_arc - l.fp_arc,
+            ),
             sd_alpha: std_dev(&da),
             sd_r: std_dev(&dr),
             crb_alpha: mean(&na).sqrt(),
@@ -742,9 +952,13 @@ pub struct Summary {
     pub true_pos: f64,
     /// Matched detectable / detectable pieces.
     pub true_pos_detectable: f64,
-    /// Unmatched / extracted lines.
+    /// False / (extracted − neutral) lines: unmatched lines are false
+    /// unless neutral (on arcs within χ²₁ 95 % of a straight line).
     pub false_pos: f64,
-    /// As `false_pos`, lines on arcs left out of both counts.
+    /// Neutral lines / extracted lines.
+    pub neutral: f64,
+    /// A diagnostic: as `false_pos` with every line on arcs (neutral or
+    /// false) left out of both counts — FalsePos off curved walls.
     pub false_pos_no_arc: f64,
     /// Standard deviation of Δα over matched resolvable pairs (rad).
     pub sd_alpha: f64,

@@ -6,10 +6,13 @@
 //! (`arc_chain = 0`), and the defaults (pairs of lines on a curve dropped
 //! too, `Params::arc_pairs`) against the defaults with pairs kept.
 //!
-//! Asserted: lines are dropped as arcs and counted; FalsePos falls by at
-//! least 0.008 (chains; measured 0.160 → 0.144 over 100 scans per family)
-//! and 0.003 (pairs), lines on arcs being most of what goes; TruePos falls
-//! by no more than 0.002 (measured: unchanged).
+//! Asserted: lines are dropped as arcs and counted; what goes is lines on
+//! arcs that are straight within the noise over their own beams — neutral
+//! lines (`lms_lab::metrics`), neither true nor false: the neutral share
+//! falls by at least 0.015 (chains; measured 0.091 → 0.066 over 50 scans
+//! per family) and 0.003 (pairs; 0.066 → 0.062), FalsePos does not rise
+//! (measured 0.0215 with and without) and TruePos falls by no more than
+//! 0.002 (measured: unchanged).
 
 use lms_core::{Extractor, Params};
 use lms_lab::ablation;
@@ -50,20 +53,30 @@ fn compare(with: Params, without: Params) -> [(lms_lab::metrics::Summary, u32); 
     [(a.summary(), dropped[0]), (b.summary(), dropped[1])]
 }
 
-/// Assert what `on` gains over `off`: FalsePos down by `min_gain`, TruePos
-/// down by no more than 0.002, and what goes mostly on arcs.
+/// Assert what `on` gains over `off`: the neutral share down by
+/// `min_gain`, FalsePos and TruePos not worse, and the lines off arcs
+/// untouched.
 fn assert_gain(on: &lms_lab::metrics::Summary, off: &lms_lab::metrics::Summary, min_gain: f64) {
     println!(
-        "with: TruePos {:.3} FalsePos {:.3} (off arcs {:.3}); without: {:.3} {:.3} ({:.3})",
+        "with: TruePos {:.4} FalsePos {:.4} neutral {:.4} (off arcs {:.4}); \
+         without: {:.4} {:.4} {:.4} ({:.4})",
         on.true_pos,
         on.false_pos,
+        on.neutral,
         on.false_pos_no_arc,
         off.true_pos,
         off.false_pos,
+        off.neutral,
         off.false_pos_no_arc
     );
     assert!(
-        on.false_pos <= off.false_pos - min_gain,
+        on.neutral <= off.neutral - min_gain,
+        "neutral {} vs {}",
+        on.neutral,
+        off.neutral
+    );
+    assert!(
+        on.false_pos <= off.false_pos + 0.001,
         "FalsePos {} vs {}",
         on.false_pos,
         off.false_pos
@@ -74,9 +87,9 @@ fn assert_gain(on: &lms_lab::metrics::Summary, off: &lms_lab::metrics::Summary, 
         on.true_pos,
         off.true_pos
     );
-    // What goes is mostly on arcs: FalsePos off the arcs moves far less.
+    // What goes is on arcs: FalsePos off the arcs does not move.
     assert!(
-        (on.false_pos_no_arc - off.false_pos_no_arc).abs() < 0.5 * (off.false_pos - on.false_pos),
+        (on.false_pos_no_arc - off.false_pos_no_arc).abs() < 0.002,
         "off arcs {} vs {}",
         on.false_pos_no_arc,
         off.false_pos_no_arc
@@ -84,20 +97,19 @@ fn assert_gain(on: &lms_lab::metrics::Summary, off: &lms_lab::metrics::Summary, 
 }
 
 #[test]
-fn dropping_arcs_removes_false_lines_and_keeps_the_walls() {
+fn dropping_arcs_removes_neutral_lines_and_keeps_the_walls() {
     let no_arcs = ablation::ARC_PAIRS_KEPT.with_arc_chain(0);
     let [(on, dropped_on), (off, dropped_off)] = compare(ablation::ARC_PAIRS_KEPT, no_arcs);
     println!("chains dropped {dropped_on} lines");
     assert!(dropped_on > 0 && dropped_off == 0);
-    assert_gain(&on, &off, 0.008);
+    assert_gain(&on, &off, 0.015);
 }
 
 /// Pairs of lines on a curve (`Params::arc_pairs`): the defaults against
-/// the defaults with pairs kept. Measured: FalsePos 0.116 →
-/// 0.112 over these 50 scans per family (4 of 1 700 lines; 0.118 → 0.108
-/// over 100), TruePos unchanged.
+/// the defaults with pairs kept. Measured over these 50 scans per family:
+/// neutral share 0.066 → 0.062, FalsePos and TruePos unchanged.
 #[test]
-fn dropping_pairs_on_curves_removes_false_lines_and_keeps_the_walls() {
+fn dropping_pairs_on_curves_removes_neutral_lines_and_keeps_the_walls() {
     let [(on, dropped_on), (off, dropped_off)] = compare(Params::DEFAULT, ablation::ARC_PAIRS_KEPT);
     println!("pairs and chains dropped {dropped_on} lines, chains alone {dropped_off}");
     assert!(dropped_on > dropped_off);

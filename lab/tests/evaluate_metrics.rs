@@ -73,6 +73,8 @@ fn room() -> ScanTruth {
         corners: vec![],
         on_arc: vec![false; 361],
         bearings: bearings(),
+        ranges: vec![None; 361],
+        incidence: vec![0.0; 361],
     }
 }
 
