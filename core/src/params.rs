@@ -204,6 +204,16 @@ pub struct Params {
     /// quantile (`crate::pipeline::arcs`); a corner between two straight
     /// walls does not pass. Default on; `false`: pairs are kept.
     pub arc_pairs: bool,
+    /// The merges refit the two lines' own beams only (beyond ALGORITHM.md,
+    /// docs/ALGORITHM.md §7.6): the union line of §7.6 and of the bridge
+    /// (§10 (e)) is fitted to the valid beams of both lines with the beams
+    /// between them left out — beams in no segment (a break where `D`
+    /// crossed τ), a rejected segment, a corner beam the fits leave out —
+    /// and its χ², the parts' χ² and the anchor gate are those of that fit.
+    /// The beams that broke the segment are no evidence against the two
+    /// lines lying on one wall. `false`: the union is fitted to every valid
+    /// beam from the first line's first to the second's last.
+    pub merge_own_beams: bool,
 }
 
 /// Pairing gate of [`Params::per_turn`] on |Δα| between two turns' lines
@@ -287,6 +297,7 @@ impl Params {
         turn_offsets: true,
         merge_f_test: 0.0,
         arc_pairs: true,
+        merge_own_beams: false,
     };
 
     /// ALGORITHM.md v2 (preset `v2`) with `merge_collinear` and the σ_α
@@ -451,6 +462,7 @@ impl ValidParams {
         turn_offsets: false,
         merge_f_test: 0.0,
         arc_pairs: false,
+        merge_own_beams: false,
     });
 
     /// The parameters.

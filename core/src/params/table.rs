@@ -434,6 +434,8 @@ fields! {
         "Nested-model F test of the merges (0 off; host builds only)";
     arc_pairs, with_arc_pairs: bool, "bool", ANY, false,
         "Drop a pair of touching lines that a circle explains better";
+    merge_own_beams, with_merge_own_beams: bool, "bool", ANY, false,
+        "Merges refit the two lines' own beams, leaving out the beams between them";
 }
 
 /// The parameter named `name` (a field of [`Params`]).
@@ -546,9 +548,10 @@ mod tests {
             turn_offsets: false,
             merge_f_test: 30.0,
             arc_pairs: false,
+            merge_own_beams: true,
         };
         assert_eq!(p, every);
-        assert_eq!(FIELDS.len(), 31);
+        assert_eq!(FIELDS.len(), 32);
     }
 
     #[test]

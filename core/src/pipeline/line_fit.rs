@@ -161,8 +161,64 @@ pub fn fit_piece<B: BearingTable>(
     piece: Segment,
     sigma: f32,
 ) -> Result<Line, FitError> {
+    fit_piece_without(scan, piece, &Holes::NONE, sigma)
+}
+
+/// Most runs of beams a fit leaves out ([`Holes`]).
+pub const MAX_HOLES: usize = 4;
+
+/// Runs of beams a fit leaves out: the gaps between the lines a merged
+/// line is made of ([`crate::Params::merge_own_beams`]), at most
+/// [`MAX_HOLES`], each a half-open range `from..to` of beam indices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Holes {
+    runs: [(u16, u16); MAX_HOLES],
+    len: u8,
+}
+
+impl Holes {
+    /// No beam left out.
+    pub const NONE: Holes = Holes {
+        runs: [(0, 0); MAX_HOLES],
+        len: 0,
+    };
+
+    /// Leave out beams `from..to` too; `false` (nothing changed) if
+    /// [`MAX_HOLES`] runs are left out already.
+    pub fn push(&mut self, from: u16, to: u16) -> bool {
+        match self.runs.get_mut(usize::from(self.len)) {
+            Some(slot) => {
+                *slot = (from, to);
+                self.len += 1;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Whether beam `j` is left out.
+    #[inline(always)]
+    fn contains(&self, j: usize) -> bool {
+        let runs = self.runs.get(..usize::from(self.len)).unwrap_or_default();
+        runs.iter()
+            .any(|&(from, to)| usize::from(from) <= j && j < usize::from(to))
+    }
+}
+
+/// [`fit_piece`] without the beams of `holes`: the merges' refit of the
+/// lines' own beams, the beams between them left out
+/// ([`crate::Params::merge_own_beams`]). The line still spans
+/// `piece.first..=piece.last`; its `points`, covariance and χ² are those
+/// of the beams fitted. A hole must lie inside the piece, not at its ends.
+pub fn fit_piece_without<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    piece: Segment,
+    holes: &Holes,
+    sigma: f32,
+) -> Result<Line, FitError> {
     let first = piece.first;
     let mut span = Span::new(scan, piece).ok_or(FitError::TooFewPoints)?;
+    span.holes = *holes;
     span.set_footprint(scan.footprint, sigma);
     // 1. Total least squares start.
     let (m, start) = span.total_least_squares()?;
@@ -205,6 +261,8 @@ struct Span<'a, B> {
     max_range: f32,
     /// `κ/σ` of the footprint weights (1/m·rad; 0: unweighted).
     kappa_per_sigma: f32,
+    /// Beams left out of the fit.
+    holes: Holes,
 }
 
 impl<B: BearingTable> RawScan<'_, B> {
@@ -261,6 +319,7 @@ impl<'a, B: BearingTable> Span<'a, B> {
             lo,
             max_range: scan.max_range,
             kappa_per_sigma: 0.0,
+            holes: Holes::NONE,
         })
     }
 
@@ -274,7 +333,7 @@ impl<'a, B: BearingTable> Span<'a, B> {
     /// [`Self::each_valid`] with the beam's index `j` in the scan first.
     #[inline]
     fn each_valid_beam(&self, ca: f32, sa: f32, mut f: impl FnMut(usize, f32, f32, f32)) {
-        let (max_range, lo) = (self.max_range, self.lo);
+        let (max_range, lo, holes) = (self.max_range, self.lo, &self.holes);
         let (ranges, beams) = (self.ranges, self.beams);
         self.bearings.sweep(
             Sweep {
@@ -284,8 +343,9 @@ impl<'a, B: BearingTable> Span<'a, B> {
                 normal: (ca, sa),
             },
             |i, d, b, c, s| {
-                if b.is_valid() && d < max_range {
-                    f(lo + i, d, c, s);
+                let j = lo + i;
+                if b.is_valid() && d < max_range && !holes.contains(j) {
+                    f(j, d, c, s);
                 }
             },
         );
