@@ -15,9 +15,10 @@ use lms_core::{Extractor, Params};
 use lms_lab::baselines::run_core;
 use lms_lab::maptruth::TruthConfig;
 use lms_lab::metrics::{scan_truth, Gates, Tally};
+use lms_lab::realistic::{realistic_model, sample, DELTA};
 use lms_lab::realtruth::{run_log, Base, RealKind, RealMethod, RealTally, SigmaChoice};
 use lms_lab::scenes::{self, Family, NoiseSpec};
-use lms_lab::sweep::{synthetic_table, Adjust};
+use lms_lab::sweep::Adjust;
 
 /// The variants: the defaults and each candidate.
 fn variants() -> Vec<(&'static str, Adjust)> {
@@ -53,23 +54,37 @@ fn row(md: &mut String, log: &str, name: &str, t: &RealTally) {
     );
 }
 
-/// Plain Gaussian rooms (the evaluation's synthetic families, mm
-/// quantisation, 1 % dropouts, seed 1): TruePos and FalsePos per variant.
-fn gaussian_table(names: &[&str], adjust: &[Adjust], scans: usize) -> Result<String> {
-    let gates = Gates::default();
+/// TruePos and FalsePos per variant on the synthetic families at σ = 10
+/// and 20 mm, `scans` per family: the realistic sensor model
+/// (`realistic = true`, as `lms_lab::sweep::synthetic_table`) or plain
+/// Gaussian rooms (mm quantisation, 1 % dropouts, seed 1).
+fn synthetic(names: &[&str], adjust: &[Adjust], scans: usize, realistic: bool) -> Result<String> {
     let mut ex = Extractor::new();
     let mut md = String::from(
         "| σ | variant | TruePos | FalsePos | lines/scan |\n|:---|:---|---:|---:|---:|\n",
     );
     for sigma in [0.01, 0.02] {
+        let model = realistic_model(sigma);
+        let gates = if realistic {
+            Gates {
+                kappa: model.kappa,
+                ..Gates::default()
+            }
+        } else {
+            Gates::default()
+        };
         let mut tallies = vec![Tally::default(); names.len()];
         for family in Family::ALL {
             for i in 0..scans {
-                let noise = NoiseSpec {
-                    sigma,
-                    dropout: 0.01,
+                let s = if realistic {
+                    sample(family, i, 1, &model, DELTA)?
+                } else {
+                    let noise = NoiseSpec {
+                        sigma,
+                        dropout: 0.01,
+                    };
+                    scenes::sample(family, i, 1, noise)?
                 };
-                let s = scenes::sample(family, i, 1, noise)?;
                 let base = Params::default().with_sigma(sigma as f32);
                 let truth = scan_truth(&s.truth, &s.scene, &base, sigma, &gates);
                 for (k, t) in tallies.iter_mut().enumerate() {
@@ -132,13 +147,11 @@ fn main() -> Result<()> {
     println!("Settled truth, every {every}. frame:\n\n{md}");
     println!(
         "Realistic synthetic scenes (0.5°), {scans} scans per family and σ₀:\n\n{}",
-        synthetic_table(&names, scans, &|k, ex, frame, base| {
-            run_core(ex, frame, &(adjust[k])(*base))
-        })?
+        synthetic(&names, &adjust, scans, true)?
     );
     println!(
         "Plain Gaussian rooms, {scans} scans per family and σ:\n\n{}",
-        gaussian_table(&names, &adjust, scans)?
+        synthetic(&names, &adjust, scans, false)?
     );
     Ok(())
 }

@@ -67,7 +67,7 @@ pub fn try_merge<B: BearingTable>(
     };
     // Beyond §7.6: the union of the lines' own beams across a short gap.
     let mut own = *holes;
-    if params.merge_own_beams && short_gap && gap_end > gap_start {
+    if params.merge_own_beams && gated && gap_end > gap_start {
         own.push(prev.last.saturating_add(1), next.first);
     }
     let merged = fit_piece_without(scan, union, &own, sigma).ok()?;
