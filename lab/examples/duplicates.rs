@@ -390,9 +390,10 @@ fn diagnose<B: lms_core::pipeline::line_fit::BearingTable>(
         last: b.last,
     };
     // The union as `try_merge` fits it: without the beams between with
-    // `merge_own_beams` across a short gap.
+    // `merge_own_beams` where §7.6's gates vouch (the final pair's own
+    // holes, if merged lines, are not known here: their beams are fitted).
     let mut hole = Holes::NONE;
-    if p.merge_own_beams && gap_ok {
+    if p.merge_own_beams && gap_ok && gate_ok {
         hole.push(a.last + 1, b.first);
     }
     let Ok(merged) = fit_piece_without(scan, union, &hole, p.line_sigma()) else {
@@ -478,7 +479,7 @@ fn diagnose<B: lms_core::pipeline::line_fit::BearingTable>(
     } else if !anchor_ok {
         "anchor gate"
     } else {
-        "F test"
+        "the F test, or the holes of a merged line"
     };
     let how = if vouched { "vouched" } else { "not vouched" };
     format!(

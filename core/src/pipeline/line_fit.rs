@@ -196,12 +196,11 @@ impl Holes {
         }
     }
 
-    /// Whether beam `j` is left out.
+    /// The runs left out, in the order pushed (a merge's gaps, in beam
+    /// order).
     #[inline(always)]
-    fn contains(&self, j: usize) -> bool {
-        let runs = self.runs.get(..usize::from(self.len)).unwrap_or_default();
-        runs.iter()
-            .any(|&(from, to)| usize::from(from) <= j && j < usize::from(to))
+    fn runs(&self) -> &[(u16, u16)] {
+        self.runs.get(..usize::from(self.len)).unwrap_or_default()
     }
 }
 
@@ -331,24 +330,41 @@ impl<'a, B: BearingTable> Span<'a, B> {
     }
 
     /// [`Self::each_valid`] with the beam's index `j` in the scan first.
+    /// The beams between the holes are swept run by run, so a fit without
+    /// holes is one sweep with no test of its own per beam.
     #[inline]
     fn each_valid_beam(&self, ca: f32, sa: f32, mut f: impl FnMut(usize, f32, f32, f32)) {
-        let (max_range, lo, holes) = (self.max_range, self.lo, &self.holes);
-        let (ranges, beams) = (self.ranges, self.beams);
-        self.bearings.sweep(
-            Sweep {
-                lo,
-                ranges,
-                beams,
-                normal: (ca, sa),
-            },
-            |i, d, b, c, s| {
-                let j = lo + i;
-                if b.is_valid() && d < max_range && !holes.contains(j) {
-                    f(j, d, c, s);
-                }
-            },
-        );
+        let (max_range, lo) = (self.max_range, self.lo);
+        let n = self.ranges.len().min(self.beams.len());
+        let runs = self.holes.runs();
+        // Beams `start..end` (from `lo`) lie between two holes.
+        let mut start = 0usize;
+        for k in 0..=runs.len() {
+            let (end, next) = match runs.get(k) {
+                Some(&(from, to)) => (usize::from(from), usize::from(to)),
+                None => (lo + n, lo + n),
+            };
+            let end = end.saturating_sub(lo).min(n);
+            if let (Some(ranges), Some(beams)) =
+                (self.ranges.get(start..end), self.beams.get(start..end))
+            {
+                let first = lo + start;
+                self.bearings.sweep(
+                    Sweep {
+                        lo: first,
+                        ranges,
+                        beams,
+                        normal: (ca, sa),
+                    },
+                    |i, d, b, c, s| {
+                        if b.is_valid() && d < max_range {
+                            f(first + i, d, c, s);
+                        }
+                    },
+                );
+            }
+            start = start.max(next.saturating_sub(lo).min(n));
+        }
     }
 
     /// §7.1: the total-least-squares line through the valid points
