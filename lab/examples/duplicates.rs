@@ -22,12 +22,17 @@
 //! `cargo run --release -p lms-lab --example duplicates -- [EVERY] [--list] [--set=NAME=VALUE]…`
 //! (`--set`: a parameter changed from the no-flag parameters per data).
 
+// `!(x <= limit)` is deliberate, as in the core: NaN fails the test.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use anyhow::Result;
+use lms_core::pipeline::bearings::TwoLevelBearings;
 use lms_core::pipeline::line_fit::{
-    fit_piece, fit_piece_without, mahalanobis, parameter_distance, residual_sum, Holes, RawScan,
+    fit_piece, fit_piece_without, mahalanobis, parameter_distance, residual_sum, BearingTable,
+    Holes, RawScan,
 };
 use lms_core::pipeline::smoothing::{interleaved_turns, usable};
 use lms_core::unstable::{fit_span, try_merge};
@@ -65,7 +70,7 @@ struct Replay {
 }
 
 fn replay(
-    scan: &RawScan<'_, &lms_core::pipeline::bearings::TwoLevelBearings>,
+    scan: &RawScan<'_, &TwoLevelBearings>,
     segs: &[Segment],
     out: &[Line],
     p: &Params,
@@ -182,12 +187,7 @@ impl Counts {
 }
 
 /// What lies between beams `a.last` and `b.first` in the replay.
-fn between(
-    r: &Replay,
-    a: &Line,
-    b: &Line,
-    scan: &RawScan<'_, impl lms_core::pipeline::line_fit::BearingTable>,
-) -> String {
+fn between(r: &Replay, a: &Line, b: &Line, scan: &RawScan<'_, impl BearingTable>) -> String {
     if b.first <= a.last {
         return "overlapping lines".into();
     }
@@ -252,114 +252,169 @@ fn between(
     }
 }
 
+/// The breakdowns over all pairs.
+#[derive(Default)]
+struct Tallies {
+    pairs: usize,
+    mismatched: usize,
+    between: Counts,
+    first_fail: Counts,
+    fails: Counts,
+    by_between_merge: Counts,
+}
+
+/// The parameters of a log: the no-flag ones with each `--set=NAME=VALUE`.
+fn params_of(no_flags: Params, flags: &[String]) -> Result<Params> {
+    let mut p = no_flags;
+    for set in flags.iter().filter_map(|f| f.strip_prefix("--set=")) {
+        let (name, value) = set.split_once('=').unwrap_or((set, ""));
+        p.set(name, value)
+            .map_err(|e| anyhow::anyhow!("--set={set}: {e}"))?;
+    }
+    Ok(p)
+}
+
+/// The scan the extractor fits `frame` on with `p`.
+fn raw_scan<'a>(
+    frame: &'a lms_core::Frame,
+    tables: &'a Tables,
+    p: &Params,
+) -> RawScan<'a, &'a TwoLevelBearings> {
+    RawScan {
+        bearings: tables.core(),
+        ranges: frame.ranges(),
+        beams: frame.beams(),
+        max_range: p.max_range,
+        footprint: p.footprint,
+        turns: if p.turn_offsets {
+            interleaved_turns(frame.geometry().step) as u8
+        } else {
+            1
+        },
+    }
+}
+
+/// One frame: every false line on a piece another line matches, paired
+/// with that line, into `t` (and printed with `list`, prefixed by `label`).
+fn frame_pairs(
+    ex: &mut Extractor,
+    scan: &host_bridge::carmen::Scan,
+    truth: &FrameTruth,
+    p: &Params,
+    t: &mut Tallies,
+    list: Option<&str>,
+) {
+    let frame = &scan.frame;
+    let x = run_core(ex, frame, p);
+    let tables = Tables::for_frame(frame);
+    let raw = raw_scan(frame, &tables, p);
+    let r = replay(&raw, &x.segments, &x.lines, p);
+    let kept: Vec<&Line> = r
+        .candidates
+        .iter()
+        .filter(|c| c.1 == Dropped::Kept)
+        .map(|c| &c.0)
+        .collect();
+    if kept.len() != x.lines.len() || kept.iter().zip(&x.lines).any(|(a, b)| **a != *b) {
+        t.mismatched += 1;
+    }
+    let lines: Vec<ScoredLine> = x.lines.iter().map(ScoredLine::from).collect();
+    let valid: Vec<bool> = frame.beams().iter().map(|b| b.is_valid()).collect();
+    let line_of = matches(truth, &lines);
+    for (i, l) in lines.iter().enumerate() {
+        if line_of.contains(&Some(i)) {
+            continue;
+        }
+        let Some(k) = fragment_of(truth, l, &valid) else {
+            continue;
+        };
+        let Some(m) = line_of[k] else {
+            continue;
+        };
+        let (a, b) = if x.lines[i].first < x.lines[m].first {
+            (&x.lines[i], &x.lines[m])
+        } else {
+            (&x.lines[m], &x.lines[i])
+        };
+        t.pairs += 1;
+        let what = between(&r, a, b, &raw);
+        t.between.add(what.clone());
+        let verdict = diagnose(&raw, a, b, p, &mut t.fails);
+        t.first_fail.add(verdict.clone());
+        let merges = if verdict == "merges now" {
+            "merges now"
+        } else {
+            "does not merge"
+        };
+        t.by_between_merge.add(format!("{what} / {merges}"));
+        if let Some(label) = list {
+            let piece = &truth.pieces[k];
+            println!(
+                "{label} piece {}..{} lines {}..{} ({} pts) + {}..{} ({} pts), {} between: {what}; {verdict}",
+                piece.first, piece.last, a.first, a.last, a.points, b.first, b.last, b.points,
+                i.abs_diff(m) - 1
+            );
+        }
+    }
+}
+
 fn main() -> Result<()> {
     let (every, flags) = count_and_flags(1)?;
     let list = flags.iter().any(|f| f == "--list");
     let cfg = TruthConfig::settled();
     let mut ex = Extractor::new();
-    let (mut pairs, mut mismatched, mut dup_total) = (0usize, 0usize, 0usize);
-    let mut lies = Counts::default();
-    let mut first_fail = Counts::default();
-    let mut fails = Counts::default();
-    let mut by_between_merge = Counts::default();
+    let mut t = Tallies::default();
     for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
         let loaded = load_with_map(&path, &cfg)?;
-        let mut p = loaded.no_flags;
-        for set in flags.iter().filter_map(|f| f.strip_prefix("--set=")) {
-            let (name, value) = set.split_once('=').unwrap_or((set, ""));
-            p.set(name, value)
-                .map_err(|e| anyhow::anyhow!("--set={set}: {e}"))?;
-        }
+        let p = params_of(loaded.no_flags, &flags)?;
         let name = path
             .file_name()
             .map_or(String::new(), |n| n.to_string_lossy().into_owned());
         for (index, scan) in loaded.log.scans.iter().enumerate().step_by(every.max(1)) {
             let truth = loaded.truth(index);
-            let frame = &scan.frame;
-            let x = run_core(&mut ex, frame, &p);
-            let tables = Tables::for_frame(frame);
-            let raw = RawScan {
-                bearings: tables.core(),
-                ranges: frame.ranges(),
-                beams: frame.beams(),
-                max_range: p.max_range,
-                footprint: p.footprint,
-                turns: if p.turn_offsets {
-                    interleaved_turns(frame.geometry().step) as u8
-                } else {
-                    1
-                },
-            };
-            let r = replay(&raw, &x.segments, &x.lines, &p);
-            let kept: Vec<&Line> = r
-                .candidates
-                .iter()
-                .filter(|c| c.1 == Dropped::Kept)
-                .map(|c| &c.0)
-                .collect();
-            if kept.len() != x.lines.len() || kept.iter().zip(&x.lines).any(|(a, b)| **a != *b) {
-                mismatched += 1;
-            }
-            let lines: Vec<ScoredLine> = x.lines.iter().map(ScoredLine::from).collect();
-            let valid: Vec<bool> = frame.beams().iter().map(|b| b.is_valid()).collect();
-            let line_of = matches(&truth, &lines);
-            for (i, l) in lines.iter().enumerate() {
-                if line_of.contains(&Some(i)) {
-                    continue;
-                }
-                let Some(k) = fragment_of(&truth, l, &valid) else {
-                    continue;
-                };
-                let Some(m) = line_of[k] else {
-                    continue;
-                };
-                dup_total += 1;
-                let (a, b) = if x.lines[i].first < x.lines[m].first {
-                    (&x.lines[i], &x.lines[m])
-                } else {
-                    (&x.lines[m], &x.lines[i])
-                };
-                pairs += 1;
-                let lines_between = i.abs_diff(m) - 1;
-                let what = between(&r, a, b, &raw);
-                lies.add(what.clone());
-                let verdict = diagnose(&raw, a, b, &p, &mut fails);
-                first_fail.add(verdict.clone());
-                by_between_merge.add(format!(
-                    "{what} / {}",
-                    if verdict == "merges now" {
-                        "merges now"
-                    } else {
-                        "does not merge"
-                    }
-                ));
-                if list {
-                    println!(
-                        "{name} #{index} piece {}..{} lines {}..{} ({} pts) + {}..{} ({} pts), {lines_between} between: {what}; {verdict}",
-                        truth.pieces[k].first, truth.pieces[k].last, a.first, a.last, a.points, b.first, b.last, b.points
-                    );
-                }
-            }
+            let label = format!("{name} #{index}");
+            frame_pairs(
+                &mut ex,
+                scan,
+                &truth,
+                &p,
+                &mut t,
+                list.then_some(label.as_str()),
+            );
         }
         eprintln!("{name} done");
     }
-    println!("Settled truth, every {every}. frame: {dup_total} false lines on a matched piece (pairs), replay ≠ extractor in {mismatched} frames.");
-    lies.print("between the fragment and the matched line", pairs);
-    first_fail.print(
-        "first merge condition that fails (in try_merge's order)",
-        pairs,
+    println!(
+        "Settled truth, every {every}. frame: {} false lines on a matched piece (pairs), \
+         replay ≠ extractor in {} frames.",
+        t.pairs, t.mismatched
     );
-    fails.print(
-        "each merge condition failing (a pair may fail several)",
-        pairs,
-    );
-    by_between_merge.print("between / does try_merge join the final pair", pairs);
+    let n = t.pairs;
+    t.between
+        .print("between the fragment and the matched line", n);
+    t.first_fail
+        .print("first merge condition that fails (in try_merge's order)", n);
+    t.fails
+        .print("each merge condition failing (a pair may fail several)", n);
+    t.by_between_merge
+        .print("between / does try_merge join the final pair", n);
     Ok(())
+}
+
+/// The merge conditions of a pair, as `try_merge` tests them.
+struct Checks {
+    gap_ok: bool,
+    gate_ok: bool,
+    collinear: bool,
+    vouched: bool,
+    union_ok: bool,
+    parts_ok: bool,
+    anchor_ok: bool,
 }
 
 /// Which merge condition keeps `a` and `b` (in beam order) apart, the
 /// first in `try_merge`'s order; every failing one added to `fails`.
-fn diagnose<B: lms_core::pipeline::line_fit::BearingTable>(
+fn diagnose<B: BearingTable>(
     scan: &RawScan<'_, B>,
     a: &Line,
     b: &Line,
@@ -377,8 +432,7 @@ fn diagnose<B: lms_core::pipeline::line_fit::BearingTable>(
         })
         .count();
     let gap_ok = valid_between <= usize::from(p.merge_gap_beams);
-    let dist = parameter_distance(a, b);
-    let gate_ok = dist.is_some_and(|d| d < p.merge_gate);
+    let gate_ok = parameter_distance(a, b).is_some_and(|d| d < p.merge_gate);
     let collinear = {
         let close = a.gap_to(b) < p.corner_gap;
         let apart = lms_scene::wrap_angle(f64::from(b.alpha - a.alpha)).abs();
@@ -405,13 +459,40 @@ fn diagnose<B: lms_core::pipeline::line_fit::BearingTable>(
             .map(|rise| (residual_sum(l, scan.turns) + rise) / f32::from(l.points))
             .is_some_and(|c| c <= p.max_chi2)
     };
-    let parts_ok = part(a) && part(b);
     let larger = if b.points > a.points { b } else { a };
-    let anchor_ok = p.merge_anchor_gate == f32::INFINITY
-        || mahalanobis(&larger.cov, larger, &merged)
-            .is_some_and(|d| d <= p.merge_anchor_gate * larger.chi2.max(1.0));
-    let union_ok = merged.chi2 <= p.max_chi2;
-    // The union of the two lines' own beams, the beams between left out.
+    let checks = Checks {
+        gap_ok,
+        gate_ok,
+        collinear,
+        vouched,
+        union_ok: merged.chi2 <= p.max_chi2,
+        parts_ok: part(a) && part(b),
+        anchor_ok: anchored(larger, &merged, p),
+    };
+    if !checks.union_ok {
+        own_beams_evidence(scan, (a, b), &merged, p, fails);
+    }
+    verdict(&checks, p, fails)
+}
+
+/// `try_merge`'s anchor gate of `merged` on `larger`.
+fn anchored(larger: &Line, merged: &Line, p: &Params) -> bool {
+    p.merge_anchor_gate == f32::INFINITY
+        || mahalanobis(&larger.cov, larger, merged)
+            .is_some_and(|d| d <= p.merge_anchor_gate * larger.chi2.max(1.0))
+}
+
+/// For a pair whose union fails χ²: whether the union of the two lines'
+/// own beams (the beams between left out) passes χ² and the anchor gate,
+/// how much the beams between raise the union's χ², and whether both
+/// parts fit well on their own.
+fn own_beams_evidence<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    (a, b): (&Line, &Line),
+    merged: &Line,
+    p: &Params,
+    fails: &mut Counts,
+) {
     let mut masked: Vec<lms_core::Beam> = scan.beams.to_vec();
     for m in masked
         .iter_mut()
@@ -424,70 +505,71 @@ fn diagnose<B: lms_core::pipeline::line_fit::BearingTable>(
         beams: &masked,
         ..*scan
     };
-    if let Ok(own) = fit_piece(&holed, union, p.line_sigma()) {
-        let own_anchor = mahalanobis(&larger.cov, larger, &own)
-            .is_some_and(|d| d <= p.merge_anchor_gate * larger.chi2.max(1.0));
-        let own_ok = own.chi2 <= p.max_chi2;
-        if !union_ok {
-            fails.add(format!(
-                "union χ² fails; own beams' union: χ² {}, anchor {}",
-                if own_ok { "ok" } else { "fails" },
-                if own_anchor { "ok" } else { "fails" }
-            ));
-            let ratio = merged.chi2 / own.chi2.max(1e-6);
-            fails.add(format!(
-                "union χ² fails; union χ² / own beams' union χ² {}",
-                if ratio > 2.0 {
-                    "> 2"
-                } else if ratio > 1.2 {
-                    "1.2–2"
-                } else {
-                    "≤ 1.2"
-                }
-            ));
-            let (ca, cb) = (a.chi2, b.chi2);
-            fails.add(format!(
-                "union χ² fails; parts' own χ² both ≤ max_chi2/2: {}",
-                ca <= p.max_chi2 / 2.0 && cb <= p.max_chi2 / 2.0
-            ));
+    let union = Segment {
+        first: a.first,
+        last: b.last,
+    };
+    let Ok(own) = fit_piece(&holed, union, p.line_sigma()) else {
+        return;
+    };
+    let larger = if b.points > a.points { b } else { a };
+    let ok = |x: bool| if x { "ok" } else { "fails" };
+    fails.add(format!(
+        "union χ² fails; own beams' union: χ² {}, anchor {}",
+        ok(own.chi2 <= p.max_chi2),
+        ok(anchored(larger, &own, p))
+    ));
+    let ratio = merged.chi2 / own.chi2.max(1e-6);
+    let band = if ratio > 2.0 {
+        "> 2"
+    } else if ratio > 1.2 {
+        "1.2–2"
+    } else {
+        "≤ 1.2"
+    };
+    fails.add(format!(
+        "union χ² fails; union χ² / own beams' union χ² {band}"
+    ));
+    fails.add(format!(
+        "union χ² fails; parts' own χ² both ≤ max_chi2/2: {}",
+        a.chi2 <= p.max_chi2 / 2.0 && b.chi2 <= p.max_chi2 / 2.0
+    ));
+}
+
+/// Every failing condition of `c` into `fails`; the first in `try_merge`'s
+/// order, with whether the pair is vouched for and its gap.
+fn verdict(c: &Checks, p: &Params, fails: &mut Counts) -> String {
+    for (failed, name) in [
+        (!c.gap_ok, "gap > merge_gap_beams"),
+        (!c.gate_ok, "parameter distance ≥ merge_gate"),
+        (!c.collinear, "not collinear-and-touching"),
+        (!c.union_ok, "union χ² > max_chi2"),
+        (
+            !c.vouched && !c.parts_ok,
+            "bridge: a part's χ² about the union > max_chi2",
+        ),
+        (!c.anchor_ok, "anchor gate"),
+    ] {
+        if failed {
+            fails.add(name);
         }
     }
-    if !gap_ok {
-        fails.add("gap > merge_gap_beams");
-    }
-    if !gate_ok {
-        fails.add("parameter distance ≥ merge_gate");
-    }
-    if !collinear {
-        fails.add("not collinear-and-touching");
-    }
-    if !union_ok {
-        fails.add("union χ² > max_chi2");
-    }
-    if !vouched && !parts_ok {
-        fails.add("bridge: a part's χ² about the union > max_chi2");
-    }
-    if !anchor_ok {
-        fails.add("anchor gate");
-    }
-    let reason = if !(vouched || p.bridge_merge) {
+    let reason = if !(c.vouched || p.bridge_merge) {
         "not vouched, no bridge"
-    } else if !union_ok {
+    } else if !c.union_ok {
         "union χ² > max_chi2"
-    } else if !(vouched || parts_ok) {
+    } else if !(c.vouched || c.parts_ok) {
         "bridge: a part's χ² about the union > max_chi2"
-    } else if !anchor_ok {
+    } else if !c.anchor_ok {
         "anchor gate"
     } else {
         "the F test, or the holes of a merged line"
     };
-    let how = if vouched { "vouched" } else { "not vouched" };
-    format!(
-        "{reason} ({how}, gap {})",
-        if gap_ok {
-            "≤ merge_gap_beams"
-        } else {
-            "> merge_gap_beams"
-        }
-    )
+    let how = if c.vouched { "vouched" } else { "not vouched" };
+    let gap = if c.gap_ok {
+        "≤ merge_gap_beams"
+    } else {
+        "> merge_gap_beams"
+    };
+    format!("{reason} ({how}, gap {gap})")
 }
