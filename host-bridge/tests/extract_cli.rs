@@ -415,7 +415,8 @@ fn without_arc_counter(json: &[u8]) -> Vec<u8> {
 fn extract_json_of_every_shared_log_is_pinned() {
     // (log stem, defaults, v3.0, pairs kept, no anchor gate, consecutive
     // windows, arcs kept, v2)
-    const PINNED: [(&str, u64, u64, u64, u64, u64, u64, u64); 7] = [
+    type Pin = (&'static str, u64, u64, u64, u64, u64, u64, u64);
+    const PINNED: [Pin; 7] = [
         (
             "acapulco-corrected",
             0x8dc63c812b67ae09,
