@@ -191,6 +191,9 @@ typedef struct LmsParams {
   float merge_f_test;
   // Drop a pair of touching lines that a circle explains better (0/1).
   uint8_t arc_pairs;
+  // Merges refit the two lines' own beams, leaving out the beams
+  // between them (0/1).
+  uint8_t merge_own_beams;
 } LmsParams;
 
 // A scan variant (field of view / resolution): one of the `LMS_FOV*`
@@ -404,7 +407,7 @@ int lms_variant_for_beams(size_t n, LmsVariant *out);
 // `max_range` from its data.
 struct LmsParams lms_params_default(void);
 
-// Write the preset `name` (`"default"`, `"v2"` or `"paper"`) to `*out`.
+// Write the preset `name` (`"default"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
 // `LMS_ERR_PRESET` for another name (`*out` unchanged).
 //
 // # Safety

@@ -76,6 +76,9 @@ pub struct LmsParams {
     pub merge_f_test: f32,
     /// Drop a pair of touching lines that a circle explains better (0/1).
     pub arc_pairs: u8,
+    /// Merges refit the two lines' own beams, leaving out the beams
+    /// between them (0/1).
+    pub merge_own_beams: u8,
 }
 
 impl From<&Params> for LmsParams {
@@ -112,6 +115,7 @@ impl From<&Params> for LmsParams {
             turn_offsets: p.turn_offsets.into(),
             merge_f_test: p.merge_f_test,
             arc_pairs: p.arc_pairs.into(),
+            merge_own_beams: p.merge_own_beams.into(),
         }
     }
 }
@@ -165,7 +169,8 @@ impl LmsParams {
             .with_merge_anchor_gate(self.merge_anchor_gate)
             .with_turn_offsets(flag(self.turn_offsets)?)
             .with_merge_f_test(self.merge_f_test)
-            .with_arc_pairs(flag(self.arc_pairs)?))
+            .with_arc_pairs(flag(self.arc_pairs)?)
+            .with_merge_own_beams(flag(self.merge_own_beams)?))
     }
 }
 
@@ -177,7 +182,7 @@ pub extern "C" fn lms_params_default() -> LmsParams {
     LmsParams::from(&Params::DEFAULT)
 }
 
-/// Write the preset `name` (`"default"`, `"v2"` or `"paper"`) to `*out`.
+/// Write the preset `name` (`"default"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
 /// `LMS_ERR_PRESET` for another name (`*out` unchanged).
 ///
 /// # Safety

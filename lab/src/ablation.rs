@@ -1,12 +1,15 @@
 //! Parameter sets the evaluation compares the defaults with: the defaults
 //! with groups of their decisions turned off, each set on top of the one
-//! before, down to ALGORITHM.md v2 ([`Params::V2`]). Each row of such a
+//! before, from [`Params::V3_0`] (the merges refitting every beam between
+//! the lines) down to ALGORITHM.md v2 ([`Params::V2`]). Each row of such a
 //! table shows what the group it turns off adds (docs/DESIGN.md).
 
 use lms_core::Params;
 
-/// The defaults with pairs of lines on a curve kept (`arc_pairs = false`).
-pub const ARC_PAIRS_KEPT: Params = Params::DEFAULT.with_arc_pairs(false);
+/// [`Params::V3_0`] (the defaults with the merges refitting every beam
+/// between the lines, `merge_own_beams = false`) with pairs of lines on a
+/// curve kept (`arc_pairs = false`).
+pub const ARC_PAIRS_KEPT: Params = Params::V3_0.with_arc_pairs(false);
 
 /// [`ARC_PAIRS_KEPT`] with no anchor gate on the merges and no per-turn
 /// offsets in the fits' χ² (`merge_anchor_gate = inf`,
@@ -28,15 +31,15 @@ pub const CONSECUTIVE_WINDOWS: Params = NO_ANCHOR_NO_OFFSETS
 pub const ARC_CHAINS_KEPT: Params = CONSECUTIVE_WINDOWS.with_arc_chain(0);
 
 /// Name of [`ARC_PAIRS_KEPT`] in the tables.
-pub const ARC_PAIRS_KEPT_NAME: &str = "defaults, arc_pairs=false";
+pub const ARC_PAIRS_KEPT_NAME: &str = "v3.0, arc_pairs=false";
 /// Name of [`NO_ANCHOR_NO_OFFSETS`] in the tables.
 pub const NO_ANCHOR_NO_OFFSETS_NAME: &str =
-    "defaults, arc_pairs=false, merge_anchor_gate=inf, turn_offsets=false";
+    "v3.0, arc_pairs=false, merge_anchor_gate=inf, turn_offsets=false";
 /// Name of [`CONSECUTIVE_WINDOWS`] in the tables.
-pub const CONSECUTIVE_WINDOWS_NAME: &str = "defaults, arc_pairs=false, merge_anchor_gate=inf, \
+pub const CONSECUTIVE_WINDOWS_NAME: &str = "v3.0, arc_pairs=false, merge_anchor_gate=inf, \
      turn_offsets=false, same_turn_windows=false, split_budget=0";
 /// Name of [`ARC_CHAINS_KEPT`] in the tables.
-pub const ARC_CHAINS_KEPT_NAME: &str = "defaults, arc_pairs=false, merge_anchor_gate=inf, \
+pub const ARC_CHAINS_KEPT_NAME: &str = "v3.0, arc_pairs=false, merge_anchor_gate=inf, \
      turn_offsets=false, same_turn_windows=false, split_budget=0, arc_chain=0";
 
 #[cfg(test)]

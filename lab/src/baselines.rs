@@ -31,7 +31,7 @@ use lms_core::maths::Vec3;
 use lms_core::pipeline::bearings::TwoLevelBearings;
 use lms_core::pipeline::corners::intersect;
 use lms_core::pipeline::ekf::WindowFilter;
-use lms_core::pipeline::line_fit::{Bearings, RawScan};
+use lms_core::pipeline::line_fit::{Bearings, Holes, RawScan};
 use lms_core::unstable::fit_line;
 use lms_core::unstable::segment;
 use lms_core::unstable::{fit_span, try_merge};
@@ -123,6 +123,7 @@ pub fn features_from_segments(
         turns: 1,
     };
     let mut lines: Vec<Line> = Vec::new();
+    let mut holes = Holes::NONE;
     for k in 0..segments.len() {
         let span = fit_span(segments, k, params.fit_shared_points);
         let Ok(line) = fit_line(bearings, ranges, beams, span, params.sigma) else {
@@ -133,7 +134,7 @@ pub fn features_from_segments(
         }
         if params.merge {
             if let Some(prev) = lines.last() {
-                if let Some(merged) = try_merge(&scan, prev, &line, params) {
+                if let Some(merged) = try_merge(&scan, prev, &line, params, &mut holes) {
                     if let Some(slot) = lines.last_mut() {
                         *slot = merged;
                     }
@@ -143,6 +144,7 @@ pub fn features_from_segments(
         }
         if lines.len() < MAX_LINES {
             lines.push(line);
+            holes = Holes::NONE;
         }
     }
     lines.retain(|l| l.length() >= params.min_length);

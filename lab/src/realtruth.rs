@@ -38,8 +38,9 @@
 //! `no flags` is what `host-bridge extract LOG` does without options
 //! ([`no_flag_params`]: the defaults with σ and `max_range` from the data).
 //! The rows below it turn groups of the defaults' decisions off, each on
-//! top of the one before ([`crate::ablation`]): pairs of lines on a curve
-//! kept; then no anchor gate on the merges and no turn offsets in the fits'
+//! top of the one before ([`crate::ablation`]): `v3.0`, the merges
+//! refitting every beam between the lines ([`Params::V3_0`]); pairs of
+//! lines on a curve kept; then no anchor gate on the merges and no turn offsets in the fits'
 //! χ²; then windows of consecutive beams and no work bound on split before
 //! reject (the same figures as with every line of an arc kept too: no line
 //! of these logs is dropped as an arc); `v2` is [`Params::V2`] (no
@@ -221,6 +222,9 @@ pub const NO_ANCHOR_NO_OFFSETS: &str = ablation::NO_ANCHOR_NO_OFFSETS_NAME;
 /// of an arc kept too ([`crate::ablation::ARC_CHAINS_KEPT`]) gives the same
 /// figures: no line of them is dropped as an arc.
 pub const CONSECUTIVE_WINDOWS: &str = ablation::CONSECUTIVE_WINDOWS_NAME;
+/// Name of ALGORITHM.md v3.0's defaults on the data ([`Params::V3_0`]:
+/// the merges refit every beam between the lines).
+pub const V3_0_NO_FLAGS: &str = "v3.0 (--preset v3.0, σ per data)";
 /// Name of ALGORITHM.md v2's defaults on the data ([`Params::V2`]: no
 /// footprint weights, no merge across rejected segments either).
 pub const V2_NO_FLAGS: &str = "v2 (--preset v2, σ per data)";
@@ -253,6 +257,7 @@ pub fn methods() -> Vec<RealMethod> {
     let own = SigmaChoice::Base;
     vec![
         m(NO_FLAGS, Core, NoFlags, own),
+        g(V3_0_NO_FLAGS, |p| on_data(Params::V3_0, p)),
         g(ARC_PAIRS_KEPT, |p| on_data(ablation::ARC_PAIRS_KEPT, p)),
         g(NO_ANCHOR_NO_OFFSETS, |p| {
             on_data(ablation::NO_ANCHOR_NO_OFFSETS, p)

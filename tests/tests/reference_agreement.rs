@@ -19,9 +19,12 @@
 //!   angle and conditioning against the reference's intersection of the same
 //!   two lines.
 //!
-//! Which segments split before reject cuts, which lines merge and which are
-//! dropped (χ², length, σ_α, arcs) the reference does not decide: those
-//! decisions are the core's, and the lines they leave are checked.
+//! Which segments split before reject cuts, which lines merge, which gaps
+//! between merged lines their fit leaves out (`merge_own_beams`) and which
+//! lines are dropped (χ², length, σ_α, arcs) the reference does not decide:
+//! those decisions are the core's, and the lines they leave are checked
+//! (a merged line against the reference's fit of its usable beams less the
+//! gaps no piece covers that give the core's number of points).
 //!
 //! # Tolerances (measured first, then set with a margin of about 2–3)
 //!
@@ -403,6 +406,87 @@ fn compare_windows(
     }
 }
 
+/// The reference's fit of the beams of `l`: its usable beams, less the
+/// runs a merge left out (ALGORITHM.md §7.6 step 3, `merge_own_beams`).
+/// Which runs a merge leaves out is the core's decision, like which lines
+/// merge: the candidates are the runs of beams inside `l` that no fitted
+/// piece covers ([`uncovered_runs`]), and the reference fits every subset
+/// of at most `MAX_HOLES` of them that leaves the core's number of points, keeping the fit
+/// nearest the core's line in units of the tolerances (the lines without
+/// holes: the usable beams).
+fn reference_fit(
+    f: &Features,
+    l: &lms_core::Line,
+    raw: &[f64],
+    usable: &[bool],
+    geometry: RefGeometry,
+    fit: FitSettings,
+) -> Option<reference::RefLine> {
+    let (first, last) = (l.first as usize, l.last as usize);
+    let whole = reference::fit_line(raw, usable, geometry, first, last, fit);
+    if whole
+        .as_ref()
+        .is_some_and(|rl| rl.points == l.points as usize)
+    {
+        return whole;
+    }
+    let runs = uncovered_runs(f, first, last);
+    let mut best: Option<reference::RefLine> = None;
+    // A merged line leaves out at most MAX_HOLES runs.
+    let max_holes = lms_core::pipeline::line_fit::MAX_HOLES as u32;
+    for subset in 1u32..(1 << runs.len().min(16)) {
+        if subset.count_ones() > max_holes {
+            continue;
+        }
+        let mut own = usable.to_vec();
+        for (k, &(from, to)) in runs.iter().enumerate() {
+            if subset & (1 << k) != 0 {
+                own[from..=to].iter_mut().for_each(|u| *u = false);
+            }
+        }
+        let Some(rl) = reference::fit_line(raw, &own, geometry, first, last, fit) else {
+            continue;
+        };
+        // The deviation from the core's line in units of the tolerances.
+        let off = |x: &reference::RefLine| {
+            reference::wrap(l.alpha as f64 - x.alpha).abs() / LINE_ALPHA_TOL
+                + (l.r as f64 - x.r).abs() / (LINE_R_TOL * x.r.max(1.0))
+                + (l.chi2 as f64 - x.chi2).abs() / (LINE_CHI2_TOL * x.chi2.max(1.0))
+        };
+        if rl.points == l.points as usize && best.as_ref().is_none_or(|b| off(&rl) < off(b)) {
+            best = Some(rl);
+        }
+    }
+    best.or(whole)
+}
+
+/// The runs of beams strictly inside `first..=last` that no piece's fit
+/// covers (a piece's fit leaves out a beam it shares with a neighbour):
+/// where `D` broke a segment, or a corner beam.
+fn uncovered_runs(f: &Features, first: usize, last: usize) -> Vec<(usize, usize)> {
+    let segs = f.segments();
+    let covered = |j: usize| {
+        segs.iter().enumerate().any(|(k, s)| {
+            let shares_first = k > 0 && segs[k - 1].last == s.first;
+            let shares_last = segs.get(k + 1).is_some_and(|n| n.first == s.last);
+            let lo = s.first as usize + usize::from(shares_first);
+            let hi = (s.last as usize).saturating_sub(usize::from(shares_last));
+            (lo..=hi).contains(&j)
+        })
+    };
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for j in first + 1..last {
+        if covered(j) {
+            continue;
+        }
+        match runs.last_mut() {
+            Some(run) if run.1 + 1 == j => run.1 = j,
+            _ => runs.push((j, j)),
+        }
+    }
+    runs
+}
+
 /// §7.1–7.5 and §8 of the core's features: every line against the
 /// reference's fit of the same beams, every corner against the reference's
 /// intersection of the same two lines, and the corners where §8 puts them.
@@ -427,14 +511,7 @@ fn check_fits(
     for (k, l) in f.lines().iter().enumerate() {
         worst.lines += 1;
         let at = || format!("{label} line {k} ({}..={})", l.first, l.last);
-        let Some(rl) = reference::fit_line(
-            raw,
-            &usable,
-            geometry,
-            l.first as usize,
-            l.last as usize,
-            fit,
-        ) else {
+        let Some(rl) = reference_fit(f, l, raw, &usable, geometry, fit) else {
             failures.push(format!("{}: no reference fit", at()));
             continue;
         };

@@ -434,6 +434,8 @@ fields! {
         "Nested-model F test of the merges (0 off; host builds only)";
     arc_pairs, with_arc_pairs: bool, "bool", ANY, false,
         "Drop a pair of touching lines that a circle explains better";
+    merge_own_beams, with_merge_own_beams: bool, "bool", ANY, false,
+        "Merges refit the two lines' own beams, leaving out the beams between them";
 }
 
 /// The parameter named `name` (a field of [`Params`]).
@@ -452,13 +454,18 @@ pub struct Preset {
     pub params: Params,
 }
 
-/// The presets: `default` ([`Params::DEFAULT`]), `v2` ([`Params::V2`]) and
-/// `paper` ([`Params::PAPER`]).
-pub const PRESETS: [Preset; 3] = [
+/// The presets: `default` ([`Params::DEFAULT`]), `v3.0`
+/// ([`Params::V3_0`]), `v2` ([`Params::V2`]) and `paper` ([`Params::PAPER`]).
+pub const PRESETS: [Preset; 4] = [
     Preset {
         name: "default",
         summary: "For extraction: ALGORITHM.md v2 with the additions measured in docs/ALGORITHM.md (the defaults)",
         params: Params::DEFAULT,
+    },
+    Preset {
+        name: "v3.0",
+        summary: "For comparison with ALGORITHM.md v3.0: the defaults with the merges refitting every beam between the lines",
+        params: Params::V3_0,
     },
     Preset {
         name: "v2",
@@ -546,9 +553,10 @@ mod tests {
             turn_offsets: false,
             merge_f_test: 30.0,
             arc_pairs: false,
+            merge_own_beams: false,
         };
         assert_eq!(p, every);
-        assert_eq!(FIELDS.len(), 31);
+        assert_eq!(FIELDS.len(), 32);
     }
 
     #[test]

@@ -19,7 +19,7 @@ use crate::pipeline::arcs::mark_arcs;
 use crate::pipeline::bearings::TwoLevelBearings;
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
-use crate::pipeline::line_fit::{fit_piece, BearingTable, RawScan};
+use crate::pipeline::line_fit::{fit_piece, BearingTable, Holes, RawScan};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{EdgeList, Segmenter};
 use crate::pipeline::smoothing::{
@@ -417,6 +417,8 @@ fn fit_lines<B: BearingTable>(
     params: &Params,
     stats: &mut Stats,
 ) {
+    // The gaps the last line's merges left out of its fit (a few words).
+    let mut holes = Holes::NONE;
     for k in 0..f.segments.len() {
         let span = fit_span(&f.segments, k, params.fit_shared_points);
         let line = match fit_piece(scan, span, params.line_sigma()) {
@@ -433,7 +435,7 @@ fn fit_lines<B: BearingTable>(
         // Merge with the previous candidate where §7.6 allows it.
         if params.merge {
             if let Some(prev) = f.lines.last() {
-                if let Some(merged) = try_merge(scan, prev, &line, params) {
+                if let Some(merged) = try_merge(scan, prev, &line, params, &mut holes) {
                     stats.merges = stats.merges.saturating_add(1);
                     if let Some(slot) = f.lines.last_mut() {
                         *slot = merged;
@@ -444,6 +446,8 @@ fn fit_lines<B: BearingTable>(
         }
         if f.lines.push(line).is_err() {
             stats.line_overflow = stats.line_overflow.saturating_add(1);
+        } else {
+            holes = Holes::NONE;
         }
     }
     // Too short, then (beyond ALGORITHM.md) too uncertain to be useful:

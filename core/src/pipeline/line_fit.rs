@@ -161,8 +161,63 @@ pub fn fit_piece<B: BearingTable>(
     piece: Segment,
     sigma: f32,
 ) -> Result<Line, FitError> {
+    fit_piece_without(scan, piece, &Holes::NONE, sigma)
+}
+
+/// Most runs of beams a fit leaves out ([`Holes`]).
+pub const MAX_HOLES: usize = 4;
+
+/// Runs of beams a fit leaves out: the gaps between the lines a merged
+/// line is made of ([`crate::Params::merge_own_beams`]), at most
+/// [`MAX_HOLES`], each a half-open range `from..to` of beam indices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Holes {
+    runs: [(u16, u16); MAX_HOLES],
+    len: u8,
+}
+
+impl Holes {
+    /// No beam left out.
+    pub const NONE: Holes = Holes {
+        runs: [(0, 0); MAX_HOLES],
+        len: 0,
+    };
+
+    /// Leave out beams `from..to` too; `false` (nothing changed) if
+    /// [`MAX_HOLES`] runs are left out already.
+    pub fn push(&mut self, from: u16, to: u16) -> bool {
+        match self.runs.get_mut(usize::from(self.len)) {
+            Some(slot) => {
+                *slot = (from, to);
+                self.len += 1;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The runs left out, in the order pushed (a merge's gaps, in beam
+    /// order).
+    #[inline(always)]
+    fn runs(&self) -> &[(u16, u16)] {
+        self.runs.get(..usize::from(self.len)).unwrap_or_default()
+    }
+}
+
+/// [`fit_piece`] without the beams of `holes`: the merges' refit of the
+/// lines' own beams, the beams between them left out
+/// ([`crate::Params::merge_own_beams`]). The line still spans
+/// `piece.first..=piece.last`; its `points`, covariance and χ² are those
+/// of the beams fitted. A hole must lie inside the piece, not at its ends.
+pub fn fit_piece_without<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    piece: Segment,
+    holes: &Holes,
+    sigma: f32,
+) -> Result<Line, FitError> {
     let first = piece.first;
     let mut span = Span::new(scan, piece).ok_or(FitError::TooFewPoints)?;
+    span.holes = *holes;
     span.set_footprint(scan.footprint, sigma);
     // 1. Total least squares start.
     let (m, start) = span.total_least_squares()?;
@@ -205,6 +260,8 @@ struct Span<'a, B> {
     max_range: f32,
     /// `κ/σ` of the footprint weights (1/m·rad; 0: unweighted).
     kappa_per_sigma: f32,
+    /// Beams left out of the fit.
+    holes: Holes,
 }
 
 impl<B: BearingTable> RawScan<'_, B> {
@@ -261,6 +318,7 @@ impl<'a, B: BearingTable> Span<'a, B> {
             lo,
             max_range: scan.max_range,
             kappa_per_sigma: 0.0,
+            holes: Holes::NONE,
         })
     }
 
@@ -272,23 +330,41 @@ impl<'a, B: BearingTable> Span<'a, B> {
     }
 
     /// [`Self::each_valid`] with the beam's index `j` in the scan first.
+    /// The beams between the holes are swept run by run, so a fit without
+    /// holes is one sweep with no test of its own per beam.
     #[inline]
     fn each_valid_beam(&self, ca: f32, sa: f32, mut f: impl FnMut(usize, f32, f32, f32)) {
         let (max_range, lo) = (self.max_range, self.lo);
-        let (ranges, beams) = (self.ranges, self.beams);
-        self.bearings.sweep(
-            Sweep {
-                lo,
-                ranges,
-                beams,
-                normal: (ca, sa),
-            },
-            |i, d, b, c, s| {
-                if b.is_valid() && d < max_range {
-                    f(lo + i, d, c, s);
-                }
-            },
-        );
+        let n = self.ranges.len().min(self.beams.len());
+        let runs = self.holes.runs();
+        // Beams `start..end` (from `lo`) lie between two holes.
+        let mut start = 0usize;
+        for k in 0..=runs.len() {
+            let (end, next) = match runs.get(k) {
+                Some(&(from, to)) => (usize::from(from), usize::from(to)),
+                None => (lo + n, lo + n),
+            };
+            let end = end.saturating_sub(lo).min(n);
+            if let (Some(ranges), Some(beams)) =
+                (self.ranges.get(start..end), self.beams.get(start..end))
+            {
+                let first = lo + start;
+                self.bearings.sweep(
+                    Sweep {
+                        lo: first,
+                        ranges,
+                        beams,
+                        normal: (ca, sa),
+                    },
+                    |i, d, b, c, s| {
+                        if b.is_valid() && d < max_range {
+                            f(first + i, d, c, s);
+                        }
+                    },
+                );
+            }
+            start = start.max(next.saturating_sub(lo).min(n));
+        }
     }
 
     /// §7.1: the total-least-squares line through the valid points

@@ -7,7 +7,7 @@ use crate::features::{Line, Segment};
 use crate::maths::wrap_angle;
 use crate::params::Params;
 use crate::pipeline::line_fit::{
-    fit_piece, mahalanobis, parameter_distance, residual_sum, BearingTable, RawScan,
+    fit_piece_without, mahalanobis, parameter_distance, residual_sum, BearingTable, Holes, RawScan,
 };
 use crate::pipeline::smoothing::usable;
 
@@ -35,12 +35,16 @@ pub fn fit_span(segments: &[Segment], k: usize, fit_shared_points: bool) -> Segm
 /// beyond §7.6, stays within `merge_anchor_gate` of the larger line's own
 /// parameters: `anchored`). The union is refitted on `scan`, the scan
 /// the two lines were fitted on (its range limit, footprint term and
-/// turns).
+/// turns), without the beams of `holes` (the gaps inside `prev`, a merged
+/// line) and, with `merge_own_beams`, without the beams between the two
+/// across a gap of at most `merge_gap_beams` valid beams; on a merge that
+/// gap joins `holes` (if [`crate::pipeline::line_fit::MAX_HOLES`] allows).
 pub fn try_merge<B: BearingTable>(
     scan: &RawScan<'_, B>,
     prev: &Line,
     next: &Line,
     params: &Params,
+    holes: &mut Holes,
 ) -> Option<Line> {
     let gap_start = prev.last as usize + 1;
     let gap_end = next.first as usize; // exclusive
@@ -50,8 +54,8 @@ pub fn try_merge<B: BearingTable>(
             _ => false,
         })
         .count();
-    let gated = valid_between <= params.merge_gap_beams as usize
-        && parameter_distance(prev, next).is_some_and(|d| d < params.merge_gate);
+    let short_gap = valid_between <= params.merge_gap_beams as usize;
+    let gated = short_gap && parameter_distance(prev, next).is_some_and(|d| d < params.merge_gate);
     let vouched = gated || (params.merge_collinear && collinear_and_touching(prev, next, params));
     if !(vouched || params.bridge_merge) {
         return None;
@@ -61,7 +65,12 @@ pub fn try_merge<B: BearingTable>(
         first: prev.first,
         last: next.last,
     };
-    let merged = fit_piece(scan, union, sigma).ok()?;
+    // Beyond §7.6: the union of the lines' own beams across a short gap.
+    let mut own = *holes;
+    if params.merge_own_beams && gated && gap_end > gap_start {
+        own.push(prev.last.saturating_add(1), next.first);
+    }
+    let merged = fit_piece_without(scan, union, &own, sigma).ok()?;
     // A bridge (§10 (e)): each line's own beams must fit the union line.
     let fits = |part: &Line| part_chi2(part, &merged, turns).is_some_and(|c| c <= params.max_chi2);
     let larger = if next.points > prev.points {
@@ -73,7 +82,10 @@ pub fn try_merge<B: BearingTable>(
         && (vouched || (fits(prev) && fits(next)))
         && anchored(larger, &merged, params.merge_anchor_gate)
         && nested(prev, next, &merged, turns, params.merge_f_test))
-    .then_some(merged)
+    .then(|| {
+        *holes = own;
+        merged
+    })
 }
 
 /// Whether the union line `merged` stays within `gate` (χ²₂) of `larger`'s

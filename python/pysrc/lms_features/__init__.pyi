@@ -158,6 +158,8 @@ class Params:
     """Nested-model F test of the merges (0 off)."""
     arc_pairs: bool
     """Drop a pair of touching lines that a circle explains better."""
+    merge_own_beams: bool
+    """Merges refit the two lines' own beams, leaving out the beams between them."""
 
 @final
 class Frame:

@@ -5,7 +5,8 @@
 //!
 //! Pinned at the defaults, and at the defaults less some of their measured
 //! additions, so that each set stays reachable bit for bit:
-//! [`ARC_PAIRS_KEPT`] (pairs of lines on a curve kept), [`NO_ANCHOR_GATE`]
+//! `Params::V3_0` (the merges refitting every beam between the lines),
+//! [`ARC_PAIRS_KEPT`] (and pairs of lines on a curve kept), [`NO_ANCHOR_GATE`]
 //! (and no anchor gate on the merges, no turn offsets in the fits' χ²),
 //! [`CONSECUTIVE_WINDOWS`] (and the windows of §2–6 in every mode, no work
 //! bound on split before reject), [`ARCS_KEPT`] (and no lines of arcs
@@ -31,9 +32,11 @@ use feature_bits::{per_data_params, write_log_bits};
 use feature_bits::{write_log_bits_with, Fnv64};
 use lms_core::Params;
 
-/// The defaults with pairs of lines kept whatever a circle says of them.
+/// `Params::V3_0` (the defaults with the merges refitting every beam
+/// between the lines) with pairs of lines kept whatever a circle says of
+/// them.
 #[cfg(not(feature = "libm-trig"))]
-const ARC_PAIRS_KEPT: Params = Params::DEFAULT.with_arc_pairs(false);
+const ARC_PAIRS_KEPT: Params = Params::V3_0.with_arc_pairs(false);
 
 /// [`ARC_PAIRS_KEPT`] with no anchor gate on the merges and no turn offsets
 /// in the fits' χ².
@@ -91,6 +94,18 @@ fn log(stem: &str) -> PathBuf {
 /// 30 passes.
 #[cfg(not(feature = "libm-trig"))]
 const PINNED: [(&str, u64, usize); 7] = [
+    ("acapulco-corrected", 0x6b4fb7b476cf0741, 861),
+    ("belgioioso-corrected", 0xdbb83249a14d9650, 395),
+    ("csail-corrected", 0x82ff31945ffeae51, 406),
+    ("freiburg-101-corrected", 0x979ba687504629d8, 292),
+    ("freiburg-campus-corrected", 0x50aec1b8e05345ed, 2008),
+    ("intel-corrected", 0x5b967dabc42b171c, 910),
+    ("orebro-corrected", 0x1a565d843f54b931, 237),
+];
+
+/// The same at `Params::V3_0`.
+#[cfg(not(feature = "libm-trig"))]
+const PINNED_V3_0: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x3fd2675e26bb39dc, 861),
     ("belgioioso-corrected", 0x3908bce88a7db6d7, 395),
     ("csail-corrected", 0x0a89b0ef9fe8ed12, 406),
@@ -262,6 +277,17 @@ fn feature_bits_of_every_shared_log_are_pinned() {
 
 #[cfg(not(feature = "libm-trig"))]
 #[test]
+fn feature_bits_of_every_shared_log_at_v3_0_are_pinned() {
+    let wrong = check_pins(&PINNED_V3_0, &Params::V3_0, false);
+    assert!(
+        wrong.is_empty(),
+        "v3.0 results changed:\n{}",
+        wrong.join("\n")
+    );
+}
+
+#[cfg(not(feature = "libm-trig"))]
+#[test]
 fn feature_bits_of_every_shared_log_with_arc_pairs_kept_are_pinned() {
     let wrong = check_pins(&PINNED_ARC_PAIRS_KEPT, &ARC_PAIRS_KEPT, false);
     assert!(
@@ -326,11 +352,11 @@ fn a_changed_bit_changes_the_digest() {
     assert_eq!(a.0, PINNED[6].1);
 }
 
-/// (log stem, σ (m), `max_range` (m), digests: defaults,
+/// (log stem, σ (m), `max_range` (m), digests: defaults, `Params::V3_0`,
 /// [`ARC_PAIRS_KEPT`], [`NO_ANCHOR_GATE`], [`CONSECUTIVE_WINDOWS`],
 /// [`ARCS_KEPT`], v2).
 #[cfg(not(feature = "libm-trig"))]
-type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64, u64);
+type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64, u64, u64);
 
 /// With the parameters `host-bridge extract LOG` uses when no flag is given
 /// (σ and `max_range` from the survey of the log,
@@ -341,8 +367,8 @@ type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64, u64);
 /// values. (Örebro has no range beyond its limit: its digest is the one at
 /// `Params::default`.) `host-bridge`'s
 /// `extract_cli::per_data_defaults_match_the_pinned_feature_bits` checks
-/// that its `defaults::for_log` gives these same parameters. The last five
-/// columns are the digests with [`ARC_PAIRS_KEPT`], [`NO_ANCHOR_GATE`],
+/// that its `defaults::for_log` gives these same parameters. The last six
+/// columns are the digests with `Params::V3_0`, [`ARC_PAIRS_KEPT`], [`NO_ANCHOR_GATE`],
 /// [`CONSECUTIVE_WINDOWS`], [`ARCS_KEPT`] and `Params::V2` otherwise, the
 /// last two without the `rejected_arc` counter ([`WithoutArcCounter`]).
 #[cfg(not(feature = "libm-trig"))]
@@ -351,6 +377,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "acapulco-corrected",
         0.030000001,
         50.0,
+        0xa28474898e60848d,
         0xd7e2f9506260af05,
         0xff362eae488123ab,
         0x456597c9d8b236ef,
@@ -362,6 +389,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "belgioioso-corrected",
         0.01,
         81.83,
+        0xdd406035413ebaf9,
         0x898fc07de11d58a7,
         0x898fc07de11d58a7,
         0x04407f65d761c00e,
@@ -373,6 +401,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "csail-corrected",
         0.01,
         81.83,
+        0x9857112cb3c22c4f,
         0x82e4874b6425520e,
         0x82e4874b6425520e,
         0x4373d6154e313a6d,
@@ -384,6 +413,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "freiburg-101-corrected",
         0.01,
         81.83,
+        0x07e11f6469be26d5,
         0xd29bd4544d235609,
         0xd29bd4544d235609,
         0xb63357291e3ad9e8,
@@ -395,6 +425,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "freiburg-campus-corrected",
         0.01,
         81.83,
+        0x93983f3e38838933,
         0xd1d07c6f0d1ea572,
         0x02ae4a2203de1483,
         0x1710d46adb43c02b,
@@ -406,6 +437,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "intel-corrected",
         0.01,
         81.83,
+        0x02d7ab01256cc314,
         0x5d872066b9cfec79,
         0xf5959bee1126b7fc,
         0xe3cf0b3e0d27c2db,
@@ -417,6 +449,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "orebro-corrected",
         0.005,
         32.759,
+        0x1a565d843f54b931,
         0xe720b6fb012a9a3f,
         0xe720b6fb012a9a3f,
         0xee57028d62c2f364,
@@ -430,8 +463,18 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
 #[test]
 fn feature_bits_at_the_per_data_defaults_are_pinned() {
     let mut wrong = Vec::new();
-    for (stem, sigma, max_range, pin, pin_pairs, pin_gate, pin_windows, pin_arcs, pin_v2) in
-        PINNED_PER_DATA
+    for (
+        stem,
+        sigma,
+        max_range,
+        pin,
+        pin_v3_0,
+        pin_pairs,
+        pin_gate,
+        pin_windows,
+        pin_arcs,
+        pin_v2,
+    ) in PINNED_PER_DATA
     {
         let path = log(stem);
         let params = per_data_params(&path).unwrap();
@@ -448,6 +491,7 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
         let v2 = arcs.with_bridge_merge(false).with_footprint(0.0);
         assert_eq!(v2, Params::V2.with_sigma(sigma).with_max_range(max_range));
         let (d, _, _) = digests(&path, &params);
+        let (d_v3_0, _, _) = digests(&path, &on_data(Params::V3_0));
         let (d_pairs, _, _) = digests(&path, &pairs);
         let (d_gate, _, _) = digests(&path, &gate);
         let (d_windows, d_windows_without, _) = digests(&path, &windows);
@@ -460,14 +504,15 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
         );
         let (_, d2, _) = digests(&path, &v2);
         println!(
-            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d_pairs:016x}, 0x{d_gate:016x}, \
-             0x{d_windows:016x}, 0x{d_arcs:016x}, 0x{d2:016x}),",
+            "(\"{stem}\", {:?}, {:?}, 0x{d:016x}, 0x{d_v3_0:016x}, 0x{d_pairs:016x}, \
+             0x{d_gate:016x}, 0x{d_windows:016x}, 0x{d_arcs:016x}, 0x{d2:016x}),",
             params.sigma, params.max_range
         );
         if (
             params.sigma,
             params.max_range,
             d,
+            d_v3_0,
             d_pairs,
             d_gate,
             d_windows,
@@ -477,6 +522,7 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
             sigma,
             max_range,
             pin,
+            pin_v3_0,
             pin_pairs,
             pin_gate,
             pin_windows,
@@ -484,10 +530,11 @@ fn feature_bits_at_the_per_data_defaults_are_pinned() {
             pin_v2,
         ) {
             wrong.push(format!(
-                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, arc pairs kept 0x{d_pairs:016x}, \
+                "{stem}: σ {} m, max_range {} m, 0x{d:016x}, v3.0 0x{d_v3_0:016x}, \
+                 arc pairs kept 0x{d_pairs:016x}, \
                  no anchor gate 0x{d_gate:016x}, consecutive windows 0x{d_windows:016x}, \
                  arcs kept 0x{d_arcs:016x}, v2 0x{d2:016x}; pinned {sigma}, {max_range}, \
-                 0x{pin:016x}, 0x{pin_pairs:016x}, 0x{pin_gate:016x}, 0x{pin_windows:016x}, \
+                 0x{pin:016x}, 0x{pin_v3_0:016x}, 0x{pin_pairs:016x}, 0x{pin_gate:016x}, 0x{pin_windows:016x}, \
                  0x{pin_arcs:016x}, 0x{pin_v2:016x}",
                 params.sigma, params.max_range
             ));
