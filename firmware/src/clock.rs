@@ -12,6 +12,7 @@
 //! per instruction) and runs are deterministic.
 
 use core::cell::Cell;
+use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::{SCB, SYST};
@@ -33,17 +34,22 @@ pub fn start(mut syst: SYST, core_hz: u32) {
     syst.enable_counter();
 }
 
+/// The SysTick count's low 32 bits, read without a critical section.
+static TICKS: AtomicU32 = AtomicU32::new(0);
+
 #[exception]
 fn SysTick() {
     critical_section::with(|cs| {
         let ms = MILLIS.borrow(cs);
         ms.set(ms.get().wrapping_add(1));
     });
+    TICKS.fetch_add(1, Ordering::Relaxed);
 }
 
-/// Milliseconds since [`start`]: the SysTick count.
-pub fn millis() -> u64 {
-    critical_section::with(|cs| MILLIS.borrow(cs).get())
+/// SysTicks since [`start`], modulo 2³² (milliseconds; compare with
+/// `wrapping_sub`): one load, for the loop's check after every interrupt.
+pub fn ticks() -> u32 {
+    TICKS.load(Ordering::Relaxed)
 }
 
 /// Microseconds since [`start`] (monotonic, 1 µs resolution).

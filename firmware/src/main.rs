@@ -135,17 +135,14 @@ fn main() -> ! {
     );
     let mut watch = Watch::default();
     let mut pace = Pace::default();
-    let mut due = true;
     loop {
         fault::feed();
-        if due {
-            pace.polled_ms = clock::millis();
-            poll(app, &mut board, &mut watch);
-            watch.sensor_queue(app, &board);
-            watch.bring_up(app);
-        }
+        pace.polled_at = clock::ticks();
+        poll(app, &mut board, &mut watch);
+        watch.sensor_queue(app, &board);
+        watch.bring_up(app);
         serve_console(app, &mut board, &watch);
-        due = pace.sleep_unless_due(&board);
+        pace.sleep_until_due(&board);
     }
 }
 
@@ -277,35 +274,42 @@ fn log_report(r: &Report) {
 
 /// When the loop runs the application: not on every interrupt (a byte
 /// from the sensor, a byte sent to the host), but once a read chunk of
-/// sensor bytes waits, a host or console byte waits, or a SysTick has
-/// passed since the last poll. A telegram's last bytes wait at most 1 ms;
-/// the sensor queue holds 20 ms of a 500 kBd stream.
+/// sensor bytes waits, a host or console byte waits, a SysTick has passed
+/// with sensor bytes waiting (a telegram's last bytes wait at most 1 ms),
+/// or [`IDLE_POLL_MS`] have passed (the time-outs, the host line's
+/// output, the watchdog). The sensor queue holds 20 ms of a 500 kBd
+/// stream, the host queue 16 ms.
 #[derive(Default)]
 struct Pace {
-    /// [`clock::millis`] at the last poll.
-    polled_ms: u64,
+    /// [`clock::ticks`] at the last poll.
+    polled_at: u32,
 }
+
+/// Milliseconds between polls while no sensor byte waits.
+const IDLE_POLL_MS: u32 = 4;
 
 impl Pace {
     fn due(&self, board: &board::Board) -> bool {
-        clock::millis() != self.polled_ms
-            || board.sensor.rx_pending() >= READ_CHUNK
+        let sensor = board.sensor.rx_pending();
+        let since = clock::ticks().wrapping_sub(self.polled_at);
+        sensor >= READ_CHUNK
+            || (sensor > 0 && since > 0)
+            || since >= IDLE_POLL_MS
             || board.host.rx_pending() > 0
             || board.control.rx_pending() > 0
     }
 
-    /// Whether the application is due; if not, sleep until the next
-    /// interrupt (at the latest the next SysTick, 1 ms) and say no: the
-    /// next round asks again. Interrupts are masked while deciding, so one
-    /// that arrives in between still wakes WFI.
-    fn sleep_unless_due(&self, board: &board::Board) -> bool {
-        critical_section::with(|_| {
+    /// Sleep, interrupt after interrupt, until the application is due.
+    /// Interrupts are masked while deciding, so one that arrives in between
+    /// still wakes WFI.
+    fn sleep_until_due(&self, board: &board::Board) {
+        while critical_section::with(|_| {
             let due = self.due(board);
             if !due {
                 cortex_m::asm::wfi();
             }
-            due
-        })
+            !due
+        }) {}
     }
 }
 
