@@ -448,7 +448,7 @@ fn diagnose<B: BearingTable>(
     // holes, if merged lines, are not known here: their beams are fitted).
     let mut hole = Holes::NONE;
     if p.merge_own_beams && gap_ok && gate_ok {
-        hole.push(a.last + 1, b.first);
+        hole.push(a.last + 1..b.first);
     }
     let Ok(merged) = fit_piece_without(scan, union, &hole, p.line_sigma()) else {
         fails.add("union fit degenerate");

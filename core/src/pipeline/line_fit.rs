@@ -183,12 +183,12 @@ impl Holes {
         len: 0,
     };
 
-    /// Leave out beams `from..to` too; `false` (nothing changed) if
+    /// Leave out the beams of `gap` too; `false` (nothing changed) if
     /// [`MAX_HOLES`] runs are left out already.
-    pub fn push(&mut self, from: u16, to: u16) -> bool {
+    pub fn push(&mut self, gap: core::ops::Range<u16>) -> bool {
         match self.runs.get_mut(usize::from(self.len)) {
             Some(slot) => {
-                *slot = (from, to);
+                *slot = (gap.start, gap.end);
                 self.len += 1;
                 true
             }

@@ -68,7 +68,7 @@ pub fn try_merge<B: BearingTable>(
     // Beyond §7.6: the union of the lines' own beams across a short gap.
     let mut own = *holes;
     if params.merge_own_beams && gated && gap_end > gap_start {
-        own.push(prev.last.saturating_add(1), next.first);
+        own.push(prev.last.saturating_add(1)..next.first);
     }
     let merged = fit_piece_without(scan, union, &own, sigma).ok()?;
     // A bridge (§10 (e)): each line's own beams must fit the union line.
