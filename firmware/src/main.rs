@@ -57,7 +57,7 @@ mod app {
     /// flash image, nothing copied at boot); [`start`] configures it in place.
     pub const INITIAL: App = CoProcessor::unconfigured();
 
-    /// The defaults (docs/ALGORITHM.md v3) with the passes of this build,
+    /// The defaults (docs/ALGORITHM.md v3.1) with the passes of this build,
     /// validated at compile time
     /// (an invalid setting fails the build).
     const PARAMS: ValidParams = {
