@@ -8,21 +8,12 @@
 use std::path::Path;
 
 use anyhow::Result;
-use lms_core::Params;
 use lms_lab::maptruth::TruthConfig;
-use lms_lab::realtruth::{
-    methods, pooled_over_logs, pooled_table, Base, RealKind, RealMethod, SigmaChoice, ORACLE,
-};
+use lms_lab::realtruth::{methods, pooled_over_logs, pooled_table, RealMethod, ORACLE};
 
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
-    let m = |name, adjust: fn(Params) -> Params| RealMethod {
-        name,
-        kind: RealKind::Core,
-        base: Base::NoFlags,
-        sigma: SigmaChoice::Base,
-        adjust,
-    };
+    let m = RealMethod::no_flags_with;
     let mut ms = vec![
         m("defaults (max_alpha_sd_deg=1.67)", |p| p),
         m("max_alpha_sd_deg=1.0", |p| p.with_max_alpha_sd_deg(1.0)),

@@ -16,7 +16,7 @@ use lms_lab::baselines::run_core;
 use lms_lab::maptruth::TruthConfig;
 use lms_lab::metrics::{scan_truth, Gates, Tally};
 use lms_lab::realistic::{realistic_model, sample, DELTA};
-use lms_lab::realtruth::{run_log, Base, RealKind, RealMethod, RealTally, SigmaChoice};
+use lms_lab::realtruth::{run_log, RealMethod, RealTally};
 use lms_lab::scenes::{self, Family, NoiseSpec};
 use lms_lab::sweep::Adjust;
 
@@ -117,13 +117,7 @@ fn main() -> Result<()> {
     let adjust: Vec<Adjust> = vs.iter().map(|v| v.1).collect();
     let methods: Vec<RealMethod> = vs
         .iter()
-        .map(|&(name, adjust)| RealMethod {
-            name,
-            kind: RealKind::Core,
-            base: Base::NoFlags,
-            sigma: SigmaChoice::Base,
-            adjust,
-        })
+        .map(|&(name, adjust)| RealMethod::no_flags_with(name, adjust))
         .collect();
     let cfg = TruthConfig::settled();
     let mut pooled = vec![RealTally::default(); vs.len()];

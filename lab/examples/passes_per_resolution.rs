@@ -20,7 +20,7 @@ use anyhow::Result;
 use host_bridge::carmen::{self, UnitMode};
 use lms_lab::baselines::run_core;
 use lms_lab::maptruth::TruthConfig;
-use lms_lab::realtruth::{run_log, Base, RealKind, RealMethod, RealTally, SigmaChoice};
+use lms_lab::realtruth::{run_log, RealMethod, RealTally};
 use lms_lab::sweep::{synthetic_table, Adjust};
 
 /// The variants: the defaults (30 passes) and fewer passes.
@@ -100,13 +100,7 @@ fn main() -> Result<()> {
     let all_names: Vec<&str> = all.iter().map(|v| v.0).collect();
     let methods: Vec<RealMethod> = all
         .iter()
-        .map(|&(name, adjust)| RealMethod {
-            name,
-            kind: RealKind::Core,
-            base: Base::NoFlags,
-            sigma: SigmaChoice::Base,
-            adjust,
-        })
+        .map(|&(name, adjust)| RealMethod::no_flags_with(name, adjust))
         .collect();
     let cfg = TruthConfig::settled();
     // Pooled: [0] 1° logs, [1] 0.5° logs; per variant.

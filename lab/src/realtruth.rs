@@ -193,6 +193,17 @@ pub struct RealMethod {
 }
 
 impl RealMethod {
+    /// The core at the no-flag parameters on the data, changed by `adjust`.
+    pub fn no_flags_with(name: &'static str, adjust: fn(Params) -> Params) -> Self {
+        RealMethod {
+            name,
+            kind: RealKind::Core,
+            base: Base::NoFlags,
+            sigma: SigmaChoice::Base,
+            adjust,
+        }
+    }
+
     /// The parameters on a log in `unit` whose no-flag parameters are `no_flags`.
     pub fn params(&self, unit: Unit, no_flags: &Params) -> Params {
         let base = match self.base {
@@ -247,10 +258,7 @@ pub fn methods() -> Vec<RealMethod> {
         adjust: |p| p,
     };
     // The defaults per data with changes (docs/DESIGN.md).
-    let g = |name, adjust| RealMethod {
-        adjust,
-        ..m(name, RealKind::Core, Base::NoFlags, SigmaChoice::Base)
-    };
+    let g = RealMethod::no_flags_with;
     use Base::{NoFlags, Paper};
     use RealKind::*;
     use SigmaChoice::{ByUnit, Fixed};
