@@ -95,7 +95,7 @@ fn curvature_evidence(s: &Sample, l: &Line, sigma: f64) -> f64 {
         .filter_map(|j| s.truth.hits.get(j).copied().flatten())
         .map(|h| [h.point.x, h.point.y])
         .collect();
-    let (alpha, r) = lms_lab::maptruth::tls(&pts);
+    let (alpha, r) = lms_lab::metrics::tls(&pts);
     pts.iter()
         .map(|q| (q[0] * alpha.cos() + q[1] * alpha.sin() - r).powi(2))
         .sum::<f64>()

@@ -327,7 +327,7 @@ fn fragment_pairs(
                     [d * phi.cos(), d * phi.sin()]
                 })
                 .collect();
-            let (alpha, r) = lms_lab::maptruth::tls(&pts);
+            let (alpha, r) = lms_lab::metrics::tls(&pts);
             let rss: f64 = pts
                 .iter()
                 .map(|q| (q[0] * alpha.cos() + q[1] * alpha.sin() - r).powi(2))

@@ -80,6 +80,7 @@ use std::collections::{BinaryHeap, HashMap};
 
 use host_bridge::carmen::Scan;
 
+use crate::metrics::{centroid, tls};
 use crate::realtruth::{gate_offsets, within_gates, ScoredLine};
 
 /// Parameters of the map and of the per-frame truth.
@@ -338,31 +339,6 @@ pub fn occupied_cells_at(
             frames,
         })
         .collect()
-}
-
-/// Mean of the points `pts` (the origin for none).
-pub fn centroid(pts: &[[f64; 2]]) -> [f64; 2] {
-    let n = pts.len().max(1) as f64;
-    let (mx, my) = pts
-        .iter()
-        .fold((0.0, 0.0), |(a, b), p| (a + p[0] / n, b + p[1] / n));
-    [mx, my]
-}
-
-/// Total-least-squares line `(α, ρ)` through `pts`.
-pub fn tls(pts: &[[f64; 2]]) -> (f64, f64) {
-    let [mx, my] = centroid(pts);
-    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
-    for p in pts {
-        let (dx, dy) = (p[0] - mx, p[1] - my);
-        sxx += dx * dx;
-        syy += dy * dy;
-        sxy += dx * dy;
-    }
-    // Normal = eigenvector of the smaller eigenvalue of the scatter matrix.
-    let alpha = 0.5 * (-2.0 * sxy).atan2(syy - sxx);
-    let rho = mx * alpha.cos() + my * alpha.sin();
-    (alpha, rho)
 }
 
 /// A consensus fit of the points `pts` (sorted along their line): of the

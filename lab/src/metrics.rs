@@ -682,22 +682,36 @@ pub fn straightness_chi2(
     Some(worst)
 }
 
-/// The orthogonal least-squares line `x·cos α + y·sin α = r` (r ≥ 0)
-/// through `points` (at least two).
-pub fn orthogonal_fit(points: impl Iterator<Item = (f64, f64)>) -> (f64, f64) {
-    let p: Vec<(f64, f64)> = points.collect();
-    let n = p.len().max(1) as f64;
-    let mx = p.iter().map(|q| q.0).sum::<f64>() / n;
-    let my = p.iter().map(|q| q.1).sum::<f64>() / n;
+/// Mean of the points `pts` (the origin for none).
+pub fn centroid(pts: &[[f64; 2]]) -> [f64; 2] {
+    let n = pts.len().max(1) as f64;
+    let (mx, my) = pts
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p[0] / n, b + p[1] / n));
+    [mx, my]
+}
+
+/// Total-least-squares line `(α, ρ)` through `pts`.
+pub fn tls(pts: &[[f64; 2]]) -> (f64, f64) {
+    let [mx, my] = centroid(pts);
     let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
-    for &(x, y) in &p {
-        let (dx, dy) = (x - mx, y - my);
+    for p in pts {
+        let (dx, dy) = (p[0] - mx, p[1] - my);
         sxx += dx * dx;
         syy += dy * dy;
         sxy += dx * dy;
     }
+    // Normal = eigenvector of the smaller eigenvalue of the scatter matrix.
     let alpha = 0.5 * (-2.0 * sxy).atan2(syy - sxx);
-    let r = mx * alpha.cos() + my * alpha.sin();
+    let rho = mx * alpha.cos() + my * alpha.sin();
+    (alpha, rho)
+}
+
+/// [`tls`] through `points` (at least two) as `x·cos α + y·sin α = r`
+/// with r ≥ 0.
+pub fn orthogonal_fit(points: impl Iterator<Item = (f64, f64)>) -> (f64, f64) {
+    let p: Vec<[f64; 2]> = points.map(|(x, y)| [x, y]).collect();
+    let (alpha, r) = tls(&p);
     if r < 0.0 {
         (wrap_angle(alpha + std::f64::consts::PI), -r)
     } else {
