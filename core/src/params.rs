@@ -10,7 +10,7 @@ pub use data::{max_range_of, sigma_for_step, DataProfile, DataSurvey, RangeMode}
 pub use table::{field, preset, Field, Preset, Range, Value, FIELDS, HOST_ONLY, PRESETS};
 
 /// All tunable parameters. Start from a preset ([`Params::DEFAULT`],
-/// [`Params::V3_0`], [`Params::V2`], [`Params::PAPER`]) and change fields with the `const`
+/// [`Params::V3_1`], [`Params::V3_0`], [`Params::V2`], [`Params::PAPER`]) and change fields with the `const`
 /// setters, e.g. `Params::DEFAULT.with_iterations(5).with_tau(9.0)`;
 /// [`Params::validate`] refuses nonsense and gives the [`ValidParams`] the
 /// pipeline runs with. Each field's name, unit, range and meaning are
@@ -23,9 +23,9 @@ pub struct Params {
     pub sigma: f32,
     /// Process noise `q` (m²), the second scale parameter. Default 0.
     pub q: f32,
-    /// Number of smoothing passes, the first scale parameter. Default 30, at least 1.
+    /// Number of smoothing passes, the first scale parameter. Default 6, at least 1.
     pub iterations: u16,
-    /// χ² gate on `D` for segmentation (§6). Default 9.
+    /// χ² gate on `D` for segmentation (§6). Default 12.
     pub tau: f32,
     /// Smallest segment kept, in points (§6). Default 5, at least 3.
     pub min_points: u16,
@@ -269,12 +269,13 @@ impl Params {
     /// (`merge_collinear`, `max_alpha_sd_deg`, `bridge_merge` and
     /// `footprint` (§10 (e) and (f)), `arc_chain`, `same_turn_windows`,
     /// `split_budget`, `merge_anchor_gate`, `turn_offsets`, `arc_pairs` and
-    /// `merge_own_beams`).
+    /// `merge_own_beams`), and the scale the MCU keeps up with: 6 passes
+    /// with the segmentation gate τ = 12.
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
-        iterations: 30,
-        tau: 9.0,
+        iterations: 6,
+        tau: 12.0,
         min_points: 5,
         max_chi2: 4.0,
         min_length: 0.1,
@@ -305,12 +306,21 @@ impl Params {
         merge_own_beams: true,
     };
 
-    /// The defaults with the merges refitting every usable beam from the
-    /// first line's first to the second line's last (preset `v3.0`,
+    /// The defaults at 30 smoothing passes with the segmentation gate τ = 9
+    /// (preset `v3.1`): ALGORITHM.md v3.1, too slow for the MCU to keep up
+    /// with the sensor.
+    pub const V3_1: Params = Params {
+        iterations: 30,
+        tau: 9.0,
+        ..Params::DEFAULT
+    };
+
+    /// [`Params::V3_1`] with the merges refitting every usable beam from
+    /// the first line's first to the second line's last (preset `v3.0`,
     /// `merge_own_beams = false`): ALGORITHM.md v3.0.
     pub const V3_0: Params = Params {
         merge_own_beams: false,
-        ..Params::DEFAULT
+        ..Params::V3_1
     };
 
     /// ALGORITHM.md v2 (preset `v2`) with `merge_collinear` and the σ_α
@@ -327,7 +337,7 @@ impl Params {
         turn_offsets: false,
         arc_pairs: false,
         merge_own_beams: false,
-        ..Params::DEFAULT
+        ..Params::V3_1
     };
 
     /// The seed paper's method, ALGORITHM.md v1 (preset `paper`): [`Params::V2`]

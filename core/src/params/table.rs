@@ -454,17 +454,23 @@ pub struct Preset {
     pub params: Params,
 }
 
-/// The presets: `default` ([`Params::DEFAULT`]), `v3.0`
-/// ([`Params::V3_0`]), `v2` ([`Params::V2`]) and `paper` ([`Params::PAPER`]).
-pub const PRESETS: [Preset; 4] = [
+/// The presets: `default` ([`Params::DEFAULT`]), `v3.1` ([`Params::V3_1`]),
+/// `v3.0` ([`Params::V3_0`]), `v2` ([`Params::V2`]) and `paper`
+/// ([`Params::PAPER`]).
+pub const PRESETS: [Preset; 5] = [
     Preset {
         name: "default",
         summary: "For extraction: ALGORITHM.md v2 with the additions measured in docs/ALGORITHM.md (the defaults)",
         params: Params::DEFAULT,
     },
     Preset {
+        name: "v3.1",
+        summary: "For comparison with ALGORITHM.md v3.1: the defaults at 30 smoothing passes and tau 9 (too slow for the MCU)",
+        params: Params::V3_1,
+    },
+    Preset {
         name: "v3.0",
-        summary: "For comparison with ALGORITHM.md v3.0: the defaults with the merges refitting every beam between the lines",
+        summary: "For comparison with ALGORITHM.md v3.0: v3.1 with the merges refitting every beam between the lines",
         params: Params::V3_0,
     },
     Preset {
