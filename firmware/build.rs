@@ -29,16 +29,28 @@ fn main() {
             .expect("LMS_EXIT_AFTER_SCANS must be a whole number"),
         Err(_) => 100,
     };
-    // Smoothing passes (the first scale parameter) of this build: the
-    // default of ALGORITHM.md unless `LMS_ITERATIONS` says otherwise (the
-    // budget measurements build with 1 and 30).
+    // The parameters of this build: a preset of the core (`LMS_PRESET`,
+    // default `default`), with its smoothing passes replaced where
+    // `LMS_ITERATIONS` gives them (the budget measurements build with 1).
+    println!("cargo:rerun-if-env-changed=LMS_PRESET");
+    let preset = match env::var("LMS_PRESET").as_deref().map(str::trim) {
+        Ok("default") | Err(_) => "DEFAULT",
+        Ok("v3.1") => "V3_1",
+        Ok("v3.0") => "V3_0",
+        Ok("v2") => "V2",
+        Ok("paper") => "PAPER",
+        Ok(other) => panic!("LMS_PRESET must be default, v3.1, v3.0, v2 or paper, not {other}"),
+    };
     println!("cargo:rerun-if-env-changed=LMS_ITERATIONS");
-    let iterations: u16 = match env::var("LMS_ITERATIONS") {
-        Ok(s) => s
-            .trim()
-            .parse()
-            .expect("LMS_ITERATIONS must be a whole number 1..=1000"),
-        Err(_) => 30,
+    let iterations = match env::var("LMS_ITERATIONS") {
+        Ok(s) => {
+            let n: u16 = s
+                .trim()
+                .parse()
+                .expect("LMS_ITERATIONS must be a whole number 1..=1000");
+            format!("Some({n})")
+        }
+        Err(_) => "None".to_string(),
     };
     // The scan variant the co-processor brings the LMS up with until its
     // client sets one (`3B`): 180°/0.5° unless `LMS_VARIANT` (FOV/RES in
@@ -71,8 +83,10 @@ fn main() {
         format!(
             "/// Scans after which an `exit-after-scans` build exits (`LMS_EXIT_AFTER_SCANS` at build time).\n\
              pub const EXIT_AFTER_SCANS: u32 = {scans};\n\
-             /// Smoothing passes (`LMS_ITERATIONS` at build time, default 30).\n\
-             pub const ITERATIONS: u16 = {iterations};\n\
+             /// The preset the parameters start from (`LMS_PRESET` at build time, default `default`).\n\
+             pub const PRESET: lms_core::Params = lms_core::Params::{preset};\n\
+             /// Smoothing passes instead of the preset's (`LMS_ITERATIONS` at build time; `None`: the preset's).\n\
+             pub const ITERATIONS: Option<u16> = {iterations};\n\
              /// The board's crystal (`LMS_HSE_HZ` at build time, default 8 MHz).\n\
              pub const HSE_HZ: u32 = {hse_hz};\n\
              /// The scan variant the LMS is brought up with (`LMS_VARIANT` at build time, default 180/0.5).\n\

@@ -407,7 +407,7 @@ int lms_variant_for_beams(size_t n, LmsVariant *out);
 // `max_range` from its data.
 struct LmsParams lms_params_default(void);
 
-// Write the preset `name` (`"default"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
+// Write the preset `name` (`"default"`, `"v3.1"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
 // `LMS_ERR_PRESET` for another name (`*out` unchanged).
 //
 // # Safety

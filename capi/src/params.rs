@@ -182,7 +182,7 @@ pub extern "C" fn lms_params_default() -> LmsParams {
     LmsParams::from(&Params::DEFAULT)
 }
 
-/// Write the preset `name` (`"default"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
+/// Write the preset `name` (`"default"`, `"v3.1"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
 /// `LMS_ERR_PRESET` for another name (`*out` unchanged).
 ///
 /// # Safety

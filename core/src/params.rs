@@ -23,7 +23,7 @@ pub struct Params {
     pub sigma: f32,
     /// Process noise `q` (m²), the second scale parameter. Default 0.
     pub q: f32,
-    /// Number of smoothing passes, the first scale parameter. Default 6, at least 1.
+    /// Number of smoothing passes, the first scale parameter. Default 5, at least 1.
     pub iterations: u16,
     /// χ² gate on `D` for segmentation (§6). Default 12.
     pub tau: f32,
@@ -269,12 +269,12 @@ impl Params {
     /// (`merge_collinear`, `max_alpha_sd_deg`, `bridge_merge` and
     /// `footprint` (§10 (e) and (f)), `arc_chain`, `same_turn_windows`,
     /// `split_budget`, `merge_anchor_gate`, `turn_offsets`, `arc_pairs` and
-    /// `merge_own_beams`), and the scale the MCU keeps up with: 6 passes
+    /// `merge_own_beams`), and the scale the MCU keeps up with: 5 passes
     /// with the segmentation gate τ = 12.
     pub const DEFAULT: Params = Params {
         sigma: 0.005,
         q: 0.0,
-        iterations: 6,
+        iterations: 5,
         tau: 12.0,
         min_points: 5,
         max_chi2: 4.0,

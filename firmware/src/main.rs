@@ -57,12 +57,14 @@ mod app {
     /// flash image, nothing copied at boot); [`start`] configures it in place.
     pub const INITIAL: App = CoProcessor::unconfigured();
 
-    /// The defaults (docs/ALGORITHM.md v3.1) with the passes of this build,
-    /// validated at compile time
-    /// (an invalid setting fails the build).
+    /// The parameters of this build: the defaults (docs/ALGORITHM.md) or
+    /// the preset `LMS_PRESET`, with the passes `LMS_ITERATIONS` if given,
+    /// validated at compile time (an invalid setting fails the build).
     const PARAMS: ValidParams = {
-        let mut p = Params::DEFAULT;
-        p.iterations = crate::ITERATIONS;
+        let p: Params = match crate::ITERATIONS {
+            Some(n) => crate::PRESET.with_iterations(n),
+            None => crate::PRESET,
+        };
         match p.validate() {
             Ok(valid) => valid,
             Err(_) => panic!("the build's parameters are invalid (LMS_ITERATIONS?)"),

@@ -14,7 +14,7 @@ NAMES = [name for name, _, _ in lf.PARAMETERS]
 
 def test_the_table_is_the_cores():
     assert len(NAMES) == 32 and NAMES[:4] == ["sigma", "q", "iterations", "tau"]
-    assert set(lf.PRESETS) == {"default", "v3.0", "v2", "paper"}
+    assert set(lf.PRESETS) == {"default", "v3.1", "v3.0", "v2", "paper"}
     for name, unit, meaning in lf.PARAMETERS:
         assert unit and meaning, name
     assert list(lf.Params().to_dict()) == NAMES
@@ -23,11 +23,14 @@ def test_the_table_is_the_cores():
 
 def test_defaults_and_presets():
     p = lf.Params()
-    assert (p.sigma, p.q, p.iterations, p.tau, p.min_points) == (0.005, 0.0, 30, 9.0, 5)
+    assert (p.sigma, p.q, p.iterations, p.tau, p.min_points) == (0.005, 0.0, 5, 12.0, 5)
     assert (p.max_range, p.merge, p.split_depth) == (81.83, True, 8)
     assert lf.Params(preset="default") == p
+    v3_1 = lf.Params(preset="v3.1")
+    assert (v3_1.iterations, v3_1.tau) == (30, 9.0)
+    assert v3_1.replace(iterations=5, tau=12) == p
     assert p.merge_own_beams and not lf.Params(preset="v3.0").merge_own_beams
-    assert lf.Params(preset="v3.0").replace(merge_own_beams=True) == p
+    assert lf.Params(preset="v3.0").replace(merge_own_beams=True) == v3_1
     paper = lf.Params(preset="paper")
     assert (paper.split_depth, paper.fit_shared_points, paper.max_range) == (0, True, math.inf)
     v2 = lf.Params(preset="v2")
@@ -71,7 +74,7 @@ def test_a_bad_value_or_name_is_a_value_error_naming_it(settings, message):
 
 
 def test_other_errors():
-    with pytest.raises(ValueError, match="no preset `v1`: give one of default, v3.0, v2, paper"):
+    with pytest.raises(ValueError, match="no preset `v1`: give one of default, v3.1, v3.0, v2, paper"):
         lf.Params(preset="v1")
     with pytest.raises(TypeError, match="sigma: a number, a bool or text, not list"):
         lf.Params(sigma=[0.01])

@@ -1,5 +1,7 @@
 //! `feature-bits LOG [ITERATIONS]`: every feature of every frame of a
-//! CARMEN log as raw IEEE-754 bits on stdout (see the library docs).
+//! CARMEN log as raw IEEE-754 bits on stdout (see the library docs), at the
+//! default parameters with `ITERATIONS` smoothing passes (default: the
+//! defaults' passes).
 //!
 //! `.ci/run` runs it built with and without `--features std` and requires
 //! identical output (ALGORITHM.md §9: `std` changes no numeric result).
@@ -15,7 +17,7 @@ fn main() -> ExitCode {
             .unwrap_or_else(|| "../shared/data/carmen/csail-corrected.log.gz".into()),
     );
     let iterations = match args.next().map(|s| s.parse::<u16>()) {
-        None => 30,
+        None => lms_core::Params::DEFAULT.iterations,
         Some(Ok(n)) => n,
         Some(Err(e)) => {
             eprintln!("feature-bits: ITERATIONS must be a number of passes (1..=1000): {e}");

@@ -1,10 +1,11 @@
 //! The results on every shared log, pinned: the feature bits of every frame
-//! of the seven recorded logs of `../shared/data/carmen` (30 passes) must
-//! hash to the digests below. A change of any bit of any smoothed range,
+//! of the seven recorded logs of `../shared/data/carmen` must hash to the
+//! digests below. A change of any bit of any smoothed range,
 //! `D`, edge, segment, line, corner or counter of any frame fails this test.
 //!
-//! Pinned at the defaults, and at the defaults less some of their measured
-//! additions, so that each set stays reachable bit for bit:
+//! Pinned at the defaults, at `Params::V3_1` (30 smoothing passes with
+//! τ = 9), and at `Params::V3_1` less some of its measured additions, so
+//! that each set stays reachable bit for bit:
 //! `Params::V3_0` (the merges refitting every beam between the lines),
 //! [`ARC_PAIRS_KEPT`] (and pairs of lines on a curve kept), [`NO_ANCHOR_GATE`]
 //! (and no anchor gate on the merges, no turn offsets in the fits' χ²),
@@ -57,8 +58,8 @@ const CONSECUTIVE_WINDOWS: Params = NO_ANCHOR_GATE
 #[cfg(not(feature = "libm-trig"))]
 const ARCS_KEPT: Params = CONSECUTIVE_WINDOWS.with_arc_chain(0);
 
-/// (log stem, FNV-1a-64 of the feature bits, frames) at `Params::V2`, 30
-/// passes, without the `rejected_arc` counter.
+/// (log stem, FNV-1a-64 of the feature bits, frames) at `Params::V2`,
+/// without the `rejected_arc` counter.
 #[cfg(not(feature = "libm-trig"))]
 const PINNED_V2: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x6ebae6f9863f5531, 861),
@@ -90,10 +91,21 @@ fn log(stem: &str) -> PathBuf {
         .join(format!("{stem}.log.gz"))
 }
 
-/// (log stem, FNV-1a-64 of the feature bits, frames) at `Params::default`,
-/// 30 passes.
+/// (log stem, FNV-1a-64 of the feature bits, frames) at `Params::default`.
 #[cfg(not(feature = "libm-trig"))]
 const PINNED: [(&str, u64, usize); 7] = [
+    ("acapulco-corrected", 0x8e87be236306a2c5, 861),
+    ("belgioioso-corrected", 0xc6abfa6fe636b088, 395),
+    ("csail-corrected", 0x04ee2743b6d501f2, 406),
+    ("freiburg-101-corrected", 0x3c2945be5cc56759, 292),
+    ("freiburg-campus-corrected", 0xcf7ba862fee9fde7, 2008),
+    ("intel-corrected", 0x661e7a45036bce89, 910),
+    ("orebro-corrected", 0xf558b3ea5241cc91, 237),
+];
+
+/// The same at `Params::V3_1`.
+#[cfg(not(feature = "libm-trig"))]
+const PINNED_V3_1: [(&str, u64, usize); 7] = [
     ("acapulco-corrected", 0x6b4fb7b476cf0741, 861),
     ("belgioioso-corrected", 0xdbb83249a14d9650, 395),
     ("csail-corrected", 0x82ff31945ffeae51, 406),
@@ -246,7 +258,7 @@ fn digests(path: &Path, params: &Params) -> (u64, u64, usize) {
     (d.full.0, d.without_arc_counter.inner.0, n)
 }
 
-/// Every log of `pinned` at `params` (30 passes), with or without the
+/// Every log of `pinned` at `params`, with or without the
 /// `rejected_arc` counter: the digests that differ.
 fn check_pins(
     pinned: &[(&str, u64, usize)],
@@ -254,9 +266,8 @@ fn check_pins(
     without_arc_counter: bool,
 ) -> Vec<String> {
     let mut wrong = Vec::new();
-    let params = (*params).with_iterations(30);
     for &(stem, pin, frames) in pinned {
-        let (full, without, n) = digests(&log(stem), &params);
+        let (full, without, n) = digests(&log(stem), params);
         let d = if without_arc_counter { without } else { full };
         println!("(\"{stem}\", 0x{d:016x}, {n}),");
         if (d, n) != (pin, frames) {
@@ -273,6 +284,17 @@ fn check_pins(
 fn feature_bits_of_every_shared_log_are_pinned() {
     let wrong = check_pins(&PINNED, &Params::default(), false);
     assert!(wrong.is_empty(), "results changed:\n{}", wrong.join("\n"));
+}
+
+#[cfg(not(feature = "libm-trig"))]
+#[test]
+fn feature_bits_of_every_shared_log_at_v3_1_are_pinned() {
+    let wrong = check_pins(&PINNED_V3_1, &Params::V3_1, false);
+    assert!(
+        wrong.is_empty(),
+        "v3.1 results changed:\n{}",
+        wrong.join("\n")
+    );
 }
 
 #[cfg(not(feature = "libm-trig"))]
@@ -346,8 +368,9 @@ fn a_changed_bit_changes_the_digest() {
     // The check can fail: one more pass changes the digest of a log.
     let path = log("orebro-corrected");
     let (mut a, mut b) = (Fnv64::default(), Fnv64::default());
-    write_log_bits(&path, 30, &mut a).unwrap();
-    write_log_bits(&path, 31, &mut b).unwrap();
+    let passes = Params::DEFAULT.iterations;
+    write_log_bits(&path, passes, &mut a).unwrap();
+    write_log_bits(&path, passes + 1, &mut b).unwrap();
     assert_ne!(a.0, b.0);
     assert_eq!(a.0, PINNED[6].1);
 }
@@ -360,7 +383,7 @@ type PerDataPin = (&'static str, f32, f32, u64, u64, u64, u64, u64, u64, u64);
 
 /// With the parameters `host-bridge extract LOG` uses when no flag is given
 /// (σ and `max_range` from the survey of the log,
-/// [`per_data_params`]), 30 passes: (log stem, σ (m), `max_range` (m),
+/// [`per_data_params`]): (log stem, σ (m), `max_range` (m),
 /// FNV-1a-64 of the feature bits). σ is 1 cm on the cm logs, 30 mm on
 /// Acapulco's 5 cm steps and 5 mm on Örebro (mm); `max_range` is the unit's
 /// and mode's largest true range, and 50 m on Acapulco, below its ~51 m fill
@@ -377,7 +400,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "acapulco-corrected",
         0.030000001,
         50.0,
-        0xa28474898e60848d,
+        0x535934f1c28efe90,
         0xd7e2f9506260af05,
         0xff362eae488123ab,
         0x456597c9d8b236ef,
@@ -389,7 +412,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "belgioioso-corrected",
         0.01,
         81.83,
-        0xdd406035413ebaf9,
+        0x5884d578c471e4ca,
         0x898fc07de11d58a7,
         0x898fc07de11d58a7,
         0x04407f65d761c00e,
@@ -401,7 +424,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "csail-corrected",
         0.01,
         81.83,
-        0x9857112cb3c22c4f,
+        0x64d5ea2da7ff92f3,
         0x82e4874b6425520e,
         0x82e4874b6425520e,
         0x4373d6154e313a6d,
@@ -413,7 +436,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "freiburg-101-corrected",
         0.01,
         81.83,
-        0x07e11f6469be26d5,
+        0xe7933954cea8acc7,
         0xd29bd4544d235609,
         0xd29bd4544d235609,
         0xb63357291e3ad9e8,
@@ -425,7 +448,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "freiburg-campus-corrected",
         0.01,
         81.83,
-        0x93983f3e38838933,
+        0x186e97f1f9bba488,
         0xd1d07c6f0d1ea572,
         0x02ae4a2203de1483,
         0x1710d46adb43c02b,
@@ -437,7 +460,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "intel-corrected",
         0.01,
         81.83,
-        0x02d7ab01256cc314,
+        0x476f7b230457b60c,
         0x5d872066b9cfec79,
         0xf5959bee1126b7fc,
         0xe3cf0b3e0d27c2db,
@@ -449,7 +472,7 @@ const PINNED_PER_DATA: [PerDataPin; 7] = [
         "orebro-corrected",
         0.005,
         32.759,
-        0x1a565d843f54b931,
+        0xf558b3ea5241cc91,
         0xe720b6fb012a9a3f,
         0xe720b6fb012a9a3f,
         0xee57028d62c2f364,
