@@ -22,19 +22,20 @@ use std::path::{Path, PathBuf};
 use crate::carmen::{decide_unit, ReadError, Reader};
 use crate::Params;
 
-/// The defaults with the windows of ALGORITHM.md v2 §2–6 (consecutive beams
-/// over both mirror turns) in every mode, and the additions measured on top
-/// of same-turn windows left out: no work bound on split before reject, no
-/// anchor gate on the merges, no turn offsets in the fits' χ², and pairs of
-/// lines kept whatever a circle says of them. The tests that check the
-/// windows of §2–6 on interleaved scans run with it.
+/// Preset `v3.1` (the defaults at v2's scale: 30 passes, τ = 9) with the
+/// windows of ALGORITHM.md v2 §2–6 (consecutive beams over both mirror
+/// turns) in every mode, and the additions measured on top of same-turn
+/// windows left out: no work bound on split before reject, no anchor gate
+/// on the merges, no turn offsets in the fits' χ², and pairs of lines kept
+/// whatever a circle says of them. The tests that check the windows of
+/// §2–6 on interleaved scans run with it.
 pub const CONSECUTIVE_WINDOWS: Params = Params {
     same_turn_windows: false,
     split_budget: 0,
     merge_anchor_gate: f32::INFINITY,
     turn_offsets: false,
     arc_pairs: false,
-    ..Params::DEFAULT
+    ..Params::V3_1
 };
 
 /// One direction of a serial line in memory: the device reads `rx` and

@@ -46,7 +46,12 @@ fn a_turn_offset_breaks_spec_windows_but_not_same_turn_windows() {
 #[test]
 fn one_degree_modes_are_unchanged() {
     let frame = one_degree_room();
-    let spec = CONSECUTIVE_WINDOWS.validate().unwrap();
+    // At the defaults' scale (CONSECUTIVE_WINDOWS has preset v3.1's).
+    let spec = CONSECUTIVE_WINDOWS
+        .with_iterations(Params::DEFAULT.iterations)
+        .with_tau(Params::DEFAULT.tau)
+        .validate()
+        .unwrap();
     let turn = Params::DEFAULT.validate().unwrap();
     assert!(turn.same_turn_windows);
     let mut a = Extractor::new();

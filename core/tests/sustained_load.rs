@@ -2,7 +2,7 @@
 //!
 //! The core's LMS emulator streams 361-value scans at 500 kBd (one every
 //! 26.7 ms, each 14.6 ms on the line: the sensor's own rate) into the
-//! co-processor with the default parameters (30 passes); a client on the
+//! co-processor with the default parameters; a client on the
 //! host side takes the pass-through and the features. Simulated time, so
 //! the run is exact and repeatable.
 //!

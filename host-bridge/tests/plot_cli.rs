@@ -184,7 +184,7 @@ fn check_mahalanobis_svg(svg: &str, valid_pass1: usize, valid_last: usize) {
             > 10,
         "no dashed tau line"
     );
-    assert!(svg.contains("τ = 9"), "tau not named");
+    assert!(svg.contains("τ = 12"), "tau not named");
 }
 
 #[test]
@@ -217,7 +217,7 @@ fn builtin_scene_frame() {
         non_null(&pass1["mahalanobis"]),
         non_null(&rec["mahalanobis"]),
     );
-    assert!(d.contains("after pass 1 and 30"), "title names the passes");
+    assert!(d.contains("after pass 1 and 5"), "title names the passes");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -328,8 +328,8 @@ fn bad_arguments_fail_with_a_message() {
         &["passes count from 1"],
     );
     fails(
-        &["plot", "--passes", "1,31", "-o", d],
-        &["pass 31 is beyond the 30 passes"],
+        &["plot", "--passes", "1,6", "-o", d],
+        &["pass 6 is beyond the 5 passes"],
     );
     fails(
         &["plot", "-o", "x.svg", "--format", "png"],

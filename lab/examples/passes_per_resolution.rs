@@ -1,15 +1,17 @@
-//! The smoothing passes per angular resolution (docs/DESIGN.md,
-//! "Parameters"): the three-beam mask iterated `iterations` times spreads over
-//! about √iterations beams, so 30 passes at 1° smooth over twice the angle
-//! they do at 0.5°; a quarter of the passes (≈ 8) matches the 0.5° scale.
-//! Per log of the settled truth (`lms-lab truth`: the no-flag parameters,
-//! σ and range limit per data, only `iterations` changed) for 30, 20, 15,
-//! 12, 10, 8 and 6 passes: TruePos overall and by piece length, FalsePos,
-//! unexplained lines, coverage, fragmentation; then pooled per resolution,
-//! all logs with 30 passes at 0.5° and each count at 1°; τ, `min_points`
-//! and the σ_α gate on the 1° logs instead; and the realistic synthetic
-//! scenes (0.5°, `SCANS` per family and σ₀) for the passes. Every frame
-//! (`EVERY` = 1, the default) runs in about half a minute.
+//! The scale of the defaults (docs/DESIGN.md, "Parameters"): the smoothing
+//! passes and the segmentation gate τ. The three-beam mask iterated
+//! `iterations` times spreads over about √iterations beams, so 30 passes at
+//! 1° smooth over twice the angle they do at 0.5° (where the same-turn
+//! windows already take every other beam); fewer passes leave more noise
+//! in `D`, which a larger τ answers. Per log of the settled truth (`lms-lab
+//! truth`: the no-flag parameters, σ and range limit per data, only the
+//! scale changed): preset `v3.1` (30 passes, τ = 9), the defaults (5
+//! passes, τ = 12), 4 to 30 passes at τ = 12 and τ from 9 to 14 at 5
+//! passes: TruePos overall and by piece length, FalsePos, unexplained
+//! lines, coverage, fragmentation; pooled per resolution and over all logs;
+//! on the 1° logs also τ, `min_points` and the σ_α gate; and the realistic
+//! synthetic scenes (0.5°, `SCANS` per family and σ₀). Every frame (`EVERY`
+//! = 1, the default) runs in about a minute.
 //!
 //! `cargo run --release -p lms-lab --example passes_per_resolution -- [EVERY] [SCANS]`
 
@@ -23,32 +25,31 @@ use lms_lab::maptruth::TruthConfig;
 use lms_lab::realtruth::{run_log, RealMethod, RealTally};
 use lms_lab::sweep::{synthetic_table, Adjust};
 
-/// The variants: the defaults (30 passes) and fewer passes.
+/// The variants: the defaults, preset `v3.1`, then the passes at τ = 12
+/// and τ at 5 passes.
 fn variants() -> Vec<(&'static str, Adjust)> {
     vec![
-        ("30 (defaults)", |p| p),
-        ("20", |p| p.with_iterations(20)),
-        ("15", |p| p.with_iterations(15)),
-        ("12", |p| p.with_iterations(12)),
-        ("10", |p| p.with_iterations(10)),
-        ("8", |p| p.with_iterations(8)),
-        ("6", |p| p.with_iterations(6)),
+        ("5, τ 12 (defaults)", |p| p),
+        ("30, τ 9 (v3.1)", |p| p.with_iterations(30).with_tau(9.0)),
+        ("30, τ 12", |p| p.with_iterations(30)),
+        ("12, τ 12", |p| p.with_iterations(12)),
+        ("8, τ 12", |p| p.with_iterations(8)),
+        ("6, τ 12", |p| p.with_iterations(6)),
+        ("4, τ 12", |p| p.with_iterations(4)),
+        ("5, τ 9", |p| p.with_tau(9.0)),
+        ("5, τ 10", |p| p.with_tau(10.0)),
+        ("5, τ 11", |p| p.with_tau(11.0)),
+        ("5, τ 14", |p| p.with_tau(14.0)),
     ]
 }
 
-/// Other settings a 1° scan might want instead: the segmentation gate, the
-/// shortest segment, and the σ_α gate scaled by √2 (half the beams on a
-/// wall at 1°).
+/// Other settings a 1° scan might want instead: the shortest segment and
+/// the σ_α gate scaled by √2 (half the beams on a wall at 1°).
 fn others() -> Vec<(&'static str, Adjust)> {
     vec![
-        ("tau=7", |p| p.with_tau(7.0)),
-        ("tau=12", |p| p.with_tau(12.0)),
         ("min_points=4", |p| p.with_min_points(4)),
         ("max_alpha_sd_deg=2.36 (√2·5/3)", |p| {
             p.with_max_alpha_sd_deg(2.36)
-        }),
-        ("12 passes, max_alpha_sd_deg=2.36", |p| {
-            p.with_iterations(12).with_max_alpha_sd_deg(2.36)
         }),
     ]
 }
@@ -106,7 +107,7 @@ fn main() -> Result<()> {
     // Pooled: [0] 1° logs, [1] 0.5° logs; per variant.
     let mut pooled = vec![vec![RealTally::default(); all.len()]; 2];
     let (mut md, mut other) = (String::new(), String::new());
-    header(&mut md, "iterations");
+    header(&mut md, "passes, τ");
     header(&mut other, "setting");
     for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
         let beams = carmen::read_log(&path, UnitMode::Auto)?
@@ -129,7 +130,7 @@ fn main() -> Result<()> {
     }
     println!("Settled truth, every {every}. frame, per log:\n\n{md}");
     let mut md = String::new();
-    header(&mut md, "iterations");
+    header(&mut md, "passes, τ");
     for (g, label) in [(0, "1° logs"), (1, "0.5° logs")] {
         for (k, t) in pooled[g].iter().enumerate().take(n) {
             row(&mut md, &format!("**{label}**"), all_names[k], t);
@@ -139,17 +140,12 @@ fn main() -> Result<()> {
         }
     }
     for (k, t) in pooled[0].iter().enumerate().take(n) {
-        let mut all = pooled[1][0].clone();
+        let mut all = pooled[1][k].clone();
         all.merge(t);
-        row(
-            &mut md,
-            "**all logs, 30 at 0.5°**",
-            &format!("{} at 1°", names[k]),
-            &all,
-        );
+        row(&mut md, "**all logs**", names[k], &all);
     }
     println!("Pooled:\n\n{md}");
-    println!("Other settings, 30 passes unless named (1° logs, then pooled):\n\n{other}");
+    println!("Other settings at the defaults (1° logs, then pooled):\n\n{other}");
     println!(
         "Realistic synthetic scenes (0.5°), {scans} scans per family and σ₀:\n\n{}",
         synthetic_table(&names, scans, &|k, ex, frame, base| {

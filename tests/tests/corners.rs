@@ -78,13 +78,17 @@ fn summary(v: &[f64]) -> (f64, f64) {
 
 /// A right-angle corner at 3.16 m, 400 draws with noise sigma = 5 mm, the
 /// scene turned by a random angle in ±0.3 rad so that the corner falls
-/// anywhere between two beams; default parameters (30 passes).
+/// anywhere between two beams.
 ///
-/// 1. Every draw has exactly one well-conditioned corner, within 1 cm of the
+/// 1. At `Params::PAPER` and `Params::V2` (30 passes) every draw has exactly
+///    one well-conditioned corner; at the defaults (5 passes) at most 2 of
+///    the 400 have none (measured 1: fewer passes leave a few beams at the
+///    corner breaking, and the lines' ends fall more than `corner_gap` apart
+///    on the grazing wall). The corner found is within 1 cm of the
 ///    truth (measured worst: a few mm), at 90° within 1° or 4 standard
 ///    deviations of the lines' angles (a false break can leave a short piece
-///    of wall next to the corner, whose angle is uncertain by ~0.5°). A rare false break after
-///    30 passes can split a wall into two lines that the merge gate keeps
+///    of wall next to the corner, whose angle is uncertain by ~0.5°). A rare false break
+///    can split a wall into two lines that the merge gate keeps
 ///    apart; the corner between them is then near 0° and must be flagged
 ///    ill-conditioned (counted and printed).
 /// 2. **The §8 covariance is honest**: the NEES `eᵀ Σ⁻¹ e` of the true corner
@@ -119,7 +123,7 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
     let mut ex = Extractor::new();
     let mut ex_excluding = Extractor::new();
     let (mut as_extracted, mut refitted, mut weighted) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut worst_dist, mut split_walls) = (0.0f64, 0);
+    let (mut worst_dist, mut split_walls, mut missed_at_defaults) = (0.0f64, 0, 0);
     for draw in 0..DRAWS {
         let turn = rng.random_range(-0.3..0.3);
         let (walls, truth) = right_corner(turn);
@@ -159,6 +163,10 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
         ] {
             let f2 = ex_excluding.run(&frame, &params.validate().unwrap());
             let good2: Vec<_> = f2.corners().iter().filter(|c| c.well_conditioned).collect();
+            if good2.is_empty() && params == Params::default() {
+                missed_at_defaults += 1;
+                continue;
+            }
             assert_eq!(good2.len(), 1, "draw {draw}: corners {:?}", f2.corners());
             out.push(nees(
                 [good2[0].x as f64 - truth[0], good2[0].y as f64 - truth[1]],
@@ -166,6 +174,10 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
             ));
         }
     }
+    assert!(
+        missed_at_defaults <= 2,
+        "defaults: no corner in {missed_at_defaults} of {DRAWS} draws"
+    );
     let (mean_x, inside_x) = summary(&as_extracted);
     let (mean_r, inside_r) = summary(&refitted);
     let (mean_w, inside_w) = summary(&weighted);
@@ -178,6 +190,7 @@ fn a_right_angle_corner_is_found_with_an_honest_covariance() {
         "defaults: mean corner NEES {mean_w}, {:.1} % inside",
         100.0 * inside_w
     );
+    eprintln!("defaults: no corner in {missed_at_defaults} of {DRAWS} draws");
     eprintln!(
         "90° corner, {DRAWS} draws: as extracted mean NEES {mean_x:.3}, {:.1} % inside the 99 % ellipse; \
          with fit_shared_points = false mean NEES {mean_r:.3}, {:.1} % inside; worst distance {:.2} mm; \
