@@ -39,7 +39,7 @@ use lms_core::unstable::{fit_span, try_merge};
 use lms_core::{Extractor, Line, Params, Segment};
 use lms_lab::baselines::{run_core, Tables};
 use lms_lab::maptruth::{FrameTruth, TruthConfig};
-use lms_lab::realtruth::{candidate, load_with_map, ScoredLine, GATE_ALPHA_DEG, GATE_R};
+use lms_lab::realtruth::{load_with_map, ScoredLine};
 use lms_lab::sweep::count_and_flags;
 
 /// What became of one segment in the replay of §7.
@@ -124,25 +124,8 @@ fn replay(
 
 /// The line each piece is matched to, as `score_frame` matches them.
 fn matches(truth: &FrameTruth, lines: &[ScoredLine]) -> Vec<Option<usize>> {
-    let mut pairs = Vec::new();
-    for (i, l) in lines.iter().enumerate() {
-        for (k, p) in truth.pieces.iter().enumerate() {
-            if let Some((da, dr)) = candidate(l, p) {
-                let cost = (da / GATE_ALPHA_DEG.to_radians()).powi(2) + (dr / GATE_R).powi(2);
-                pairs.push((cost, i, k));
-            }
-        }
-    }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut line_of = vec![None; truth.pieces.len()];
-    let mut used = vec![false; lines.len()];
-    for (_, i, k) in pairs {
-        if !used[i] && line_of[k].is_none() {
-            used[i] = true;
-            line_of[k] = Some(i);
-        }
-    }
-    line_of
+    let (line_of, _) = lms_lab::realtruth::match_pieces(truth, lines);
+    line_of.into_iter().map(|m| m.map(|(i, _, _)| i)).collect()
 }
 
 /// For each unmatched line that is not unexplained: the counted piece it

@@ -45,7 +45,7 @@ use lms_core::{Extractor, Line, Params, Trace};
 use lms_lab::baselines::{corners_of, run_core, segments_of, Tables};
 use lms_lab::maptruth::{FrameTruth, TruthConfig};
 use lms_lab::realtruth::{
-    candidate, classify_lines, gate_offsets, load_with_map, overlap, score_frame, RealMethod,
+    classify_lines, gate_offsets, load_with_map, overlap, score_frame, RealMethod,
     RealTally, ScoredLine, GATE_ALPHA_DEG, GATE_OVERLAP, GATE_R,
 };
 use lms_lab::sweep::{synthetic_table, Adjust};
@@ -81,24 +81,8 @@ fn relaxations() -> Vec<(&'static str, Adjust)> {
 /// Piece index → matched line index: the evaluation's one-to-one greedy
 /// matching (`realtruth::score_frame`) by `(Δα/3°)² + (Δr/0.1 m)²`.
 fn matching(truth: &FrameTruth, lines: &[ScoredLine]) -> Vec<Option<usize>> {
-    let mut pairs = Vec::new();
-    for (i, l) in lines.iter().enumerate() {
-        for (k, p) in truth.pieces.iter().enumerate() {
-            if let Some((da, dr)) = candidate(l, p) {
-                let cost = (da / GATE_ALPHA_DEG.to_radians()).powi(2) + (dr / GATE_R).powi(2);
-                pairs.push((cost, i, k));
-            }
-        }
-    }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let (mut of, mut used) = (vec![None; truth.pieces.len()], vec![false; lines.len()]);
-    for (_, i, k) in pairs {
-        if !used[i] && of[k].is_none() {
-            used[i] = true;
-            of[k] = Some(i);
-        }
-    }
-    of
+    let (line_of, _) = lms_lab::realtruth::match_pieces(truth, lines);
+    line_of.into_iter().map(|m| m.map(|(i, _, _)| i)).collect()
 }
 
 fn is_coarse(path: &Path) -> Result<bool> {

@@ -577,14 +577,14 @@ pub fn within_gates((da, dr): (f64, f64)) -> bool {
 /// The walls of matched counted pieces of a frame.
 pub type MatchedWalls = HashSet<usize>;
 
-/// Score `lines` of a frame against `truth`, adding to `t`; returns the
-/// walls of matched counted pieces and, per line, whether it is matched.
-pub fn score_frame(
+/// The one-to-one matching of lines to pieces: every candidate pair
+/// ([`candidate`]) by cost `(Δα/3°)² + (Δr/0.1 m)²`, cheapest first, each
+/// line and each piece taken once. Per piece the matched line with its
+/// `(Δα, Δr)`, and per piece the number of candidate lines.
+pub fn match_pieces(
     truth: &FrameTruth,
     lines: &[ScoredLine],
-    valid: &[bool],
-    t: &mut RealTally,
-) -> (MatchedWalls, Vec<bool>) {
+) -> (Vec<Option<(usize, f64, f64)>>, Vec<usize>) {
     let mut pairs: Vec<(f64, usize, usize, f64, f64)> = Vec::new();
     let mut candidates = vec![0usize; truth.pieces.len()];
     for (i, l) in lines.iter().enumerate() {
@@ -605,6 +605,22 @@ pub fn score_frame(
         }
         used[i] = true;
         line_of[k] = Some((i, da, dr));
+    }
+    (line_of, candidates)
+}
+
+/// Score `lines` of a frame against `truth`, adding to `t`; returns the
+/// walls of matched counted pieces and, per line, whether it is matched.
+pub fn score_frame(
+    truth: &FrameTruth,
+    lines: &[ScoredLine],
+    valid: &[bool],
+    t: &mut RealTally,
+) -> (MatchedWalls, Vec<bool>) {
+    let (line_of, candidates) = match_pieces(truth, lines);
+    let mut used = vec![false; lines.len()];
+    for &(i, _, _) in line_of.iter().flatten() {
+        used[i] = true;
     }
     t.frames += 1;
     t.lines += lines.len();
