@@ -45,8 +45,8 @@ use lms_core::{Extractor, Line, Params, Trace};
 use lms_lab::baselines::{corners_of, run_core, segments_of, Tables};
 use lms_lab::maptruth::{FrameTruth, TruthConfig};
 use lms_lab::realtruth::{
-    classify_lines, gate_offsets, load_with_map, overlap, score_frame, RealMethod,
-    RealTally, ScoredLine, GATE_ALPHA_DEG, GATE_OVERLAP, GATE_R,
+    classify_lines, gate_offsets, load_with_map, overlap, score_frame, RealMethod, RealTally,
+    ScoredLine, GATE_ALPHA_DEG, GATE_OVERLAP, GATE_R,
 };
 use lms_lab::sweep::{synthetic_table, Adjust};
 
