@@ -577,14 +577,14 @@ pub fn within_gates((da, dr): (f64, f64)) -> bool {
 /// The walls of matched counted pieces of a frame.
 pub type MatchedWalls = HashSet<usize>;
 
+/// Per piece of a frame, the line matched to it with its `(Δα, Δr)`.
+pub type PieceMatches = Vec<Option<(usize, f64, f64)>>;
+
 /// The one-to-one matching of lines to pieces: every candidate pair
 /// ([`candidate`]) by cost `(Δα/3°)² + (Δr/0.1 m)²`, cheapest first, each
 /// line and each piece taken once. Per piece the matched line with its
 /// `(Δα, Δr)`, and per piece the number of candidate lines.
-pub fn match_pieces(
-    truth: &FrameTruth,
-    lines: &[ScoredLine],
-) -> (Vec<Option<(usize, f64, f64)>>, Vec<usize>) {
+pub fn match_pieces(truth: &FrameTruth, lines: &[ScoredLine]) -> (PieceMatches, Vec<usize>) {
     let mut pairs: Vec<(f64, usize, usize, f64, f64)> = Vec::new();
     let mut candidates = vec![0usize; truth.pieces.len()];
     for (i, l) in lines.iter().enumerate() {
