@@ -15,15 +15,8 @@
 //!
 //! `cargo run --release -p lms-lab --example passes_per_resolution -- [EVERY] [SCANS]`
 
-use std::fmt::Write as _;
-use std::path::Path;
-
 use anyhow::Result;
-use host_bridge::carmen::{self, UnitMode};
-use lms_lab::baselines::run_core;
-use lms_lab::maptruth::TruthConfig;
-use lms_lab::realtruth::{run_log, RealMethod, RealTally};
-use lms_lab::sweep::{synthetic_table, Adjust};
+use lms_lab::sweep::{settled_sweep, Adjust};
 
 /// The variants: the defaults, preset `v3.1`, then the passes at τ = 12
 /// and τ at 5 passes.
@@ -54,103 +47,12 @@ fn others() -> Vec<(&'static str, Adjust)> {
     ]
 }
 
-fn f(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:.3}")
-    } else {
-        "—".into()
-    }
-}
-
-fn header(md: &mut String, setting: &str) {
-    let _ = writeln!(
-        md,
-        "| log | {setting} | TruePos | ≥ 1 m | 0.5–1 m (pieces) | < 0.5 m | FalsePos | \
-         unexplained | coverage | fragmented | walls fragmented | lines / frame |\n\
-         |:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
-}
-
-fn row(md: &mut String, log: &str, name: &str, t: &RealTally) {
-    let s = t.summary();
-    let (bad, of) = s.walls_fragmented;
-    let _ = writeln!(
-        md,
-        "| {log} | {name} | {} | {} | {} ({}) | {} | {} | {} | {} | {} | {bad} of {of} | {:.2} |",
-        f(s.true_pos),
-        f(s.true_pos_1m),
-        f(s.true_pos_mid),
-        t.pieces_mid,
-        f(s.true_pos_short),
-        f(s.false_pos),
-        f(s.unexplained),
-        f(s.coverage),
-        f(s.fragmented),
-        s.lines_per_frame,
-    );
-}
-
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(1), |s| s.parse())?;
     let scans: usize = std::env::args().nth(2).map_or(Ok(100), |s| s.parse())?;
-    let vs = variants();
-    let names: Vec<&str> = vs.iter().map(|v| v.0).collect();
-    let adjust: Vec<Adjust> = vs.iter().map(|v| v.1).collect();
-    let n = vs.len();
-    let all: Vec<_> = vs.iter().chain(&others()).copied().collect();
-    let all_names: Vec<&str> = all.iter().map(|v| v.0).collect();
-    let methods: Vec<RealMethod> = all
-        .iter()
-        .map(|&(name, adjust)| RealMethod::no_flags_with(name, adjust))
-        .collect();
-    let cfg = TruthConfig::settled();
-    // Pooled: [0] 1° logs, [1] 0.5° logs; per variant.
-    let mut pooled = vec![vec![RealTally::default(); all.len()]; 2];
-    let (mut md, mut other) = (String::new(), String::new());
-    header(&mut md, "passes, τ");
-    header(&mut other, "setting");
-    for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
-        let beams = carmen::read_log(&path, UnitMode::Auto)?
-            .scans
-            .first()
-            .map_or(0, |s| s.frame.len());
-        let coarse = beams <= 181;
-        let r = run_log(&path, &methods, every, &cfg, None)?;
-        let name = r.name.trim_end_matches("-corrected.log.gz");
-        let label = format!("{name} ({}°, {beams})", if coarse { "1" } else { "0.5" });
-        for (k, t) in r.tallies.iter().enumerate() {
-            if k < n {
-                row(&mut md, &label, all_names[k], t);
-            } else if coarse {
-                row(&mut other, &label, all_names[k], t);
-            }
-            pooled[usize::from(!coarse)][k].merge(t);
-        }
-        eprintln!("{label}: {} frames", r.frames);
-    }
-    println!("Settled truth, every {every}. frame, per log:\n\n{md}");
-    let mut md = String::new();
-    header(&mut md, "passes, τ");
-    for (g, label) in [(0, "1° logs"), (1, "0.5° logs")] {
-        for (k, t) in pooled[g].iter().enumerate().take(n) {
-            row(&mut md, &format!("**{label}**"), all_names[k], t);
-        }
-        for (k, t) in pooled[g].iter().enumerate().skip(n) {
-            row(&mut other, &format!("**{label}**"), all_names[k], t);
-        }
-    }
-    for (k, t) in pooled[0].iter().enumerate().take(n) {
-        let mut all = pooled[1][k].clone();
-        all.merge(t);
-        row(&mut md, "**all logs**", names[k], &all);
-    }
-    println!("Pooled:\n\n{md}");
-    println!("Other settings at the defaults (1° logs, then pooled):\n\n{other}");
-    println!(
-        "Realistic synthetic scenes (0.5°), {scans} scans per family and σ₀:\n\n{}",
-        synthetic_table(&names, scans, &|k, ex, frame, base| {
-            run_core(ex, frame, &(adjust[k])(*base))
-        })?
+    print!(
+        "{}",
+        settled_sweep("passes, τ", &variants(), &others(), every, scans)?
     );
     Ok(())
 }

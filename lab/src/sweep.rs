@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Result;
-use host_bridge::carmen::Scan;
+use host_bridge::carmen::{self, Scan, UnitMode};
 use lms_core::{Extractor, Frame, Params};
 
 use crate::baselines::{run_core, Extraction};
@@ -14,7 +14,8 @@ use crate::maptruth::{frame_truth, Map, TruthConfig};
 use crate::metrics::{scan_truth, score_lines, Gates, LineScore, ScanTruth, Tally};
 use crate::realistic::{realistic_model, sample, DELTA, SIGMAS};
 use crate::realtruth::{
-    load_with_map, pooled_table, score_frame, LogWithMap, RealTally, ScoredLine,
+    load_with_map, pooled_table, run_log, score_frame, LogWithMap, RealMethod, RealTally,
+    ScoredLine,
 };
 use crate::scenes::{Family, Sample};
 
@@ -201,4 +202,119 @@ pub fn synthetic_table(names: &[&str], scans: usize, run: &RunVariant<'_>) -> Re
         }
     }
     Ok(md)
+}
+
+fn f3(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.3}")
+    } else {
+        "—".into()
+    }
+}
+
+fn settled_header(md: &mut String, setting: &str) {
+    let _ = writeln!(
+        md,
+        "| log | {setting} | TruePos | ≥ 1 m | 0.5–1 m (pieces) | < 0.5 m | FalsePos | \
+         unexplained | coverage | fragmented | walls fragmented | lines / frame |\n\
+         |:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+}
+
+fn settled_row(md: &mut String, log: &str, name: &str, t: &RealTally) {
+    let s = t.summary();
+    let (bad, of) = s.walls_fragmented;
+    let _ = writeln!(
+        md,
+        "| {log} | {name} | {} | {} | {} ({}) | {} | {} | {} | {} | {} | {bad} of {of} | {:.2} |",
+        f3(s.true_pos),
+        f3(s.true_pos_1m),
+        f3(s.true_pos_mid),
+        t.pieces_mid,
+        f3(s.true_pos_short),
+        f3(s.false_pos),
+        f3(s.unexplained),
+        f3(s.coverage),
+        f3(s.fragmented),
+        s.lines_per_frame,
+    );
+}
+
+/// A sweep on the settled truth (`TruthConfig::settled`, the no-flag
+/// parameters per log with each variant's change): every `every`-th frame
+/// of every shared log, per log, pooled per resolution (1°, 0.5°) and over
+/// all logs; `others` per 1° log and pooled per resolution only; then the
+/// realistic synthetic scenes (0.5°, `scans` per family and σ₀) for
+/// `variants`. `setting` heads the variants' column. Markdown, with the
+/// logs' progress on standard error.
+pub fn settled_sweep(
+    setting: &str,
+    variants: &[(&'static str, Adjust)],
+    others: &[(&'static str, Adjust)],
+    every: usize,
+    scans: usize,
+) -> Result<String> {
+    let n = variants.len();
+    let all: Vec<_> = variants.iter().chain(others).copied().collect();
+    let methods: Vec<RealMethod> = all
+        .iter()
+        .map(|&(name, adjust)| RealMethod::no_flags_with(name, adjust))
+        .collect();
+    let cfg = TruthConfig::settled();
+    // Pooled: [0] 1° logs, [1] 0.5° logs; per variant.
+    let mut pooled = vec![vec![RealTally::default(); all.len()]; 2];
+    let (mut md, mut other) = (String::new(), String::new());
+    settled_header(&mut md, setting);
+    settled_header(&mut other, "setting");
+    for path in crate::real::find_logs(Path::new("../shared/data/carmen"))? {
+        let beams = carmen::read_log(&path, UnitMode::Auto)?
+            .scans
+            .first()
+            .map_or(0, |s| s.frame.len());
+        let coarse = beams <= 181;
+        let r = run_log(&path, &methods, every, &cfg, None)?;
+        let name = r.name.trim_end_matches("-corrected.log.gz");
+        let label = format!("{name} ({}°, {beams})", if coarse { "1" } else { "0.5" });
+        for (k, t) in r.tallies.iter().enumerate() {
+            if k < n {
+                settled_row(&mut md, &label, all[k].0, t);
+            } else if coarse {
+                settled_row(&mut other, &label, all[k].0, t);
+            }
+            pooled[usize::from(!coarse)][k].merge(t);
+        }
+        eprintln!("{label}: {} frames", r.frames);
+    }
+    let mut out = format!("Settled truth, every {every}. frame, per log:\n\n{md}\n");
+    let mut md = String::new();
+    settled_header(&mut md, setting);
+    for (g, label) in [(0, "1° logs"), (1, "0.5° logs")] {
+        for (k, t) in pooled[g].iter().enumerate().take(n) {
+            settled_row(&mut md, &format!("**{label}**"), all[k].0, t);
+        }
+        for (k, t) in pooled[g].iter().enumerate().skip(n) {
+            settled_row(&mut other, &format!("**{label}**"), all[k].0, t);
+        }
+    }
+    for (k, t) in pooled[0].iter().enumerate().take(n) {
+        let mut both = pooled[1][k].clone();
+        both.merge(t);
+        settled_row(&mut md, "**all logs**", all[k].0, &both);
+    }
+    let _ = writeln!(out, "Pooled:\n\n{md}");
+    if !others.is_empty() {
+        let _ = writeln!(
+            out,
+            "Other settings at the defaults (1° logs, then pooled):\n\n{other}"
+        );
+    }
+    let names: Vec<&str> = variants.iter().map(|v| v.0).collect();
+    let _ = write!(
+        out,
+        "Realistic synthetic scenes (0.5°), {scans} scans per family and σ₀:\n\n{}",
+        synthetic_table(&names, scans, &|k, ex, frame, base| {
+            run_core(ex, frame, &(variants[k].1)(*base))
+        })?
+    );
+    Ok(out)
 }
