@@ -67,6 +67,7 @@ use crate::maptruth::{
     build_map, frame_truth, frame_truth_registered, register_log, FrameTruth, Map, TruthConfig,
 };
 use crate::metrics::{mean, std_dev};
+use crate::report::f;
 
 /// Matching gate on |Δα| (degrees).
 pub const GATE_ALPHA_DEG: f64 = 3.0;
@@ -827,6 +828,8 @@ pub struct LogTruth {
     pub unit: Unit,
     /// Frames evaluated.
     pub frames: usize,
+    /// Beams per scan (of the log's first scan; 181 in the 1° logs).
+    pub beams: usize,
     /// Map walls.
     pub walls: usize,
     /// Map lines (collinear walls are one).
@@ -921,6 +924,7 @@ pub fn run_log(
         name,
         unit: log.unit,
         frames: scans.len(),
+        beams: log.scans.first().map_or(0, |s| s.frame.len()),
         walls: map.walls.len(),
         lines: map.walls.last().map_or(0, |w| w.line + 1),
         pieces_per_frame: tallies
@@ -997,14 +1001,6 @@ pub fn run_logs(
         bar.inc(1);
     }
     Ok(out)
-}
-
-fn f(x: f64, d: usize) -> String {
-    if x.is_finite() {
-        format!("{x:.d$}")
-    } else {
-        "—".into()
-    }
 }
 
 /// The Markdown section of the report (heading level `##`): the same text

@@ -68,7 +68,9 @@ pub fn scan_figure(
 
 // ------------------------------------------------------------ formatting --
 
-fn f(x: f64, decimals: usize) -> String {
+/// `x` with `decimals` decimals, or "—" if it is not finite (a figure
+/// with nothing to measure).
+pub(crate) fn f(x: f64, decimals: usize) -> String {
     if x.is_finite() {
         format!("{x:.decimals$}")
     } else {

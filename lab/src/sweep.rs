@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Result;
-use host_bridge::carmen::{self, Scan, UnitMode};
+use host_bridge::carmen::Scan;
 use lms_core::{Extractor, Frame, Params};
 
 use crate::baselines::{run_core, Extraction};
@@ -17,6 +17,7 @@ use crate::realtruth::{
     load_with_map, pooled_table, run_log, score_frame, LogWithMap, RealMethod, RealTally,
     ScoredLine,
 };
+use crate::report::f;
 use crate::scenes::{Family, Sample};
 
 /// A change applied to the defaults (the per-data defaults on real logs,
@@ -204,14 +205,6 @@ pub fn synthetic_table(names: &[&str], scans: usize, run: &RunVariant<'_>) -> Re
     Ok(md)
 }
 
-fn f3(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:.3}")
-    } else {
-        "—".into()
-    }
-}
-
 fn settled_header(md: &mut String, setting: &str) {
     let _ = writeln!(
         md,
@@ -227,15 +220,15 @@ fn settled_row(md: &mut String, log: &str, name: &str, t: &RealTally) {
     let _ = writeln!(
         md,
         "| {log} | {name} | {} | {} | {} ({}) | {} | {} | {} | {} | {} | {bad} of {of} | {:.2} |",
-        f3(s.true_pos),
-        f3(s.true_pos_1m),
-        f3(s.true_pos_mid),
+        f(s.true_pos, 3),
+        f(s.true_pos_1m, 3),
+        f(s.true_pos_mid, 3),
         t.pieces_mid,
-        f3(s.true_pos_short),
-        f3(s.false_pos),
-        f3(s.unexplained),
-        f3(s.coverage),
-        f3(s.fragmented),
+        f(s.true_pos_short, 3),
+        f(s.false_pos, 3),
+        f(s.unexplained, 3),
+        f(s.coverage, 3),
+        f(s.fragmented, 3),
         s.lines_per_frame,
     );
 }
@@ -267,12 +260,8 @@ pub fn settled_sweep(
     settled_header(&mut md, setting);
     settled_header(&mut other, "setting");
     for path in crate::real::find_logs(Path::new("../shared/data/carmen"))? {
-        let beams = carmen::read_log(&path, UnitMode::Auto)?
-            .scans
-            .first()
-            .map_or(0, |s| s.frame.len());
-        let coarse = beams <= 181;
         let r = run_log(&path, &methods, every, &cfg, None)?;
+        let (beams, coarse) = (r.beams, r.beams <= 181);
         let name = r.name.trim_end_matches("-corrected.log.gz");
         let label = format!("{name} ({}°, {beams})", if coarse { "1" } else { "0.5" });
         for (k, t) in r.tallies.iter().enumerate() {

@@ -30,6 +30,7 @@ fn one_log(truth: TruthConfig) -> LogTruth {
         name: "x.log.gz".into(),
         unit: Unit::Centimetre,
         frames: 2,
+        beams: 361,
         walls: 7,
         lines: 6,
         pieces_per_frame: 5.0,
