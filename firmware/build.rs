@@ -35,11 +35,12 @@ fn main() {
     println!("cargo:rerun-if-env-changed=LMS_PRESET");
     let preset = match env::var("LMS_PRESET").as_deref().map(str::trim) {
         Ok("default") | Err(_) => "DEFAULT",
+        Ok("v3.2") => "V3_2",
         Ok("v3.1") => "V3_1",
         Ok("v3.0") => "V3_0",
         Ok("v2") => "V2",
         Ok("paper") => "PAPER",
-        Ok(other) => panic!("LMS_PRESET must be default, v3.1, v3.0, v2 or paper, not {other}"),
+        Ok(other) => panic!("LMS_PRESET must be default, v3.2, v3.1, v3.0, v2 or paper, not {other}"),
     };
     println!("cargo:rerun-if-env-changed=LMS_ITERATIONS");
     let iterations = match env::var("LMS_ITERATIONS") {

@@ -194,6 +194,9 @@ typedef struct LmsParams {
   // Merges refit the two lines' own beams, leaving out the beams
   // between them (0/1).
   uint8_t merge_own_beams;
+  // Each line takes the fit, with or without the footprint term, whose
+  // noise model its beams are likelier under (0/1).
+  uint8_t footprint_choice;
 } LmsParams;
 
 // A scan variant (field of view / resolution): one of the `LMS_FOV*`
@@ -407,7 +410,7 @@ int lms_variant_for_beams(size_t n, LmsVariant *out);
 // `max_range` from its data.
 struct LmsParams lms_params_default(void);
 
-// Write the preset `name` (`"default"`, `"v3.1"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
+// Write the preset `name` (`"default"`, `"v3.2"`, `"v3.1"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
 // `LMS_ERR_PRESET` for another name (`*out` unchanged).
 //
 // # Safety

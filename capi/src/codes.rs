@@ -94,7 +94,7 @@ const MESSAGES: [(c_int, &CStr); 14] = [
     ),
     (
         LMS_ERR_PRESET,
-        c"no preset of that name (default, v3.1, v3.0, v2, paper)",
+        c"no preset of that name (default, v3.2, v3.1, v3.0, v2, paper)",
     ),
     (
         LMS_ERR_FLAG,

@@ -79,6 +79,9 @@ pub struct LmsParams {
     /// Merges refit the two lines' own beams, leaving out the beams
     /// between them (0/1).
     pub merge_own_beams: u8,
+    /// Each line takes the fit, with or without the footprint term, whose
+    /// noise model its beams are likelier under (0/1).
+    pub footprint_choice: u8,
 }
 
 impl From<&Params> for LmsParams {
@@ -116,6 +119,7 @@ impl From<&Params> for LmsParams {
             merge_f_test: p.merge_f_test,
             arc_pairs: p.arc_pairs.into(),
             merge_own_beams: p.merge_own_beams.into(),
+            footprint_choice: p.footprint_choice.into(),
         }
     }
 }
@@ -170,7 +174,8 @@ impl LmsParams {
             .with_turn_offsets(flag(self.turn_offsets)?)
             .with_merge_f_test(self.merge_f_test)
             .with_arc_pairs(flag(self.arc_pairs)?)
-            .with_merge_own_beams(flag(self.merge_own_beams)?))
+            .with_merge_own_beams(flag(self.merge_own_beams)?)
+            .with_footprint_choice(flag(self.footprint_choice)?))
     }
 }
 
@@ -182,7 +187,7 @@ pub extern "C" fn lms_params_default() -> LmsParams {
     LmsParams::from(&Params::DEFAULT)
 }
 
-/// Write the preset `name` (`"default"`, `"v3.1"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
+/// Write the preset `name` (`"default"`, `"v3.2"`, `"v3.1"`, `"v3.0"`, `"v2"` or `"paper"`) to `*out`.
 /// `LMS_ERR_PRESET` for another name (`*out` unchanged).
 ///
 /// # Safety

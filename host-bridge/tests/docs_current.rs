@@ -194,7 +194,7 @@ fn the_docs_check_finds_what_is_wrong() {
         [
             "3: `--set split-depth=3`: no parameter `split-depth`",
             "3: `--set merge=yes`: merge must be true or false",
-            "3: `--preset v1`: no such preset (there are default, v3.1, v3.0, v2, paper)",
+            "3: `--preset v1`: no such preset (there are default, v3.2, v3.1, v3.0, v2, paper)",
         ]
     );
 }

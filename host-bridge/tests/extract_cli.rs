@@ -339,7 +339,7 @@ fn bad_arguments_fail() {
         (vec!["--set", "merge=yes"], "merge must be true or false"),
         (
             vec!["--preset", "v1"],
-            "possible values: default, v3.1, v3.0, v2, paper",
+            "possible values: default, v3.2, v3.1, v3.0, v2, paper",
         ),
         (
             vec!["--params", "/nonexistent/p.toml"],

@@ -17,7 +17,7 @@ use crate::convert::{host_error, warn};
 /// Parameters of the pipeline: a preset and any parameter by name.
 ///
 /// ``Params(preset="default", **settings)``: the preset's values
-/// (``"default"``, ``"v3.1"``, ``"v3.0"``, ``"v2"`` or ``"paper"``, as ``host-bridge --preset``),
+/// (``"default"``, ``"v3.2"``, ``"v3.1"``, ``"v3.0"``, ``"v2"`` or ``"paper"``, as ``host-bridge --preset``),
 /// then each setting, by the parameter's name (``PARAMETERS`` lists every
 /// one with its unit and meaning). A value is a number (``float("inf")``
 /// where the parameter allows it), a whole number, a bool, or text as

@@ -14,7 +14,7 @@ NAMES = [name for name, _, _ in lf.PARAMETERS]
 
 def test_the_table_is_the_cores():
     assert len(NAMES) == 32 and NAMES[:4] == ["sigma", "q", "iterations", "tau"]
-    assert set(lf.PRESETS) == {"default", "v3.1", "v3.0", "v2", "paper"}
+    assert set(lf.PRESETS) == {"default", "v3.2", "v3.1", "v3.0", "v2", "paper"}
     for name, unit, meaning in lf.PARAMETERS:
         assert unit and meaning, name
     assert list(lf.Params().to_dict()) == NAMES
@@ -26,9 +26,12 @@ def test_defaults_and_presets():
     assert (p.sigma, p.q, p.iterations, p.tau, p.min_points) == (0.005, 0.0, 5, 12.0, 5)
     assert (p.max_range, p.merge, p.split_depth) == (81.83, True, 8)
     assert lf.Params(preset="default") == p
+    v3_2 = lf.Params(preset="v3.2")
+    assert p.footprint_choice and not v3_2.footprint_choice
+    assert v3_2.replace(footprint_choice=True) == p
     v3_1 = lf.Params(preset="v3.1")
     assert (v3_1.iterations, v3_1.tau) == (30, 9.0)
-    assert v3_1.replace(iterations=5, tau=12) == p
+    assert v3_1.replace(iterations=5, tau=12) == v3_2
     assert p.merge_own_beams and not lf.Params(preset="v3.0").merge_own_beams
     assert lf.Params(preset="v3.0").replace(merge_own_beams=True) == v3_1
     paper = lf.Params(preset="paper")
@@ -74,7 +77,7 @@ def test_a_bad_value_or_name_is_a_value_error_naming_it(settings, message):
 
 
 def test_other_errors():
-    with pytest.raises(ValueError, match="no preset `v1`: give one of default, v3.1, v3.0, v2, paper"):
+    with pytest.raises(ValueError, match="no preset `v1`: give one of default, v3.2, v3.1, v3.0, v2, paper"):
         lf.Params(preset="v1")
     with pytest.raises(TypeError, match="sigma: a number, a bool or text, not list"):
         lf.Params(sigma=[0.01])

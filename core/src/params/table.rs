@@ -436,6 +436,8 @@ fields! {
         "Drop a pair of touching lines that a circle explains better";
     merge_own_beams, with_merge_own_beams: bool, "bool", ANY, false,
         "Merges refit the two lines' own beams, leaving out the beams between them";
+    footprint_choice, with_footprint_choice: bool, "bool", ANY, false,
+        "Each line takes the fit with or without the footprint term whose noise model its beams are likelier under";
 }
 
 /// The parameter named `name` (a field of [`Params`]).
@@ -454,18 +456,23 @@ pub struct Preset {
     pub params: Params,
 }
 
-/// The presets: `default` ([`Params::DEFAULT`]), `v3.1` ([`Params::V3_1`]),
-/// `v3.0` ([`Params::V3_0`]), `v2` ([`Params::V2`]) and `paper`
-/// ([`Params::PAPER`]).
-pub const PRESETS: [Preset; 5] = [
+/// The presets: `default` ([`Params::DEFAULT`]), `v3.2` ([`Params::V3_2`]),
+/// `v3.1` ([`Params::V3_1`]), `v3.0` ([`Params::V3_0`]), `v2`
+/// ([`Params::V2`]) and `paper` ([`Params::PAPER`]).
+pub const PRESETS: [Preset; 6] = [
     Preset {
         name: "default",
         summary: "For extraction: ALGORITHM.md v2 with the additions measured in docs/ALGORITHM.md (the defaults)",
         params: Params::DEFAULT,
     },
     Preset {
+        name: "v3.2",
+        summary: "For comparison with ALGORITHM.md v3.2: the defaults with every line keeping the footprint weights",
+        params: Params::V3_2,
+    },
+    Preset {
         name: "v3.1",
-        summary: "For comparison with ALGORITHM.md v3.1: the defaults at 30 smoothing passes and tau 9 (too slow for the MCU)",
+        summary: "For comparison with ALGORITHM.md v3.1: v3.2 at 30 smoothing passes and tau 9 (too slow for the MCU)",
         params: Params::V3_1,
     },
     Preset {
@@ -560,9 +567,10 @@ mod tests {
             merge_f_test: 30.0,
             arc_pairs: false,
             merge_own_beams: false,
+            footprint_choice: false,
         };
         assert_eq!(p, every);
-        assert_eq!(FIELDS.len(), 32);
+        assert_eq!(FIELDS.len(), 33);
     }
 
     #[test]

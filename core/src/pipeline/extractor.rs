@@ -10,7 +10,7 @@
 //! [`Extractor::run_observed`] hands `D` and the ranges to a callback after
 //! every pass (the scale-space plots of paper Fig. 10).
 
-use crate::features::{Features, Stats, MAX_LINES, MAX_WINDOWS};
+use crate::features::{Features, Line, Segment, Stats, MAX_LINES, MAX_WINDOWS};
 use crate::frame::{Frame, Geometry, MAX_BEAMS};
 #[cfg(feature = "section10")]
 use crate::params::GRAZING_MAX_INCIDENCE_DEG;
@@ -19,7 +19,9 @@ use crate::pipeline::arcs::mark_arcs;
 use crate::pipeline::bearings::TwoLevelBearings;
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
-use crate::pipeline::line_fit::{fit_piece, BearingTable, Holes, RawScan};
+use crate::pipeline::line_fit::{
+    fit_piece, footprint_log_sum, residual_sum, BearingTable, Holes, RawScan,
+};
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{EdgeList, Segmenter};
 use crate::pipeline::smoothing::{
@@ -479,6 +481,38 @@ fn fit_lines<B: BearingTable>(
         f.lines.retain(|_| !on_arc.next().copied().unwrap_or(false));
     }
     stats.rejected_arc = arcs;
+    // Beyond ALGORITHM.md v2 too: each line's noise model (§7.9).
+    if params.footprint_choice && scan.footprint > 0.0 {
+        choose_noise_models(&mut f.lines, scan, params.line_sigma());
+    }
+}
+
+/// §7.9: each line refitted with every beam at `sigma` (no footprint
+/// term) over its span; the refit replaces it where its beams are likelier
+/// under that model, `S_plain ≤ S + Λ` ([`residual_sum`]s,
+/// [`footprint_log_sum`]). Λ ≥ 0, so it is summed only when
+/// `S_plain > S`.
+fn choose_noise_models<B: BearingTable>(lines: &mut [Line], scan: &RawScan<'_, B>, sigma: f32) {
+    let plain_scan = RawScan {
+        footprint: 0.0,
+        ..*scan
+    };
+    for line in lines.iter_mut() {
+        let span = Segment {
+            first: line.first,
+            last: line.last,
+        };
+        let Ok(plain) = fit_piece(&plain_scan, span, sigma) else {
+            continue;
+        };
+        let s_plain = residual_sum(&plain, scan.turns);
+        let s_weighted = residual_sum(line, scan.turns);
+        if s_plain <= s_weighted
+            || s_plain <= s_weighted + footprint_log_sum(scan, span, line, sigma)
+        {
+            *line = plain;
+        }
+    }
 }
 
 /// §8: a corner for each pair of consecutive lines whose facing endpoints are

@@ -164,6 +164,29 @@ pub fn fit_piece<B: BearingTable>(
     fit_piece_without(scan, piece, &Holes::NONE, sigma)
 }
 
+/// `Λ = Σ ln(1 + t_j²)`, `t_j = (κ/σ)·d_j·tan θ_j` (κ = `scan.footprint`,
+/// σ = `sigma`), over the usable beams of `piece` at `line`'s normal: the
+/// log of the footprint model's range variances over σ², summed
+/// (ALGORITHM.md §7.9). A beam not seen from the front
+/// (`cos θ_j ≤ MIN_INCIDENCE_COS`) adds nothing.
+pub fn footprint_log_sum<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    piece: Segment,
+    line: &Line,
+    sigma: f32,
+) -> f32 {
+    let k = scan.footprint / sigma;
+    let (ca, sa) = cos_sin(line.alpha);
+    let mut sum = 0.0f32;
+    scan.each_valid(piece, ca, sa, |_, d, c, s| {
+        if c > MIN_INCIDENCE_COS {
+            let t = k * d * (s / c);
+            sum += libm::logf(1.0 + t * t);
+        }
+    });
+    sum
+}
+
 /// Most runs of beams a fit leaves out ([`Holes`]).
 pub const MAX_HOLES: usize = 4;
 

@@ -34,7 +34,7 @@ PARAMETERS: Tuple[Tuple[str, str, str], ...]
 """``(name, unit, meaning)`` of every parameter of ``Params``, in field order."""
 
 PRESETS: Dict[str, str]
-"""Preset name (``"default"``, ``"v3.1"``, ``"v3.0"``, ``"v2"``, ``"paper"``) → its one-line summary."""
+"""Preset name (``"default"``, ``"v3.2"``, ``"v3.1"``, ``"v3.0"``, ``"v2"``, ``"paper"``) → its one-line summary."""
 
 STATS: Tuple[Tuple[str, str], ...]
 """``(name, meaning)`` of every counter of ``Features.stats``, in order."""
@@ -65,7 +65,7 @@ class Params:
     """Parameters of the pipeline: a preset and any parameter by name.
 
     ``Params(preset="default", **settings)``: the preset's values
-    (``"default"``, ``"v3.1"``, ``"v3.0"``, ``"v2"`` or ``"paper"``, as ``host-bridge --preset``),
+    (``"default"``, ``"v3.2"``, ``"v3.1"``, ``"v3.0"``, ``"v2"`` or ``"paper"``, as ``host-bridge --preset``),
     then each setting by the parameter's name (``PARAMETERS`` lists every
     one with its unit and meaning). A value is a number (``float("inf")``
     where the parameter allows it), a whole number, a bool, or text as
@@ -160,6 +160,8 @@ class Params:
     """Drop a pair of touching lines that a circle explains better."""
     merge_own_beams: bool
     """Merges refit the two lines' own beams, leaving out the beams between them."""
+    footprint_choice: bool
+    """Each line takes the fit with or without the footprint term whose noise model its beams are likelier under."""
 
 @final
 class Frame:
