@@ -46,10 +46,12 @@ fn a_turn_offset_breaks_spec_windows_but_not_same_turn_windows() {
 #[test]
 fn one_degree_modes_are_unchanged() {
     let frame = one_degree_room();
-    // At the defaults' scale (CONSECUTIVE_WINDOWS has preset v3.1's).
+    // At the defaults' scale and lines (CONSECUTIVE_WINDOWS has preset
+    // v3.1's).
     let spec = CONSECUTIVE_WINDOWS
         .with_iterations(Params::DEFAULT.iterations)
         .with_tau(Params::DEFAULT.tau)
+        .with_footprint_choice(Params::DEFAULT.footprint_choice)
         .validate()
         .unwrap();
     let turn = Params::DEFAULT.validate().unwrap();

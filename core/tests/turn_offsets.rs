@@ -96,9 +96,12 @@ fn a_wall_two_turns_apart_stays_one_line() {
     // Offset 2 cm between the turns, ±5 mm ripple, incidences up to 75°.
     let frame = interleaved_wall(0.2, 2.0, 0.02, 0.005);
     let run = |turn_offsets| {
+        // Every line keeps its footprint-weighted fit (§7.9 off): the χ²
+        // the straightness test, the gate and the merges see.
         let params = Params::DEFAULT
             .with_sigma(SIGMA)
-            .with_turn_offsets(turn_offsets);
+            .with_turn_offsets(turn_offsets)
+            .with_footprint_choice(false);
         let mut ex = Extractor::new();
         let f = ex.run(&frame, &params.validate().unwrap());
         f.lines()

@@ -483,16 +483,21 @@ fn fit_lines<B: BearingTable>(
     stats.rejected_arc = arcs;
     // Beyond ALGORITHM.md v2 too: each line's noise model (§7.9).
     if params.footprint_choice && scan.footprint > 0.0 {
-        choose_noise_models(&mut f.lines, scan, params.line_sigma());
+        choose_noise_models(&mut f.lines, scan, params.line_sigma(), params.max_chi2);
     }
 }
 
 /// §7.9: each line refitted with every beam at `sigma` (no footprint
-/// term) over its span; the refit replaces it where its beams are likelier
-/// under that model, `S_plain ≤ S + Λ` ([`residual_sum`]s,
-/// [`footprint_log_sum`]). Λ ≥ 0, so it is summed only when
-/// `S_plain > S`.
-fn choose_noise_models<B: BearingTable>(lines: &mut [Line], scan: &RawScan<'_, B>, sigma: f32) {
+/// term) over its span; the refit replaces it where it passes `max_chi2`
+/// and the beams are likelier under that model, `S_plain ≤ S + Λ`
+/// ([`residual_sum`]s, [`footprint_log_sum`]). Λ ≥ 0, so it is summed
+/// only when `S_plain > S`.
+fn choose_noise_models<B: BearingTable>(
+    lines: &mut [Line],
+    scan: &RawScan<'_, B>,
+    sigma: f32,
+    max_chi2: f32,
+) {
     let plain_scan = RawScan {
         footprint: 0.0,
         ..*scan
@@ -502,8 +507,9 @@ fn choose_noise_models<B: BearingTable>(lines: &mut [Line], scan: &RawScan<'_, B
             first: line.first,
             last: line.last,
         };
-        let Ok(plain) = fit_piece(&plain_scan, span, sigma) else {
-            continue;
+        let plain = match fit_piece(&plain_scan, span, sigma) {
+            Ok(plain) if plain.chi2 <= max_chi2 => plain,
+            _ => continue,
         };
         let s_plain = residual_sum(&plain, scan.turns);
         let s_weighted = residual_sum(line, scan.turns);
