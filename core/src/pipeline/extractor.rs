@@ -10,7 +10,7 @@
 //! [`Extractor::run_observed`] hands `D` and the ranges to a callback after
 //! every pass (the scale-space plots of paper Fig. 10).
 
-use crate::features::{Features, Line, Segment, Stats, MAX_LINES, MAX_WINDOWS};
+use crate::features::{Features, Line, Stats, MAX_LINES, MAX_WINDOWS};
 use crate::frame::{Frame, Geometry, MAX_BEAMS};
 #[cfg(feature = "section10")]
 use crate::params::GRAZING_MAX_INCIDENCE_DEG;
@@ -20,7 +20,7 @@ use crate::pipeline::bearings::TwoLevelBearings;
 use crate::pipeline::corners::intersect;
 use crate::pipeline::ekf::WindowFilter;
 use crate::pipeline::line_fit::{
-    fit_piece, footprint_log_sum, residual_sum, BearingTable, Holes, RawScan,
+    fit_piece, refit_without_footprint, residual_sum, BearingTable, Holes, RawScan,
 };
 use crate::pipeline::merge::{fit_span, try_merge};
 use crate::pipeline::segmentation::{EdgeList, Segmenter};
@@ -488,33 +488,22 @@ fn fit_lines<B: BearingTable>(
 }
 
 /// §7.9: each line refitted with every beam at `sigma` (no footprint
-/// term) over its span; the refit replaces it where it passes `max_chi2`
-/// and the beams are likelier under that model, `S_plain ≤ S + Λ`
-/// ([`residual_sum`]s, [`footprint_log_sum`]). Λ ≥ 0, so it is summed
-/// only when `S_plain > S`.
+/// term, [`refit_without_footprint`]); the refit replaces it where it
+/// passes `max_chi2` and the beams are likelier under that model:
+/// `S_plain ≤ S + Λ`, `S` the [`residual_sum`]s, `Λ` the log of the
+/// footprint model's variances over σ².
 fn choose_noise_models<B: BearingTable>(
     lines: &mut [Line],
     scan: &RawScan<'_, B>,
     sigma: f32,
     max_chi2: f32,
 ) {
-    let plain_scan = RawScan {
-        footprint: 0.0,
-        ..*scan
-    };
     for line in lines.iter_mut() {
-        let span = Segment {
-            first: line.first,
-            last: line.last,
+        let Ok((plain, log_variances)) = refit_without_footprint(scan, line, sigma) else {
+            continue;
         };
-        let plain = match fit_piece(&plain_scan, span, sigma) {
-            Ok(plain) if plain.chi2 <= max_chi2 => plain,
-            _ => continue,
-        };
-        let s_plain = residual_sum(&plain, scan.turns);
-        let s_weighted = residual_sum(line, scan.turns);
-        if s_plain <= s_weighted
-            || s_plain <= s_weighted + footprint_log_sum(scan, span, line, sigma)
+        if plain.chi2 <= max_chi2
+            && residual_sum(&plain, scan.turns) <= residual_sum(line, scan.turns) + log_variances
         {
             *line = plain;
         }

@@ -164,29 +164,6 @@ pub fn fit_piece<B: BearingTable>(
     fit_piece_without(scan, piece, &Holes::NONE, sigma)
 }
 
-/// `Λ = Σ ln(1 + t_j²)`, `t_j = (κ/σ)·d_j·tan θ_j` (κ = `scan.footprint`,
-/// σ = `sigma`), over the usable beams of `piece` at `line`'s normal: the
-/// log of the footprint model's range variances over σ², summed
-/// (ALGORITHM.md §7.9). A beam not seen from the front
-/// (`cos θ_j ≤ MIN_INCIDENCE_COS`) adds nothing.
-pub fn footprint_log_sum<B: BearingTable>(
-    scan: &RawScan<'_, B>,
-    piece: Segment,
-    line: &Line,
-    sigma: f32,
-) -> f32 {
-    let k = scan.footprint / sigma;
-    let (ca, sa) = cos_sin(line.alpha);
-    let mut sum = 0.0f32;
-    scan.each_valid(piece, ca, sa, |_, d, c, s| {
-        if c > MIN_INCIDENCE_COS {
-            let t = k * d * (s / c);
-            sum += libm::logf(1.0 + t * t);
-        }
-    });
-    sum
-}
-
 /// Most runs of beams a fit leaves out ([`Holes`]).
 pub const MAX_HOLES: usize = 4;
 
@@ -270,6 +247,101 @@ pub fn fit_piece_without<B: BearingTable>(
         chi2,
         endpoints: span.endpoints(ca, sa, r),
     })
+}
+
+/// ALGORITHM.md §7.9: `line` refitted to every usable beam of its span
+/// with every beam at `sigma` (no footprint term, every weight 1) by one
+/// Gauss–Newton step from `line`'s own solution (a one-step estimator:
+/// the two solutions lie well within one step of each other), its
+/// covariance `σ²(JᵀJ)⁻¹` at `line`'s solution and its χ² from the
+/// residual sum the linearised model predicts; with it `Λ = ln Π(1 +
+/// t_j²)`, `t_j = (κ/σ)·d_j·tan θ_j` (κ = `scan.footprint`) over those
+/// beams at `line`'s normal, the log of the footprint model's range
+/// variances over σ², summed. One pass over the beams.
+pub fn refit_without_footprint<B: BearingTable>(
+    scan: &RawScan<'_, B>,
+    line: &Line,
+    sigma: f32,
+) -> Result<(Line, f32), FitError> {
+    let piece = Segment {
+        first: line.first,
+        last: line.last,
+    };
+    // Unweighted: `Span::new` leaves the footprint term off.
+    let span = Span::new(scan, piece).ok_or(FitError::TooFewPoints)?;
+    let (ca, sa) = cos_sin(line.alpha);
+    let start = Normal { ca, sa, r: line.r };
+    let step = span.footprint_free_step(start, scan.footprint / sigma, scan.turns)?;
+    let Normal { ca, sa, r } = step.solution.facing_sensor();
+    let alpha = match atan2(sa, ca) {
+        a if a <= -core::f32::consts::PI => core::f32::consts::PI,
+        a => a,
+    };
+    let var = sigma * sigma;
+    let cov = step
+        .jtj
+        .inverse_spd()
+        .ok_or(FitError::Degenerate)?
+        .scale(var);
+    let chi2 = step.residual / (var * residual_dof(step.points, step.turns));
+    let refit = Line {
+        alpha,
+        r,
+        cov,
+        first: line.first,
+        last: (span.lo + span.ranges.len() - 1) as u16,
+        points: step.points,
+        chi2,
+        endpoints: span.endpoints(ca, sa, r),
+    };
+    Ok((refit, step.log_variances))
+}
+
+/// What [`Span::footprint_free_step`] finds in its one pass.
+struct FootprintFreeStep {
+    /// The normal after the step (`r` not yet made ≥ 0).
+    solution: Normal,
+    /// `JᵀJ` at the start.
+    jtj: Sym2,
+    /// The residual sum after the step (m², the turns' offsets out).
+    residual: f32,
+    /// Usable beams.
+    points: u16,
+    /// The turns whose offsets are taken out (1: none).
+    turns: u8,
+    /// `Λ` of §7.9.
+    log_variances: f32,
+}
+
+/// The natural log of a product of factors ≥ 1, taken without overflow:
+/// the running product is kept as `mantissa · 2^exponent` with the mantissa
+/// in `[1, 2)`, its binary exponent moved out after each factor
+/// (ALGORITHM.md §7.9). One `logf` for the whole product.
+#[derive(Clone, Copy, Debug)]
+struct LogProduct {
+    mantissa: f32,
+    exponent: i32,
+}
+
+impl LogProduct {
+    /// The empty product, 1.
+    const ONE: LogProduct = LogProduct {
+        mantissa: 1.0,
+        exponent: 0,
+    };
+
+    /// Multiply by `x` (finite, ≥ 1).
+    #[inline(always)]
+    fn times(&mut self, x: f32) {
+        let bits = (self.mantissa * x).to_bits();
+        self.exponent += ((bits >> 23) & 0xff) as i32 - 127;
+        self.mantissa = f32::from_bits((bits & 0x007f_ffff) | (127 << 23));
+    }
+
+    /// `ln` of the product: `exponent·ln 2 + ln(mantissa)`.
+    fn ln(self) -> f32 {
+        self.exponent as f32 * core::f32::consts::LN_2 + libm::logf(self.mantissa)
+    }
 }
 
 /// The beams `first..=last` of a segment as two slices of one length,
@@ -474,6 +546,83 @@ impl<'a, B: BearingTable> Span<'a, B> {
             }
         }
         Ok(Normal { ca, sa, r })
+    }
+
+    /// §7.9: one unweighted Gauss–Newton step from `(ca, sa, r)` over the
+    /// usable beams, with what the refit needs from the same pass: `JᵀJ`
+    /// at `(ca, sa, r)`, the residual sum after the step as the linearised
+    /// model predicts it (`Σe² − δᵀJᵀe`, the turns' offsets taken out of it
+    /// where `turns` asks for it, at most `m` beams), the number `m` of
+    /// usable beams and `Λ = ln Π(1 + t²)`, `t = k·d·(sin θ·(1/cos θ))`.
+    fn footprint_free_step(
+        &self,
+        Normal { ca, sa, r }: Normal,
+        k: f32,
+        turns: u8,
+    ) -> Result<FootprintFreeStep, FitError> {
+        let mut jte = [0.0f32; 2];
+        let mut jtj = Sym2::default();
+        let mut sum_e2 = 0.0f32;
+        let mut edge_on = false;
+        let mut m = 0u32;
+        let mut variances = LogProduct::ONE;
+        // Per turn: Σe, Σ∂e/∂α, Σ∂e/∂r (as Σja, Σjr) and the beams.
+        let mask = TurnSums::new(turns).mask;
+        let (mut te, mut ta, mut tr, mut tw) = (
+            [0.0f32; MAX_TURNS],
+            [0.0f32; MAX_TURNS],
+            [0.0f32; MAX_TURNS],
+            [0.0f32; MAX_TURNS],
+        );
+        self.each_valid_beam(ca, sa, |j, d, cd, sd| {
+            edge_on |= !(cd > MIN_INCIDENCE_COS);
+            let inv_c = 1.0 / cd;
+            let e = d - r * inv_c;
+            let ja = -r * sd * inv_c * inv_c;
+            let jr = inv_c;
+            jtj.a += ja * ja;
+            jtj.b += ja * jr;
+            jtj.c += jr * jr;
+            jte[0] += ja * e;
+            jte[1] += jr * e;
+            sum_e2 += e * e;
+            let t = j & mask & (MAX_TURNS - 1);
+            te[t] += e;
+            ta[t] += ja;
+            tr[t] += jr;
+            tw[t] += 1.0;
+            let f = k * d * (sd * inv_c);
+            variances.times(1.0 + f * f);
+            m += 1;
+        });
+        if edge_on {
+            return Err(FitError::Degenerate);
+        }
+        if m < 3 {
+            return Err(FitError::TooFewPoints);
+        }
+        let inv = jtj.inverse_spd().ok_or(FitError::Degenerate)?;
+        let d_alpha = inv.a * jte[0] + inv.b * jte[1];
+        let d_r = inv.b * jte[0] + inv.c * jte[1];
+        let after = sum_e2 - (d_alpha * jte[0] + d_r * jte[1]);
+        let points = m.min(u16::MAX as u32) as u16;
+        let turns = offset_turns(points, turns);
+        let mut per_turn = TurnSums::new(turns);
+        if per_turn.mask != 0 {
+            for t in 0..MAX_TURNS {
+                per_turn.e[t] = te[t] - (d_alpha * ta[t] + d_r * tr[t]);
+                per_turn.w[t] = tw[t];
+            }
+        }
+        let (ca, sa) = rotate(ca, sa, d_alpha);
+        Ok(FootprintFreeStep {
+            solution: Normal { ca, sa, r: r + d_r },
+            jtj,
+            residual: per_turn.take_out_of(after.max(0.0)),
+            points,
+            turns,
+            log_variances: variances.ln(),
+        })
     }
 
     /// §7.3–7.4: `JᵀJ` and `Σ e²` at the solution `(cos α, sin α, r)`;
