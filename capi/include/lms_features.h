@@ -417,7 +417,8 @@ struct LmsParams lms_params_default(void);
 //
 // `name` is NULL or a NUL-terminated string; `out` is NULL or points to
 // writable memory for one `LmsParams`.
-int lms_params_preset(const char *name, struct LmsParams *out);
+int lms_params_preset(const char *name,
+                      struct LmsParams *out);
 
 // Check `*params` as the extraction would: `LMS_OK` or the code of the
 // first field refused.

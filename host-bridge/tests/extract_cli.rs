@@ -419,7 +419,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
     const PINNED: [Pin; 7] = [
         (
             "acapulco-corrected",
-            0xbfacc1d32ca88cda,
+            0x42d71018507ca20e,
             0xa3f8776617088897,
             0x04250938a78912fa,
             0xc40701c7d173c357,
@@ -429,7 +429,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "belgioioso-corrected",
-            0x00fa77ace21ad7a3,
+            0x2f0b292422c6bf20,
             0x0b4302b0290ca5d1,
             0x0b4302b0290ca5d1,
             0xe5cd3416cf912913,
@@ -439,7 +439,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "csail-corrected",
-            0x8c7916bddcb78a12,
+            0x1334903b473a4a1a,
             0xd6ad46dc5e78fb06,
             0xd6ad46dc5e78fb06,
             0x83fc1a76c6ce7327,
@@ -449,7 +449,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "freiburg-101-corrected",
-            0xef325788d804306d,
+            0x9523471d051096cd,
             0xead9bdb3cf37d669,
             0xead9bdb3cf37d669,
             0x18db85e23d9855b4,
@@ -459,7 +459,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "freiburg-campus-corrected",
-            0x1b46481146118dec,
+            0x54b520eae02b1a23,
             0x3238531ce147315d,
             0x37ae5dcfab6bf12d,
             0x9e9f56de6baafb1e,
@@ -469,7 +469,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "intel-corrected",
-            0xf1fddf529e4a6ce4,
+            0x47658bc763f09b8b,
             0xbebe5ac352b47944,
             0x4abed1f79912e32e,
             0x739aa99c0dab50e2,
@@ -479,7 +479,7 @@ fn extract_json_of_every_shared_log_is_pinned() {
         ),
         (
             "orebro-corrected",
-            0xdac0ac2b2ce68929,
+            0x0b5c130c11f0bb7d,
             0x582be87adeaa59c8,
             0x582be87adeaa59c8,
             0x23de0131a1d3b95d,

@@ -624,6 +624,120 @@ pub fn fit_line(
     })
 }
 
+/// v3.3 §7.9: the refit of a footprint-weighted line `(alpha, r)` over the
+/// usable beams `first..=last` with every beam at σ, written from the text:
+/// one Gauss–Newton step of the unweighted range model from `(alpha, r)`,
+/// the covariance `σ²·(JᵀJ)⁻¹` at `(alpha, r)`, the χ² of the residual sum
+/// the linearised model predicts after the step (`Σe² − δᵀJᵀe`, the turns'
+/// offsets taken out of it with each turn's residuals moved by the step),
+/// the endpoints at the new line; and `Λ = Σ ln(1 + (κ/σ·d·tan θ)²)` at
+/// `(alpha, r)`, summed directly. `None` for fewer than three beams, a beam
+/// seen edge-on or a singular system.
+pub fn refit_without_footprint(
+    ranges: &[f64],
+    usable: &[bool],
+    geometry: RefGeometry,
+    (first, last): (usize, usize),
+    (alpha, r): (f64, f64),
+    fit: FitSettings,
+) -> Option<(RefLine, f64)> {
+    use std::f64::consts::PI;
+    let beams: Vec<usize> = (first..=last.min(ranges.len().saturating_sub(1)))
+        .filter(|&j| usable[j])
+        .collect();
+    let m = beams.len();
+    if m < 3 {
+        return None;
+    }
+    let k = fit.footprint / fit.sigma;
+    let (mut n, mut g, mut sum, mut lambda) = ([[0.0f64; 2]; 2], [0.0f64; 2], 0.0, 0.0);
+    // Per beam: turn, residual, Jacobian row (α, r).
+    let mut rows = Vec::with_capacity(m);
+    for &j in &beams {
+        let delta = geometry.bearing(j) - alpha;
+        let (c, s) = (delta.cos(), delta.sin());
+        if c <= MIN_INCIDENCE_COS {
+            return None;
+        }
+        let d = ranges[j];
+        let (e, ja, jr) = (d - r / c, -r * s / (c * c), 1.0 / c);
+        n[0][0] += ja * ja;
+        n[0][1] += ja * jr;
+        n[1][1] += jr * jr;
+        g[0] += ja * e;
+        g[1] += jr * e;
+        sum += e * e;
+        lambda += (k * d * s / c).powi(2).ln_1p();
+        rows.push((j, e, ja, jr));
+    }
+    let det = n[0][0] * n[1][1] - n[0][1] * n[0][1];
+    if !(n[0][0] > 0.0 && det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    let inv = [
+        [n[1][1] / det, -n[0][1] / det],
+        [-n[0][1] / det, n[0][0] / det],
+    ];
+    let da = inv[0][0] * g[0] + inv[0][1] * g[1];
+    let dr = inv[1][0] * g[0] + inv[1][1] * g[1];
+    let mut after = (sum - (da * g[0] + dr * g[1])).max(0.0);
+    let offsets = matches!(fit.turns, 2 | 4) && m > 2 * fit.turns;
+    let dof = if offsets {
+        let t = fit.turns;
+        let (mut se, mut sw) = (vec![0.0; t], vec![0.0; t]);
+        for &(j, e, ja, jr) in &rows {
+            se[j % t] += e - (ja * da + jr * dr);
+            sw[j % t] += 1.0;
+        }
+        let mean = se.iter().sum::<f64>() / sw.iter().sum::<f64>();
+        let between: f64 = (0..t)
+            .filter(|&u| sw[u] > 0.0)
+            .map(|u| sw[u] * (se[u] / sw[u] - mean).powi(2))
+            .sum();
+        after = (after - between).max(0.0);
+        m - 1 - t
+    } else {
+        m - 2
+    };
+    let (mut alpha, mut r) = (alpha + da, r + dr);
+    if r < 0.0 {
+        (alpha, r) = (alpha + PI, -r);
+    }
+    let alpha = wrap(alpha);
+    let var = fit.sigma * fit.sigma;
+    let point = |j: usize| {
+        let phi = geometry.bearing(j);
+        let (x, y) = (ranges[j] * phi.cos(), ranges[j] * phi.sin());
+        let dist = x * alpha.cos() + y * alpha.sin() - r;
+        [x - dist * alpha.cos(), y - dist * alpha.sin()]
+    };
+    let line = RefLine {
+        alpha,
+        r,
+        cov: [
+            [var * inv[0][0], var * inv[0][1]],
+            [var * inv[1][0], var * inv[1][1]],
+        ],
+        points: m,
+        chi2: after / (var * dof.max(1) as f64),
+        endpoints: [point(beams[0]), point(beams[m - 1])],
+    };
+    Some((line, lambda))
+}
+
+/// A line's residual sum `χ²·dof` (v3 §7.3), `dof` = `m − 1 − turns` where
+/// the turns' offsets apply (2 or 4 turns, more than two beams per turn),
+/// else `m − 2`, at least 1.
+pub fn residual_sum(line: &RefLine, turns: usize) -> f64 {
+    let m = line.points;
+    let dof = if matches!(turns, 2 | 4) && m > 2 * turns {
+        m - 1 - turns
+    } else {
+        m.saturating_sub(2)
+    };
+    line.chi2 * dof.max(1) as f64
+}
+
 /// A corner by [`corner`] (v3 §8).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RefCorner {

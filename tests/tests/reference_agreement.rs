@@ -14,6 +14,11 @@
 //!   the reference's footprint-weighted fit of the same usable beams, with
 //!   the turns' offsets out of χ²: the number of points exactly, α, r, the
 //!   covariance, χ² and the endpoints within named tolerances;
+//! * §7.9 — where the core's line took the refit without the footprint
+//!   term, that line against the reference's refit (one unweighted
+//!   Gauss–Newton step from the reference's weighted fit); and the core's
+//!   choice against the reference's likelihood ratio wherever that is not
+//!   a near tie;
 //! * §8 — a corner for exactly the consecutive pairs whose facing endpoints
 //!   are closer than `corner_gap`, and each corner's position, covariance,
 //!   angle and conditioning against the reference's intersection of the same
@@ -256,8 +261,7 @@ fn compare(case: &Case, report: &mut Report) {
     check_fits(
         case,
         &label,
-        &raw,
-        &valid,
+        (&frame, &raw, &valid),
         &case.params,
         ex.features(),
         report,
@@ -402,7 +406,14 @@ fn compare_windows(
             }
         }
         let fits_label = format!("{label} pass {passes}");
-        check_fits(case, &fits_label, raw, valid, &run, ex.features(), report);
+        check_fits(
+            case,
+            &fits_label,
+            (frame, raw, valid),
+            &run,
+            ex.features(),
+            report,
+        );
     }
 }
 
@@ -487,14 +498,53 @@ fn uncovered_runs(f: &Features, first: usize, last: usize) -> Vec<(usize, usize)
     runs
 }
 
-/// §7.1–7.5 and §8 of the core's features: every line against the
-/// reference's fit of the same beams, every corner against the reference's
-/// intersection of the same two lines, and the corners where §8 puts them.
+/// §7.9: the reference's line for the core's line `l`, whose fit before
+/// §7.9 was `weighted` (the reference's `rw`): the reference's refit
+/// without the footprint term where the core took its refit, else `rw`.
+/// Which lines take the refit is the core's decision (its f32 residual
+/// sums against the reference's f64 ones); it must agree with the
+/// reference's likelihood ratio wherever that is not a near tie.
+fn noise_model(
+    (l, weighted): (&lms_core::Line, &lms_core::Line),
+    rw: reference::RefLine,
+    (raw, usable, geometry): (&[f64], &[bool], RefGeometry),
+    fit: FitSettings,
+    max_chi2: f64,
+) -> Result<reference::RefLine, String> {
+    let span = (weighted.first as usize, weighted.last as usize);
+    let refit =
+        reference::refit_without_footprint(raw, usable, geometry, span, (rw.alpha, rw.r), fit);
+    let took = l != weighted;
+    let Some((plain, lambda)) = refit else {
+        return if took {
+            Err("took a refit the reference cannot make".into())
+        } else {
+            Ok(rw)
+        };
+    };
+    let weighted_sum = reference::residual_sum(&rw, fit.turns);
+    let margin = weighted_sum + lambda - reference::residual_sum(&plain, fit.turns);
+    let takes = plain.chi2 <= max_chi2 && margin >= 0.0;
+    let clear = margin.abs() > 1e-3 * weighted_sum.max(1.0)
+        && (plain.chi2 - max_chi2).abs() > 1e-4 * max_chi2;
+    if clear && takes != took {
+        return Err(format!(
+            "core took the refit: {took}, reference: {takes} (margin {margin:.3e}, χ² {:.4})",
+            plain.chi2
+        ));
+    }
+    Ok(if took { plain } else { rw })
+}
+
+/// §7.1–7.5, §7.9 and §8 of the core's features: every line against the
+/// reference's fit of the same beams (with §7.9 on, the lines of the same
+/// run without it give each line's fit before §7.9), every corner against
+/// the reference's intersection of the same two lines, and the corners
+/// where §8 puts them.
 fn check_fits(
     case: &Case,
     label: &str,
-    raw: &[f64],
-    valid: &[bool],
+    (frame, raw, valid): (&Frame, &[f64], &[bool]),
     params: &Params,
     f: &Features,
     report: &mut Report,
@@ -506,14 +556,42 @@ fn check_fits(
         step: case.step as f64,
     };
     let fit = FitSettings::of(&rp, case.step as f64);
+    let choice = params.footprint_choice && params.footprint > 0.0;
+    let weighted_run = choice.then(|| {
+        let without = params.with_footprint_choice(false);
+        let mut ex = Extractor::new();
+        ex.run(frame, &without.validate().expect("valid params"));
+        ex.features().clone()
+    });
+    let before = weighted_run.as_ref().unwrap_or(f);
     let worst = &mut report.fits;
     let failures = &mut report.failures;
-    for (k, l) in f.lines().iter().enumerate() {
+    if before.lines().len() != f.lines().len() {
+        failures.push(format!(
+            "{label}: {} lines, {} without §7.9",
+            f.lines().len(),
+            before.lines().len()
+        ));
+        return;
+    }
+    for (k, (l, w)) in f.lines().iter().zip(before.lines()).enumerate() {
         worst.lines += 1;
         let at = || format!("{label} line {k} ({}..={})", l.first, l.last);
-        let Some(rl) = reference_fit(f, l, raw, &usable, geometry, fit) else {
+        let Some(rw) = reference_fit(before, w, raw, &usable, geometry, fit) else {
             failures.push(format!("{}: no reference fit", at()));
             continue;
+        };
+        let rl = if choice {
+            let scan = (raw, &usable[..], geometry);
+            match noise_model((l, w), rw, scan, fit, params.max_chi2 as f64) {
+                Ok(rl) => rl,
+                Err(why) => {
+                    failures.push(format!("{}: §7.9: {why}", at()));
+                    continue;
+                }
+            }
+        } else {
+            rw
         };
         if rl.points != l.points as usize {
             failures.push(format!(
