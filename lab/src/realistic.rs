@@ -86,7 +86,7 @@ pub fn sample(
 }
 
 /// The methods: ALGORITHM.md v1 ([`Params::PAPER`]) and v2
-/// ([`Params::V2`]); the defaults; [`Params::V3_1`]; [`Params::V3_0`] and groups of the
+/// ([`Params::V2`]); the defaults; [`Params::V3_2`]; [`Params::V3_1`]; [`Params::V3_0`] and groups of the
 /// defaults' decisions turned off on top of it, each on top of the one
 /// before ([`crate::ablation`]); the
 /// defaults with one option that is not a default; split-and-merge.
@@ -98,6 +98,7 @@ pub fn methods() -> Vec<Method> {
             Params::PAPER.with_sigma(p.sigma)
         }),
         crate::defaults_method(),
+        core("v3.2 (--preset v3.2)", |p| Params::V3_2.with_sigma(p.sigma)),
         core("v3.1 (--preset v3.1)", |p| Params::V3_1.with_sigma(p.sigma)),
         core("v3.0 (--preset v3.0)", |p| Params::V3_0.with_sigma(p.sigma)),
         core(ablation::ARC_PAIRS_KEPT_NAME, |p| {

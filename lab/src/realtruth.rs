@@ -234,6 +234,9 @@ pub const NO_ANCHOR_NO_OFFSETS: &str = ablation::NO_ANCHOR_NO_OFFSETS_NAME;
 /// of an arc kept too ([`crate::ablation::ARC_CHAINS_KEPT`]) gives the same
 /// figures: no line of them is dropped as an arc.
 pub const CONSECUTIVE_WINDOWS: &str = ablation::CONSECUTIVE_WINDOWS_NAME;
+/// Name of ALGORITHM.md v3.2's defaults on the data ([`Params::V3_2`]:
+/// every line keeps its footprint-weighted fit).
+pub const V3_2_NO_FLAGS: &str = "v3.2 (--preset v3.2, σ per data)";
 /// Name of ALGORITHM.md v3.1's defaults on the data ([`Params::V3_1`]: 30
 /// smoothing passes, τ = 9).
 pub const V3_1_NO_FLAGS: &str = "v3.1 (--preset v3.1, σ per data)";
@@ -269,6 +272,7 @@ pub fn methods() -> Vec<RealMethod> {
     let own = SigmaChoice::Base;
     vec![
         m(NO_FLAGS, Core, NoFlags, own),
+        g(V3_2_NO_FLAGS, |p| on_data(Params::V3_2, p)),
         g(V3_1_NO_FLAGS, |p| on_data(Params::V3_1, p)),
         g(V3_0_NO_FLAGS, |p| on_data(Params::V3_0, p)),
         g(ARC_PAIRS_KEPT, |p| on_data(ablation::ARC_PAIRS_KEPT, p)),
