@@ -493,13 +493,8 @@ pub fn fit_line(
     fit: FitSettings,
 ) -> Option<RefLine> {
     use std::f64::consts::PI;
-    let beams: Vec<usize> = (first..=last.min(ranges.len().saturating_sub(1)))
-        .filter(|&j| usable[j])
-        .collect();
+    let beams = fit_beams(ranges, usable, first, last)?;
     let m = beams.len();
-    if m < 3 {
-        return None;
-    }
     let point = |j: usize| {
         let phi = geometry.bearing(j);
         [ranges[j] * phi.cos(), ranges[j] * phi.sin()]
@@ -597,12 +592,7 @@ pub fn fit_line(
             we[j % t] += w * e;
             ww[j % t] += w;
         }
-        let mean = we.iter().sum::<f64>() / ww.iter().sum::<f64>();
-        let between: f64 = (0..t)
-            .filter(|&u| ww[u] > 0.0)
-            .map(|u| ww[u] * (we[u] / ww[u] - mean).powi(2))
-            .sum();
-        sum = (sum - between).max(0.0);
+        sum = (sum - between_turns(&we, &ww)).max(0.0);
         m - 1 - t
     } else {
         m - 2
@@ -624,6 +614,26 @@ pub fn fit_line(
     })
 }
 
+/// The usable beams of `first..=last` a fit takes (v3 §7.1); `None` for
+/// fewer than three.
+fn fit_beams(ranges: &[f64], usable: &[bool], first: usize, last: usize) -> Option<Vec<usize>> {
+    let beams: Vec<usize> = (first..=last.min(ranges.len().saturating_sub(1)))
+        .filter(|&j| usable[j])
+        .collect();
+    (beams.len() >= 3).then_some(beams)
+}
+
+/// What the turns' offsets explain (v3 §7.3): `Σ_t W_t·(ē_t − ē)²`, the
+/// turns' weighted mean residuals `ē_t = sums[t]/weights[t]` about their
+/// common mean, over the turns with weight.
+fn between_turns(sums: &[f64], weights: &[f64]) -> f64 {
+    let mean = sums.iter().sum::<f64>() / weights.iter().sum::<f64>();
+    (0..sums.len())
+        .filter(|&u| weights[u] > 0.0)
+        .map(|u| weights[u] * (sums[u] / weights[u] - mean).powi(2))
+        .sum()
+}
+
 /// v3.3 §7.9: the refit of a footprint-weighted line `(alpha, r)` over the
 /// usable beams `first..=last` with every beam at σ, written from the text:
 /// one Gauss–Newton step of the unweighted range model from `(alpha, r)`,
@@ -642,13 +652,8 @@ pub fn refit_without_footprint(
     fit: FitSettings,
 ) -> Option<(RefLine, f64)> {
     use std::f64::consts::PI;
-    let beams: Vec<usize> = (first..=last.min(ranges.len().saturating_sub(1)))
-        .filter(|&j| usable[j])
-        .collect();
+    let beams = fit_beams(ranges, usable, first, last)?;
     let m = beams.len();
-    if m < 3 {
-        return None;
-    }
     let k = fit.footprint / fit.sigma;
     let (mut n, mut g, mut sum, mut lambda) = ([[0.0f64; 2]; 2], [0.0f64; 2], 0.0, 0.0);
     // Per beam: turn, residual, Jacobian row (α, r).
@@ -689,12 +694,7 @@ pub fn refit_without_footprint(
             se[j % t] += e - (ja * da + jr * dr);
             sw[j % t] += 1.0;
         }
-        let mean = se.iter().sum::<f64>() / sw.iter().sum::<f64>();
-        let between: f64 = (0..t)
-            .filter(|&u| sw[u] > 0.0)
-            .map(|u| sw[u] * (se[u] / sw[u] - mean).powi(2))
-            .sum();
-        after = (after - between).max(0.0);
+        after = (after - between_turns(&se, &sw)).max(0.0);
         m - 1 - t
     } else {
         m - 2
