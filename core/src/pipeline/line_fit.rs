@@ -278,11 +278,7 @@ pub fn refit_without_footprint<B: BearingTable>(
         a => a,
     };
     let var = sigma * sigma;
-    let cov = step
-        .jtj
-        .inverse_spd()
-        .ok_or(FitError::Degenerate)?
-        .scale(var);
+    let cov = step.inverse.scale(var);
     let chi2 = step.residual / (var * residual_dof(step.points, step.turns));
     let refit = Line {
         alpha,
@@ -301,8 +297,8 @@ pub fn refit_without_footprint<B: BearingTable>(
 struct FootprintFreeStep {
     /// The normal after the step (`r` not yet made ≥ 0).
     solution: Normal,
-    /// `JᵀJ` at the start.
-    jtj: Sym2,
+    /// `(JᵀJ)⁻¹` at the start.
+    inverse: Sym2,
     /// The residual sum after the step (m², the turns' offsets out).
     residual: f32,
     /// Usable beams.
@@ -549,8 +545,8 @@ impl<'a, B: BearingTable> Span<'a, B> {
     }
 
     /// §7.9: one unweighted Gauss–Newton step from `(ca, sa, r)` over the
-    /// usable beams, with what the refit needs from the same pass: `JᵀJ`
-    /// at `(ca, sa, r)`, the residual sum after the step as the linearised
+    /// usable beams, with what the refit needs from the same pass:
+    /// `(JᵀJ)⁻¹` at `(ca, sa, r)`, the residual sum after the step as the linearised
     /// model predicts it (`Σe² − δᵀJᵀe`, the turns' offsets taken out of it
     /// where `turns` asks for it, at most `m` beams), the number `m` of
     /// usable beams and `Λ = ln Π(1 + t²)`, `t = k·d·(sin θ·(1/cos θ))`.
@@ -617,7 +613,7 @@ impl<'a, B: BearingTable> Span<'a, B> {
         let (ca, sa) = rotate(ca, sa, d_alpha);
         Ok(FootprintFreeStep {
             solution: Normal { ca, sa, r: r + d_r },
-            jtj,
+            inverse: inv,
             residual: per_turn.take_out_of(after.max(0.0)),
             points,
             turns,
