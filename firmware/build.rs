@@ -40,7 +40,9 @@ fn main() {
         Ok("v3.0") => "V3_0",
         Ok("v2") => "V2",
         Ok("paper") => "PAPER",
-        Ok(other) => panic!("LMS_PRESET must be default, v3.2, v3.1, v3.0, v2 or paper, not {other}"),
+        Ok(other) => {
+            panic!("LMS_PRESET must be default, v3.2, v3.1, v3.0, v2 or paper, not {other}")
+        }
     };
     println!("cargo:rerun-if-env-changed=LMS_ITERATIONS");
     let iterations = match env::var("LMS_ITERATIONS") {
