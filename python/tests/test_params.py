@@ -13,7 +13,7 @@ NAMES = [name for name, _, _ in lf.PARAMETERS]
 
 
 def test_the_table_is_the_cores():
-    assert len(NAMES) == 32 and NAMES[:4] == ["sigma", "q", "iterations", "tau"]
+    assert len(NAMES) == 33 and NAMES[:4] == ["sigma", "q", "iterations", "tau"]
     assert set(lf.PRESETS) == {"default", "v3.2", "v3.1", "v3.0", "v2", "paper"}
     for name, unit, meaning in lf.PARAMETERS:
         assert unit and meaning, name
