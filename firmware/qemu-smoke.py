@@ -72,6 +72,15 @@ class Deframer:
     def __init__(self):
         self.buf = bytearray()
         self.bad = 0
+        self.fed = 0  # bytes taken off the front so far
+        self.first_bad = None  # (stream offset, the 48 bytes there) of the first skip
+
+    def skip(self):
+        if self.first_bad is None:
+            self.first_bad = (self.fed, bytes(self.buf[:48]).hex(" "))
+        self.bad += 1
+        self.fed += 1
+        del self.buf[0]
 
     def feed(self, data):
         self.buf += data
@@ -79,11 +88,11 @@ class Deframer:
         while self.buf:
             if self.buf[0] == ACK:
                 out.append(b"\x06")
+                self.fed += 1
                 del self.buf[0]
                 continue
             if self.buf[0] != STX:
-                self.bad += 1
-                del self.buf[0]
+                self.skip()
                 continue
             if len(self.buf) < 4:
                 break
@@ -93,10 +102,10 @@ class Deframer:
             t = bytes(self.buf[:total])
             if lms_crc(t[:-2]) == int.from_bytes(t[-2:], "little"):
                 out.append(t)
+                self.fed += total
                 del self.buf[:total]
             else:
-                self.bad += 1
-                del self.buf[0]
+                self.skip()
         return out
 
 
@@ -379,7 +388,9 @@ def coprocessor(host, sensor, control, n_scans=5):
           " ".join("+".join(f"{c:02X}" for c in p) for p in per_scan[:2]) + " ...")
     lines = [t for t in reader.telegrams if cmd(t) == 0xD1]
     check("lines found in the room", lines and len(lines[-1]) > 20, f"D1 of {len(lines[-1]) if lines else 0} bytes")
-    check("host stream intact", reader.deframer.bad == 0, f"{reader.raw} bytes, {reader.deframer.bad} skipped")
+    check("host stream intact", reader.deframer.bad == 0, f"{reader.raw} bytes, {reader.deframer.bad} skipped"
+          + (f"; the first at byte {reader.deframer.first_bad[0]}: {reader.deframer.first_bad[1]}"
+             if reader.deframer.first_bad else ""))
 
     host.sendall(telegram(0x00, bytes([0x55])))
     ok = reader.wait_for(lambda ts: any(cmd(t) == 0xD5 for t in ts), 10)

@@ -222,12 +222,8 @@ pub fn fit_piece_without<B: BearingTable>(
     // 1. Total least squares start.
     let (m, start) = span.total_least_squares()?;
     // 2. Gauss–Newton in the range direction.
-    let Normal { ca, sa, r } = span.gauss_newton(start)?.facing_sensor();
-    // atan2 gives [−π, π]; α is in (−π, π].
-    let alpha = match atan2(sa, ca) {
-        a if a <= -core::f32::consts::PI => core::f32::consts::PI,
-        a => a,
-    };
+    let solution = span.gauss_newton(start)?.facing_sensor();
+    let (Normal { ca, sa, r }, alpha) = (solution, solution.alpha());
     // 3.–4. Covariance and chi2 at the solution (the turns' offsets taken
     // out of Σe² where `scan.turns` asks for it).
     let points = m.min(u16::MAX as u32) as u16;
@@ -272,11 +268,8 @@ pub fn refit_without_footprint<B: BearingTable>(
     let (ca, sa) = cos_sin(line.alpha);
     let start = Normal { ca, sa, r: line.r };
     let step = span.footprint_free_step(start, scan.footprint / sigma, scan.turns)?;
-    let Normal { ca, sa, r } = step.solution.facing_sensor();
-    let alpha = match atan2(sa, ca) {
-        a if a <= -core::f32::consts::PI => core::f32::consts::PI,
-        a => a,
-    };
+    let solution = step.solution.facing_sensor();
+    let (Normal { ca, sa, r }, alpha) = (solution, solution.alpha());
     let var = sigma * sigma;
     let cov = step.inverse.scale(var);
     let chi2 = step.residual / (var * residual_dof(step.points, step.turns));
@@ -748,6 +741,16 @@ impl Normal {
             }
         } else {
             self
+        }
+    }
+
+    /// The normal's angle α = atan2(sin α, cos α) in (−π, π] (atan2
+    /// gives [−π, π]; −π is taken as π).
+    #[inline]
+    fn alpha(self) -> f32 {
+        match atan2(self.sa, self.ca) {
+            a if a <= -core::f32::consts::PI => core::f32::consts::PI,
+            a => a,
         }
     }
 }
