@@ -206,6 +206,7 @@ class Chip:
                        0x40004400: Usart("USART2", 0x40004400, 1),
                        0x40004800: Usart("USART3", 0x40004800, 1)}
         self.syst = {0x10: 0, 0x14: 0, 0x18: 0}
+        self.dwt = {}
         self.nvic_enabled = set()
         self.pending = set()       # exception numbers
         self.reset_requested = False
@@ -332,6 +333,19 @@ class Chip:
             return
         self.other[addr] = value
 
+    # -- the cycle counter, DWT at 0xE000_1000 (ARMv7-M ARM C1.8) --
+    def dwt_read(self, off):
+        if off == 0x04:  # CYCCNT: the model's cycles, once enabled
+            return self.cycles & 0xFFFFFFFF if self.cycle_counter_on() else 0
+        return self.dwt.get(off, 0)  # CTRL: NOCYCCNT (bit 25) clear
+
+    def dwt_write(self, off, value):
+        self.dwt[off] = value
+
+    def cycle_counter_on(self):
+        # DWT_CTRL.CYCCNTENA and DEMCR.TRCENA (0xE000EDFC, bit 24).
+        return self.dwt.get(0x00, 0) & 1 and self.other.get(0xE000EDFC, 0) >> 24 & 1
+
     # -- system control space 0xE000_E000 --
     def reload(self):
         return self.syst[0x14] & 0xFFFFFF
@@ -427,6 +441,9 @@ class Machine:
         uc.mmio_map(0x40000000, 0x80000,
                     lambda _u, off, _s, _d: chip.periph_read(0x40000000 + off), None,
                     lambda _u, off, _s, v, _d: chip.periph_write(0x40000000 + off, v), None)
+        uc.mmio_map(0xE0001000, 0x1000,
+                    lambda _u, off, _s, _d: chip.dwt_read(off), None,
+                    lambda _u, off, _s, v, _d: chip.dwt_write(off, v), None)
         uc.mmio_map(0xE000E000, 0x1000,
                     lambda _u, off, _s, _d: chip.scs_read(off), None,
                     lambda _u, off, _s, v, _d: chip.scs_write(off, v), None)
@@ -763,6 +780,9 @@ def stream(m, chip, lms, host, syms, n_scans=3):
     ends = []
     end_addr = syms.get("scan_end", 0) & ~1
     m.uc.hook_add(UC_HOOK_CODE, lambda *_: ends.append(chip.cycles), begin=end_addr, end=end_addr)
+    begins = []
+    begin_addr = syms.get("scan_begin", 0) & ~1
+    m.uc.hook_add(UC_HOOK_CODE, lambda *_: begins.append(chip.cycles), begin=begin_addr, end=begin_addr)
     m.uc.ctl_flush_tb()
     scans = room_scans(n_scans)
     period = int(0.0267 * 168e6)
@@ -812,6 +832,22 @@ def stream(m, chip, lms, host, syms, n_scans=3):
     overlap = [(lb - e) / 168e3 for e, lb in zip(ends[-n_scans:], last_byte)]
     check("the loop finishes each scan while the host line is still sending", overlap and min(overlap) > 5,
           "host line busy " + ", ".join(f"{o:.1f}" for o in overlap) + " ms after scan_end")
+    # The console's scan cycles, read from the cycle counter (the model's
+    # cycles here): the polls that carried scans, as measured between the
+    # markers by the model.
+    polls = [e - max(b for b in begins if b <= e) for e in ends[-n_scans:]]
+    console = chip.usarts[0x40004800]
+    console.tx[:] = b""
+    console.rx.append((ord("s"), False))
+    console.peer_baud = 115200
+    why = m.run(lambda: b"\n" in console.tx, max_cycles=chip.cycles + 200_000_000)
+    fields = dict(kv.split("=", 1) for kv in console.tx.decode(errors="replace").split() if "=" in kv)
+    last, worst = int(fields.get("scan_poll_cycles_last", 0)), int(fields.get("scan_poll_cycles_max", 0))
+    check("the cycle counter on: the console's poll cycles match the model's",
+          why is None and fields.get("cycle_counter") == "1" and polls and abs(last - polls[-1]) < 0.01 * polls[-1]
+          and max(polls) <= worst < period,
+          f"scan_poll_cycles_last={last} (model {polls[-1] if polls else 0}), max={worst} "
+          f"(model {max(polls) if polls else 0})" + (f"; {why}" if why else ""))
 
 
 def fault_and_reboot(m, chip, segments, syms, sites):

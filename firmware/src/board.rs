@@ -177,6 +177,8 @@ pub struct Board {
     pub control: ControlPort,
     /// What the boot found.
     pub boot: Boot,
+    /// The scans' cycles, by the core's cycle counter.
+    pub load: crate::load::Load,
 }
 
 /// Bring the board up: clocks (or QEMU detected), the log, the fault
@@ -211,6 +213,7 @@ pub fn init() -> Option<Board> {
     serial::configure(&dp.USART3, clocks.pclk1_hz, CONTROL_BAUD);
 
     clock::start(cp.SYST, clocks.sysclk_hz);
+    let load = crate::load::Load::start(cp.DCB, cp.DWT);
     fault::start_watchdog(&dp.IWDG);
 
     // SAFETY: unmasking can break a critical section only if one is in
@@ -254,6 +257,7 @@ pub fn init() -> Option<Board> {
             },
         ),
         boot,
+        load,
     })
 }
 

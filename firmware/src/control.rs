@@ -19,7 +19,10 @@
 //! - the boot's: `sysclk_hz` (SYSCLK, Hz), the counters of kind boot (the
 //!   reset flags of `RCC_CSR`, [`crate::fault::ResetCause`], 0 under QEMU;
 //!   the previous boot's fault record: cause 0 = none, 1 panic,
-//!   2 HardFault, 3 unexpected interrupt; its PC and LR), `fault_detail`.
+//!   2 HardFault, 3 unexpected interrupt; its PC and LR), `fault_detail`;
+//! - the scans' cycles by the core's cycle counter ([`crate::load`]):
+//!   `cycle_counter` (1 on the board, 0 under QEMU, which models none),
+//!   `scan_poll_cycles_max`, `scan_poll_cycles_last`.
 //!
 //! `emulator_us` is the emulator's own clock read at the same moment
 //! (semihosting `SYS_ELAPSED` / `SYS_TICKFREQ`; QEMU: the host's monotonic
@@ -31,6 +34,7 @@ use lms_core::telegram::features::{CounterKind, Counters};
 use embedded_io::Write;
 
 use crate::board::{stack_usage, Boot, ControlPort, StackUsage};
+use crate::load::Load;
 use crate::serial::RxCounts;
 
 /// What the console is asked to do.
@@ -72,6 +76,8 @@ pub struct Report {
     pub sensor: RxCounts,
     /// What the boot found.
     pub boot: Boot,
+    /// The scans' cycles by the core's cycle counter.
+    pub load: Load,
 }
 
 impl Report {
@@ -83,6 +89,7 @@ impl Report {
         host: RxCounts,
         sensor: RxCounts,
         boot: &Boot,
+        load: Load,
     ) -> Self {
         Report {
             now_us,
@@ -93,6 +100,7 @@ impl Report {
             host,
             sensor,
             boot: *boot,
+            load,
         }
     }
 
@@ -120,6 +128,10 @@ impl Report {
         }
         let detail = self.boot.last_fault.map_or(0, |f| f.detail);
         w.field("fault_detail", detail.into());
+        let l = &self.load;
+        w.field("cycle_counter", u64::from(l.counting));
+        w.field("scan_poll_cycles_max", l.scan_poll_max.into());
+        w.field("scan_poll_cycles_last", l.scan_poll_last.into());
         w.put(b"\n");
     }
 }

@@ -18,6 +18,7 @@ mod board;
 mod clock;
 mod control;
 mod fault;
+mod load;
 mod log;
 mod rcc;
 mod serial;
@@ -188,12 +189,14 @@ struct Watch {
 /// begin to each end sees exactly the polls that carried scans.
 fn poll(app: &mut app::App, board: &mut board::Board, watch: &mut Watch) {
     board::scan_begin();
+    let began = load::Load::now();
     let outcome = match app.poll(&mut board.sensor, &mut board.host, clock::now_us()) {
         Ok(outcome) => outcome,
         Err(PollError::Sensor(never) | PollError::Host(never)) => match never {},
     };
     if outcome.scans > 0 {
         board::scan_end();
+        board.load.scan_poll(began);
         watch.scans = watch.scans.wrapping_add(outcome.scans);
     }
     if let Some(baud) = outcome.sensor_baud {
@@ -241,6 +244,7 @@ fn serve_console(app: &app::App, board: &mut board::Board, watch: &Watch) {
             board.host.rx_counts(),
             board.sensor.rx_counts(),
             &board.boot,
+            board.load,
         )
     };
     if let Some(command) = serial::try_read(&mut board.control).and_then(Command::from_byte) {
