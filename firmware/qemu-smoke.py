@@ -21,7 +21,9 @@ Both: the scan markers are in the ELF; the console answers; the SysTick time
 base against QEMU's own clock (semihosting SYS_ELAPSED); stack peak; the
 scans' cycles (no cycle counter under QEMU: reported as 0); no byte
 lost; console `q` ends QEMU with exit code 0; the decoded log has the ready
-line. Ports: TCP on 127.0.0.1 at a base it finds free (or QEMU_PORT_BASE).
+line. Ports: TCP on 127.0.0.1 at a base it finds free (or QEMU_PORT_BASE);
+QEMU starts the firmware once all three are connected (QEMU_WAIT=1), so the
+host port's stream is whole from the power-on telegram on.
 Ends with "N passed, N failed"; exit status 1 on failure.
 """
 
@@ -389,6 +391,8 @@ def coprocessor(host, sensor, control, n_scans=5):
           " ".join("+".join(f"{c:02X}" for c in p) for p in per_scan[:2]) + " ...")
     lines = [t for t in reader.telegrams if cmd(t) == 0xD1]
     check("lines found in the room", lines and len(lines[-1]) > 20, f"D1 of {len(lines[-1]) if lines else 0} bytes")
+    first = next((t for t in reader.telegrams if len(t) > 5), b"")
+    check("the power-on telegram first, whole", first[4:5] == b"\x90", first[5:26].decode(errors="replace"))
     check("host stream intact", reader.deframer.bad == 0, f"{reader.raw} bytes, {reader.deframer.bad} skipped"
           + (f"; the first at byte {reader.deframer.first_bad[0]}: {reader.deframer.first_bad[1]}"
              if reader.deframer.first_bad else ""))
@@ -422,7 +426,11 @@ def main():
     tmp = tempfile.mkdtemp(prefix="lms-qemu-")
     log_path = os.path.join(tmp, "log.txt")
     base = int(os.environ.get("QEMU_PORT_BASE") or free_port_base())
-    env = dict(os.environ, QEMU_TRANSPORT="tcp", QEMU_PORT_BASE=str(base),
+    # QEMU_WAIT: the firmware starts once the three ports are connected
+    # (in port order, as below), so the host port carries every byte from
+    # the power-on telegram on; without it QEMU drops what the firmware
+    # sends before the client connects, and the stream starts mid-telegram.
+    env = dict(os.environ, QEMU_TRANSPORT="tcp", QEMU_PORT_BASE=str(base), QEMU_WAIT="1",
                QEMU_TIMEOUT=os.environ.get("QEMU_TIMEOUT", "90"))
     with open(log_path, "w") as log:
         qemu = subprocess.Popen([os.path.join(HERE, "run-qemu.sh"), ELF], env=env,
