@@ -177,7 +177,7 @@ pub struct Board {
     /// What the boot found.
     pub boot: Boot,
     /// The scans' cycles, by the core's cycle counter.
-    pub load: crate::load::Load,
+    pub scan_cycles: crate::scan_cycles::ScanCycles,
 }
 
 /// Bring the board up: clocks (or QEMU detected), the log, the fault
@@ -212,7 +212,7 @@ pub fn init() -> Option<Board> {
     serial::configure(&dp.USART3, clocks.pclk1_hz, CONTROL_BAUD);
 
     clock::start(cp.SYST, clocks.sysclk_hz);
-    let load = crate::load::Load::start(cp.DCB, cp.DWT);
+    let scan_cycles = crate::scan_cycles::ScanCycles::start(cp.DCB, cp.DWT);
     fault::start_watchdog(&dp.IWDG);
 
     // SAFETY: unmasking can break a critical section only if one is in
@@ -256,7 +256,7 @@ pub fn init() -> Option<Board> {
             },
         ),
         boot,
-        load,
+        scan_cycles,
     })
 }
 

@@ -20,7 +20,7 @@
 //!   reset flags of `RCC_CSR`, [`crate::fault::ResetCause`], 0 under QEMU;
 //!   the previous boot's fault record: cause 0 = none, 1 panic,
 //!   2 HardFault, 3 unexpected interrupt; its PC and LR), `fault_detail`;
-//! - the scans' cycles by the core's cycle counter ([`crate::load`]):
+//! - the scans' cycles by the core's cycle counter ([`crate::scan_cycles`]):
 //!   `cycle_counter` (1 on the board, 0 under QEMU, which models none),
 //!   `scan_poll_cycles_max`, `scan_poll_cycles_last`.
 //!
@@ -34,7 +34,7 @@ use lms_core::telegram::features::{CounterKind, Counters};
 use embedded_io::Write;
 
 use crate::board::{stack_usage, Boot, ControlPort, StackUsage};
-use crate::load::Load;
+use crate::scan_cycles::ScanCycles;
 use crate::serial::RxCounts;
 
 /// What the console is asked to do.
@@ -77,7 +77,7 @@ pub struct Report {
     /// What the boot found.
     pub boot: Boot,
     /// The scans' cycles by the core's cycle counter.
-    pub load: Load,
+    pub scan_cycles: ScanCycles,
 }
 
 impl Report {
@@ -89,7 +89,7 @@ impl Report {
         host: RxCounts,
         sensor: RxCounts,
         boot: &Boot,
-        load: Load,
+        scan_cycles: ScanCycles,
     ) -> Self {
         Report {
             now_us,
@@ -100,7 +100,7 @@ impl Report {
             host,
             sensor,
             boot: *boot,
-            load,
+            scan_cycles,
         }
     }
 
@@ -128,7 +128,7 @@ impl Report {
         }
         let detail = self.boot.last_fault.map_or(0, |f| f.detail);
         w.field("fault_detail", detail.into());
-        let l = &self.load;
+        let l = &self.scan_cycles;
         w.field("cycle_counter", u64::from(l.counting));
         w.field("scan_poll_cycles_max", l.scan_poll_max.into());
         w.field("scan_poll_cycles_last", l.scan_poll_last.into());

@@ -2,8 +2,8 @@
 //! and the same ELF under QEMU's `netduinoplus2` (detected at run time,
 //! [`rcc`]). Only glue: board bring-up ([`board`]), clocks ([`rcc`]), the
 //! fault policy ([`fault`]), the log ([`log`]), the UARTs as `embedded-io`
-//! streams ([`serial`]), the time base ([`clock`]), a control console
-//! ([`control`]) and the loop that feeds the core's
+//! streams ([`serial`]), the time base ([`clock`]), the scans' cycles
+//! ([`scan_cycles`]), a control console ([`control`]) and the loop that feeds the core's
 //! [`CoProcessor`](lms_core::device::coprocessor::CoProcessor) (or, with the
 //! `standin` feature, a plain forwarder, [`standin`]).
 //!
@@ -18,9 +18,9 @@ mod board;
 mod clock;
 mod control;
 mod fault;
-mod load;
 mod log;
 mod rcc;
+mod scan_cycles;
 mod serial;
 #[cfg(feature = "standin")]
 mod standin;
@@ -189,14 +189,14 @@ struct Watch {
 /// begin to each end sees exactly the polls that carried scans.
 fn poll(app: &mut app::App, board: &mut board::Board, watch: &mut Watch) {
     board::scan_begin();
-    let began = load::Load::now();
+    let began = scan_cycles::ScanCycles::now();
     let outcome = match app.poll(&mut board.sensor, &mut board.host, clock::now_us()) {
         Ok(outcome) => outcome,
         Err(PollError::Sensor(never) | PollError::Host(never)) => match never {},
     };
     if outcome.scans > 0 {
         board::scan_end();
-        board.load.scan_poll(began);
+        board.scan_cycles.scan_poll(began);
         watch.scans = watch.scans.wrapping_add(outcome.scans);
     }
     if let Some(baud) = outcome.sensor_baud {
@@ -244,7 +244,7 @@ fn serve_console(app: &app::App, board: &mut board::Board, watch: &Watch) {
             board.host.rx_counts(),
             board.sensor.rx_counts(),
             &board.boot,
-            board.load,
+            board.scan_cycles,
         )
     };
     if let Some(command) = serial::try_read(&mut board.control).and_then(Command::from_byte) {

@@ -1,8 +1,8 @@
 //! The cycles the scans take, measured by the core's cycle counter (DWT
 //! `CYCCNT`, one count per core clock: 168 MHz on the board), for the
 //! console report: `scan_poll_cycles_max` / `_last`, the cycles of the
-//! longest and of the last poll that processed a scan, interrupts
-//! included, since boot. At 168 MHz a 361-beam scan arrives every 4.48 M
+//! longest and of the last poll that processed a scan (one scan, unless
+//! the loop fell behind), interrupts included, since boot. At 168 MHz a 361-beam scan arrives every 4.48 M
 //! cycles (26.7 ms), a 181-beam scan every 2.24 M, a 401-beam scan every
 //! 8.96 M.
 //!
@@ -17,7 +17,7 @@ use cortex_m::peripheral::{DCB, DWT};
 
 /// The cycle counter's figures since boot.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Load {
+pub struct ScanCycles {
     /// Whether the counter counts (a board; not QEMU).
     pub counting: bool,
     /// The longest poll that processed a scan (cycles).
@@ -26,7 +26,7 @@ pub struct Load {
     pub scan_poll_last: u32,
 }
 
-impl Load {
+impl ScanCycles {
     /// Switch the cycle counter on (trace enable, then `CYCCNTENA`) and
     /// find out whether it counts.
     pub fn start(mut dcb: DCB, mut dwt: DWT) -> Self {
@@ -34,9 +34,9 @@ impl Load {
         dwt.enable_cycle_counter();
         let before = DWT::cycle_count();
         cortex_m::asm::delay(64);
-        Load {
+        ScanCycles {
             counting: DWT::cycle_count() != before,
-            ..Load::default()
+            ..ScanCycles::default()
         }
     }
 
@@ -46,7 +46,8 @@ impl Load {
         DWT::cycle_count()
     }
 
-    /// A poll that began at `began` (a [`Load::now`]) has processed a scan.
+    /// A poll that began at `began` (a [`ScanCycles::now`]) has processed
+    /// a scan (or more, if the loop fell behind).
     #[inline]
     pub fn scan_poll(&mut self, began: u32) {
         let cycles = Self::now().wrapping_sub(began);
