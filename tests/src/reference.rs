@@ -519,8 +519,6 @@ pub fn fit_line(
         (alpha, r) = (alpha + PI, -r);
     }
     let k = fit.footprint / fit.sigma;
-    // Per usable beam at (α, r): beam, weight, residual, Jacobian row (α, r).
-    type Row = (usize, f64, f64, f64, f64);
     let rows = |alpha: f64, r: f64| -> Option<Vec<Row>> {
         beams
             .iter()
@@ -535,28 +533,6 @@ pub fn fit_line(
                 Some((j, w, d - r / c, -r * s / (c * c), 1.0 / c))
             })
             .collect()
-    };
-    let normal = |rows: &[Row]| {
-        let mut n = [[0.0f64; 2]; 2];
-        let mut g = [0.0f64; 2];
-        for &(_, w, e, ja, jr) in rows {
-            n[0][0] += w * ja * ja;
-            n[0][1] += w * ja * jr;
-            n[1][1] += w * jr * jr;
-            g[0] += w * ja * e;
-            g[1] += w * jr * e;
-        }
-        n[1][0] = n[0][1];
-        (n, g)
-    };
-    let inverse = |n: [[f64; 2]; 2]| {
-        let det = n[0][0] * n[1][1] - n[0][1] * n[1][0];
-        (n[0][0] > 0.0 && det > 0.0 && det.is_finite()).then(|| {
-            [
-                [n[1][1] / det, -n[0][1] / det],
-                [-n[1][0] / det, n[0][0] / det],
-            ]
-        })
     };
     // 2. Gauss–Newton.
     for _ in 0..GN_STEPS {
@@ -579,13 +555,8 @@ pub fn fit_line(
     let (n, _) = normal(&at);
     let inv = inverse(n)?;
     let var = fit.sigma * fit.sigma;
-    let cov = [
-        [var * inv[0][0], var * inv[0][1]],
-        [var * inv[1][0], var * inv[1][1]],
-    ];
     let mut sum: f64 = at.iter().map(|&(_, w, e, _, _)| w * e * e).sum();
-    let offsets = matches!(fit.turns, 2 | 4) && m > 2 * fit.turns;
-    let dof = if offsets {
+    if turn_offsets_apply(m, fit.turns) {
         let t = fit.turns;
         let (mut we, mut ww) = (vec![0.0; t], vec![0.0; t]);
         for &(j, w, e, _, _) in &at {
@@ -593,25 +564,89 @@ pub fn fit_line(
             ww[j % t] += w;
         }
         sum = (sum - between_turns(&we, &ww)).max(0.0);
-        m - 1 - t
-    } else {
-        m - 2
-    };
-    let chi2 = sum / (var * dof.max(1) as f64);
-    // 5. Endpoints: the first and the last usable point, projected.
-    let project = |j: usize| {
-        let [x, y] = point(j);
-        let dist = x * alpha.cos() + y * alpha.sin() - r;
-        [x - dist * alpha.cos(), y - dist * alpha.sin()]
-    };
+    }
+    let chi2 = sum / (var * residual_dof(m, fit.turns) as f64);
     Some(RefLine {
         alpha,
         r,
-        cov,
+        cov: scaled(inv, var),
         points: m,
         chi2,
-        endpoints: [project(beams[0]), project(beams[m - 1])],
+        // 5. Endpoints: the first and the last usable point, projected.
+        endpoints: endpoints(ranges, geometry, &beams, (alpha, r)),
     })
+}
+
+/// Per usable beam at (α, r): beam, weight, residual, Jacobian row (α, r).
+type Row = (usize, f64, f64, f64, f64);
+
+/// The normal equations of `rows`: `JᵀWJ` and `JᵀWe`.
+fn normal(rows: &[Row]) -> ([[f64; 2]; 2], [f64; 2]) {
+    let mut n = [[0.0f64; 2]; 2];
+    let mut g = [0.0f64; 2];
+    for &(_, w, e, ja, jr) in rows {
+        n[0][0] += w * ja * ja;
+        n[0][1] += w * ja * jr;
+        n[1][1] += w * jr * jr;
+        g[0] += w * ja * e;
+        g[1] += w * jr * e;
+    }
+    n[1][0] = n[0][1];
+    (n, g)
+}
+
+/// The inverse of a symmetric positive definite 2×2 matrix; `None` if it
+/// is not.
+fn inverse(n: [[f64; 2]; 2]) -> Option<[[f64; 2]; 2]> {
+    let det = n[0][0] * n[1][1] - n[0][1] * n[1][0];
+    (n[0][0] > 0.0 && det > 0.0 && det.is_finite()).then(|| {
+        [
+            [n[1][1] / det, -n[0][1] / det],
+            [-n[1][0] / det, n[0][0] / det],
+        ]
+    })
+}
+
+/// `var · inv`: a covariance from `(JᵀJ)⁻¹`.
+fn scaled(inv: [[f64; 2]; 2], var: f64) -> [[f64; 2]; 2] {
+    [
+        [var * inv[0][0], var * inv[0][1]],
+        [var * inv[1][0], var * inv[1][1]],
+    ]
+}
+
+/// The first and the last of `beams`' points projected onto the line
+/// `(alpha, r)` (v3 §7.5).
+fn endpoints(
+    ranges: &[f64],
+    geometry: RefGeometry,
+    beams: &[usize],
+    (alpha, r): (f64, f64),
+) -> [[f64; 2]; 2] {
+    let project = |j: usize| {
+        let phi = geometry.bearing(j);
+        let (x, y) = (ranges[j] * phi.cos(), ranges[j] * phi.sin());
+        let dist = x * alpha.cos() + y * alpha.sin() - r;
+        [x - dist * alpha.cos(), y - dist * alpha.sin()]
+    };
+    [project(beams[0]), project(beams[beams.len() - 1])]
+}
+
+/// Whether the turns' offsets come out of χ² (v3 §7.3): 2 or 4 turns and
+/// more than two beams per turn.
+fn turn_offsets_apply(m: usize, turns: usize) -> bool {
+    matches!(turns, 2 | 4) && m > 2 * turns
+}
+
+/// The degrees of freedom of a fit of `m` beams (v3 §7.3): `m − 1 − turns`
+/// where the turns' offsets apply, else `m − 2`; at least 1.
+fn residual_dof(m: usize, turns: usize) -> usize {
+    let dof = if turn_offsets_apply(m, turns) {
+        m - 1 - turns
+    } else {
+        m.saturating_sub(2)
+    };
+    dof.max(1)
 }
 
 /// The usable beams of `first..=last` a fit takes (v3 §7.1); `None` for
@@ -655,9 +690,9 @@ pub fn refit_without_footprint(
     let beams = fit_beams(ranges, usable, first, last)?;
     let m = beams.len();
     let k = fit.footprint / fit.sigma;
-    let (mut n, mut g, mut sum, mut lambda) = ([[0.0f64; 2]; 2], [0.0f64; 2], 0.0, 0.0);
-    // Per beam: turn, residual, Jacobian row (α, r).
-    let mut rows = Vec::with_capacity(m);
+    let (mut sum, mut lambda) = (0.0, 0.0);
+    // Every weight 1 (no footprint term).
+    let mut rows: Vec<Row> = Vec::with_capacity(m);
     for &j in &beams {
         let delta = geometry.bearing(j) - alpha;
         let (c, s) = (delta.cos(), delta.sin());
@@ -665,62 +700,38 @@ pub fn refit_without_footprint(
             return None;
         }
         let d = ranges[j];
-        let (e, ja, jr) = (d - r / c, -r * s / (c * c), 1.0 / c);
-        n[0][0] += ja * ja;
-        n[0][1] += ja * jr;
-        n[1][1] += jr * jr;
-        g[0] += ja * e;
-        g[1] += jr * e;
+        let e = d - r / c;
         sum += e * e;
         lambda += (k * d * s / c).powi(2).ln_1p();
-        rows.push((j, e, ja, jr));
+        rows.push((j, 1.0, e, -r * s / (c * c), 1.0 / c));
     }
-    let det = n[0][0] * n[1][1] - n[0][1] * n[0][1];
-    if !(n[0][0] > 0.0 && det > 0.0 && det.is_finite()) {
-        return None;
-    }
-    let inv = [
-        [n[1][1] / det, -n[0][1] / det],
-        [-n[0][1] / det, n[0][0] / det],
-    ];
+    let (n, g) = normal(&rows);
+    let inv = inverse(n)?;
     let da = inv[0][0] * g[0] + inv[0][1] * g[1];
     let dr = inv[1][0] * g[0] + inv[1][1] * g[1];
     let mut after = (sum - (da * g[0] + dr * g[1])).max(0.0);
-    let offsets = matches!(fit.turns, 2 | 4) && m > 2 * fit.turns;
-    let dof = if offsets {
+    if turn_offsets_apply(m, fit.turns) {
         let t = fit.turns;
         let (mut se, mut sw) = (vec![0.0; t], vec![0.0; t]);
-        for &(j, e, ja, jr) in &rows {
+        for &(j, _, e, ja, jr) in &rows {
             se[j % t] += e - (ja * da + jr * dr);
             sw[j % t] += 1.0;
         }
         after = (after - between_turns(&se, &sw)).max(0.0);
-        m - 1 - t
-    } else {
-        m - 2
-    };
+    }
     let (mut alpha, mut r) = (alpha + da, r + dr);
     if r < 0.0 {
         (alpha, r) = (alpha + PI, -r);
     }
     let alpha = wrap(alpha);
     let var = fit.sigma * fit.sigma;
-    let point = |j: usize| {
-        let phi = geometry.bearing(j);
-        let (x, y) = (ranges[j] * phi.cos(), ranges[j] * phi.sin());
-        let dist = x * alpha.cos() + y * alpha.sin() - r;
-        [x - dist * alpha.cos(), y - dist * alpha.sin()]
-    };
     let line = RefLine {
         alpha,
         r,
-        cov: [
-            [var * inv[0][0], var * inv[0][1]],
-            [var * inv[1][0], var * inv[1][1]],
-        ],
+        cov: scaled(inv, var),
         points: m,
-        chi2: after / (var * dof.max(1) as f64),
-        endpoints: [point(beams[0]), point(beams[m - 1])],
+        chi2: after / (var * residual_dof(m, fit.turns) as f64),
+        endpoints: endpoints(ranges, geometry, &beams, (alpha, r)),
     };
     Some((line, lambda))
 }
@@ -729,13 +740,7 @@ pub fn refit_without_footprint(
 /// the turns' offsets apply (2 or 4 turns, more than two beams per turn),
 /// else `m − 2`, at least 1.
 pub fn residual_sum(line: &RefLine, turns: usize) -> f64 {
-    let m = line.points;
-    let dof = if matches!(turns, 2 | 4) && m > 2 * turns {
-        m - 1 - turns
-    } else {
-        m.saturating_sub(2)
-    };
-    line.chi2 * dof.max(1) as f64
+    line.chi2 * residual_dof(line.points, turns) as f64
 }
 
 /// A corner by [`corner`] (v3 §8).
