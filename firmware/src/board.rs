@@ -66,8 +66,8 @@ const _: () = assert!(HOST_TX_SLOTS > lms_core::device::coprocessor::HOST_TX_MIN
 /// never waits, so the longest such time is one pipeline run: at the
 /// defaults at most 2.3 M cycles by the upper-bound cycle estimate
 /// (docs/DESIGN.md, Firmware), 13.5 ms at 168 MHz. Less than a scan period
-/// (26.7 ms at 0.5°), so at most one `B0` and a little arrive meanwhile: 732 B at
-/// 0.5°, 744–750 B at 1° (two 372-byte `B0`s 13.3 ms apart), 813 B for
+/// (26.7 ms at 0.5°), so at most one `B0` and a little arrive meanwhile:
+/// 732 B at 0.5°, 744–750 B at 1° (two 372-byte `B0`s 13.3 ms apart), 813 B for
 /// 401 beams (53.3 ms apart); 1023 leaves 210 B (4.2 ms) to spare.
 /// A full queue holds the line (backpressure, [`crate::serial`]): under
 /// QEMU nothing is lost; on a board the overrun is counted (`ORE`, the

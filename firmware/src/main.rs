@@ -3,7 +3,8 @@
 //! [`rcc`]). Only glue: board bring-up ([`board`]), clocks ([`rcc`]), the
 //! fault policy ([`fault`]), the log ([`log`]), the UARTs as `embedded-io`
 //! streams ([`serial`]), the time base ([`clock`]), the scans' cycles
-//! ([`scan_cycles`]), a control console ([`control`]) and the loop that feeds the core's
+//! ([`scan_cycles`]), a control console ([`control`]) and the loop that
+//! feeds the core's
 //! [`CoProcessor`](lms_core::device::coprocessor::CoProcessor) (or, with the
 //! `standin` feature, a plain forwarder, [`standin`]).
 //!

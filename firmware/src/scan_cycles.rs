@@ -2,9 +2,9 @@
 //! `CYCCNT`, one count per core clock: 168 MHz on the board), for the
 //! console report: `scan_poll_cycles_max` / `_last`, the cycles of the
 //! longest and of the last poll that processed a scan (one scan, unless
-//! the loop fell behind), interrupts included, since boot. At 168 MHz a 361-beam scan arrives every 4.48 M
-//! cycles (26.7 ms), a 181-beam scan every 2.24 M, a 401-beam scan every
-//! 8.96 M.
+//! the loop fell behind), interrupts included, since boot. At 168 MHz a
+//! 361-beam scan arrives every 4.48 M cycles (26.7 ms), a 181-beam scan
+//! every 2.24 M, a 401-beam scan every 8.96 M.
 //!
 //! These are the measured counterparts of the upper bound that
 //! `tools/qemu-icount/realtime.sh` estimates (docs/DESIGN.md, Firmware).
