@@ -1,7 +1,9 @@
-//! Where the defaults' errors on the real logs come from (map truth,
+//! Where the defaults' errors on the real logs come from (the settled map truth,
 //! `lab/src/maptruth.rs`; matching, `lab/src/realtruth.rs`).
 //!
-//! - **False lines**, by cause: on no map wall — on static structure (its
+//! - **Unmatched lines**, by cause (the settled truth's FalsePos counts
+//!   the ones on a wall; those on no wall are unexplained, and neutral ones
+//!   are among them too): on no map wall — on static structure (its
 //!   hits in or next to occupied map cells) that the map's wall extraction
 //!   did not make a wall, or on things seen in too few frames to be in the
 //!   map — or on a wall: a second line on a piece (a fragment), a line
@@ -14,7 +16,9 @@
 //!   any of its beams, lines on it off the gates, or only lines that lie
 //!   mostly elsewhere (over a missed corner, across a gap); for the pieces
 //!   without a line, the share of their beams in segments (§6), the rms of
-//!   their hits about their own fit, incidence and range.
+//!   their hits about their own fit, incidence and range; and those a line
+//!   within both gates covers that fails only the overlap, with how many of
+//!   its beams beyond the piece are ambiguous or on the piece's line.
 //!
 //! `cargo run --release -p lms-lab --example real_errors -- [EVERY]`
 
@@ -25,10 +29,10 @@ use anyhow::Result;
 use host_bridge::carmen::Scan;
 use lms_core::Extractor;
 use lms_lab::baselines::{run_core, Extraction};
-use lms_lab::maptruth::{frame_truth, world_hit, FrameTruth, Piece, TruthConfig};
+use lms_lab::maptruth::{world_hit, FrameTruth, Piece, TruthConfig};
 use lms_lab::realtruth::{
     candidate, gate_offsets, overlap, score_frame, within_gates, RealTally, ScoredLine,
-    GATE_ALPHA_DEG, GATE_OVERLAP, GATE_R,
+    GATE_ALPHA_DEG, GATE_OVERLAP,
 };
 
 /// Causes of false lines, in the order printed.
@@ -63,13 +67,12 @@ struct Errors {
     /// Lines over several pieces whose on-wall beams all lie on one map
     /// line, and that line within the gates: one wall seen past an occluder.
     several_one_wall: usize,
-    /// Lines off the Δr gate only whose middle (the mean of their
-    /// endpoints) lies within the gate of the piece's line: off at the foot
-    /// of the normal, on the wall where the line is.
-    dr_mid_inside: usize,
-    /// Missed pieces with an unmatched line on them within the Δα gate
-    /// whose middle is within the Δr gate of the piece's line.
-    missed_mid_inside: usize,
+    /// Missed pieces with an unmatched line within both gates that
+    /// covers ≥ 80 % of their on-wall beams but fails the overlap.
+    overlap_only: usize,
+    /// The beams of those lines outside their piece, those ambiguous and
+    /// those within 5 cm of the piece's line.
+    overlap_only_beams: [usize; 3],
     /// Lines on no wall: share of their valid beams on a map wall.
     no_wall_on: Vec<f64>,
     gate_z: Vec<f64>,
@@ -92,8 +95,10 @@ impl Errors {
         self.false_short += o.false_short;
         self.static_along += o.static_along;
         self.several_one_wall += o.several_one_wall;
-        self.dr_mid_inside += o.dr_mid_inside;
-        self.missed_mid_inside += o.missed_mid_inside;
+        self.overlap_only += o.overlap_only;
+        for (a, b) in self.overlap_only_beams.iter_mut().zip(o.overlap_only_beams) {
+            *a += b;
+        }
         self.no_wall_on.extend(o.no_wall_on);
         self.gate_z.extend(o.gate_z);
         self.gate_inside.extend(o.gate_inside);
@@ -154,10 +159,39 @@ fn one_wall(truth: &FrameTruth, l: &ScoredLine, beams: &[usize]) -> bool {
             .any(|p| p.line == id && within_gates(gate_offsets(l, p.reference(), p.gate_at_middle)))
 }
 
-/// `(Δα, Δr)` of `line` against piece `p`'s reference line with Δr at the
-/// line's middle, whatever gate `p` uses.
-fn mid_offsets(line: &lms_core::Line, p: &Piece) -> (f64, f64) {
-    gate_offsets(&ScoredLine::from(line), p.reference(), true)
+/// Counts `p` in [`Errors::overlap_only`] if an unmatched line of `on_it`
+/// lies within both gates of it and covers ≥ 80 % of its on-wall beams,
+/// but fails the overlap; with that line's beams outside the piece.
+fn overlap_only(
+    scan: &Scan,
+    truth: &FrameTruth,
+    p: &Piece,
+    on_it: &[(&ScoredLine, bool)],
+    e: &mut Errors,
+) {
+    let on = on_wall_beams(truth, p);
+    let covers = |l: &ScoredLine| {
+        let inside = on
+            .iter()
+            .filter(|&&j| (l.first..=l.last).contains(&j))
+            .count();
+        5 * inside >= 4 * on.len()
+    };
+    let Some((l, _)) = on_it.iter().find(|(l, u)| {
+        !*u && covers(l) && within_gates(gate_offsets(l, p.reference(), p.gate_at_middle))
+    }) else {
+        return;
+    };
+    e.overlap_only += 1;
+    let (g, rg) = (scan.frame.geometry(), scan.frame.ranges());
+    let (alpha, r) = p.reference();
+    for j in (l.first..=l.last).filter(|&j| !(p.first..=p.last).contains(&j)) {
+        let b = &mut e.overlap_only_beams;
+        b[0] += 1;
+        b[1] += usize::from(truth.ambiguous.get(j) == Some(&true));
+        let off = f64::from(rg[j]) * (f64::from(g.bearing(j)) - alpha).cos() - r;
+        b[2] += usize::from(scan.frame.beams()[j].is_valid() && off.abs() < 0.05);
+    }
 }
 
 /// The false lines of one frame.
@@ -203,7 +237,7 @@ fn false_lines(
             Some(p) => {
                 let (da, dr) = gate_offsets(&l, p.reference(), p.gate_at_middle);
                 let off_alpha = da.abs() >= GATE_ALPHA_DEG.to_radians();
-                if candidate(&l, p).is_some() {
+                if candidate(truth, &l, p).is_some() {
                     2
                 } else {
                     let inside = (l.first..=l.last)
@@ -219,7 +253,6 @@ fn false_lines(
                     if off_alpha {
                         3
                     } else {
-                        e.dr_mid_inside += usize::from(mid_offsets(line, p).1.abs() < GATE_R);
                         4
                     }
                 }
@@ -242,7 +275,10 @@ fn missed_pieces(scan: &Scan, truth: &FrameTruth, x: &Extraction, used: &[bool],
             .filter(|(l, _)| l.first <= p.last && p.first <= l.last)
             .map(|(l, &u)| (l, u))
             .collect();
-        if on_it.iter().any(|(l, u)| *u && candidate(l, p).is_some()) {
+        if on_it
+            .iter()
+            .any(|(l, u)| *u && candidate(truth, l, p).is_some())
+        {
             continue;
         }
         if !on_it.is_empty() {
@@ -250,10 +286,7 @@ fn missed_pieces(scan: &Scan, truth: &FrameTruth, x: &Extraction, used: &[bool],
                 .iter()
                 .any(|(l, _)| overlap(l.first, l.last, p.first, p.last) >= GATE_OVERLAP);
             e.missed[if mostly_on { 1 } else { 2 }] += 1;
-            e.missed_mid_inside += usize::from(x.lines.iter().zip(used).any(|(line, &u)| {
-                !u && overlap(line.first.into(), line.last.into(), p.first, p.last) >= GATE_OVERLAP
-                    && within_gates(mid_offsets(line, p))
-            }));
+            overlap_only(scan, truth, p, &on_it, e);
             continue;
         }
         e.missed[0] += 1;
@@ -304,7 +337,7 @@ fn fragment_pairs(
         let on: Vec<&lms_core::Line> = x
             .lines
             .iter()
-            .filter(|l| candidate(&ScoredLine::from(*l), p).is_some())
+            .filter(|l| candidate(truth, &ScoredLine::from(*l), p).is_some())
             .collect();
         for w in on.windows(2) {
             let (l1, l2) = (w[0], w[1]);
@@ -340,14 +373,15 @@ fn fragment_pairs(
 }
 
 fn log_errors(path: &Path, every: usize, cfg: &TruthConfig) -> Result<Errors> {
+    let loaded = lms_lab::realtruth::load_with_map(path, cfg)?;
     let lms_lab::realtruth::LogWithMap {
         log,
         no_flags: params,
         cfg,
         map,
         ..
-    } = lms_lab::realtruth::load_with_map(path, cfg)?;
-    let cfg = &cfg;
+    } = &loaded;
+    let params = *params;
     let cell = |p: [f64; 2]| {
         (
             (p[0] / cfg.cell).floor() as i64,
@@ -362,8 +396,8 @@ fn log_errors(path: &Path, every: usize, cfg: &TruthConfig) -> Result<Errors> {
     };
     let mut ex = Extractor::new();
     let mut e = Errors::default();
-    for scan in log.scans.iter().step_by(every) {
-        let truth = frame_truth(scan, &map, cfg);
+    for (index, scan) in log.scans.iter().enumerate().step_by(every) {
+        let truth = loaded.truth(index);
         let x = run_core(&mut ex, &scan.frame, &params);
         let lines: Vec<ScoredLine> = x.lines.iter().map(ScoredLine::from).collect();
         let valid: Vec<bool> = scan.frame.beams().iter().map(|b| b.is_valid()).collect();
@@ -429,7 +463,7 @@ fn rows(name: &str, e: &Errors) -> (String, String) {
 
 fn main() -> Result<()> {
     let every: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
-    let cfg = TruthConfig::default();
+    let cfg = TruthConfig::settled();
     let (mut false_md, mut missed_md, mut frag_md) = (Vec::new(), Vec::new(), Vec::new());
     let mut all = Errors::default();
     for path in lms_lab::real::find_logs(Path::new("../shared/data/carmen"))? {
@@ -446,8 +480,8 @@ fn main() -> Result<()> {
     false_md.push(f);
     missed_md.push(m);
     println!(
-        "False lines of the defaults (every {every}th frame), shares of the false lines:\n\n\
-         | log | lines | FalsePos | {} | of the static: map structure all along | < 10 beams | \
+        "Unmatched lines of the defaults (every {every}th frame), shares of the unmatched lines:\n\n\
+         | log | lines | unmatched | {} | of the static: map structure all along | < 10 beams | \
          median \\|z\\| off the gates | off the gates, ≥ 95 % on the wall |\n\
          |:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n{}\n",
         FALSE_CAUSES.join(" | "),
@@ -474,17 +508,16 @@ fn main() -> Result<()> {
          (one wall past an occluder).",
         all.false_by_cause[5], all.several_one_wall
     );
+    let b = all.overlap_only_beams;
     println!(
-        "Of the {} lines off the Δr gate only, {} have their middle within {} m of the \
-         piece's line (off at the foot of the normal, far from the line itself).",
-        all.false_by_cause[4], all.dr_mid_inside, GATE_R
-    );
-    println!(
-        "Of the {} missed counted pieces, {} have an unmatched line on them within the Δα gate \
-         whose middle is within {} m of the piece's line.",
+        "Of the {} missed counted pieces, {} have an unmatched line within both gates that covers \
+         ≥ 80 % of their on-wall beams and fails only the overlap; of its {} beams outside the \
+         piece, {:.2} are ambiguous and {:.2} within 5 cm of the piece's line.",
         all.missed.iter().sum::<usize>(),
-        all.missed_mid_inside,
-        GATE_R
+        all.overlap_only,
+        b[0],
+        b[1] as f64 / b[0].max(1) as f64,
+        b[2] as f64 / b[0].max(1) as f64,
     );
     let h = &all.no_wall_on;
     let at = |lo: f64, hi: f64| h.iter().filter(|&&x| x >= lo && x < hi).count();

@@ -1,9 +1,10 @@
 //! How much the real-scan figures depend on the map truth's own choices:
-//! the defaults, split-and-merge and the oracle against the verified truth
+//! the defaults, split-and-merge and the oracle against the settled truth
 //! with one setting of `TruthConfig` changed at a time — shorter map walls,
 //! a wider band of on-wall hits, cells occupied from fewer frames, sparser
-//! walls, Δr measured at the line's middle instead of at the foot of its
-//! normal — pooled over the logs (docs/DESIGN.md, "Open questions").
+//! walls, no ambiguous beams, the SLAM poses unregistered, and a line's
+//! ambiguous beams left out of the matching's overlap — pooled over the
+//! logs (docs/DESIGN.md, "Evaluation").
 //!
 //! `cargo run --release -p lms-lab --example truth_sensitivity -- [EVERY]`
 
@@ -28,9 +29,9 @@ fn main() -> Result<()> {
         method("oracle", RealKind::Oracle),
     ];
     let names: Vec<&str> = methods.iter().map(|m| m.name).collect();
-    let d = TruthConfig::default();
+    let d = TruthConfig::settled();
     let truths = [
-        ("the truth's defaults", d),
+        ("the settled truth", d),
         (
             "map walls from 0.3 m and 6 cells",
             TruthConfig {
@@ -58,9 +59,24 @@ fn main() -> Result<()> {
             },
         ),
         (
-            "Δr at the line's middle",
+            "no ambiguous beams",
             TruthConfig {
-                range_gate_at_middle: true,
+                ambiguous_within: 0.0,
+                ..d
+            },
+        ),
+        (
+            "the SLAM poses (not registered, no leave-one-wall-out)",
+            TruthConfig {
+                register_rounds: 0,
+                leave_one_wall_out: false,
+                ..d
+            },
+        ),
+        (
+            "ambiguous beams left out of the overlap",
+            TruthConfig {
+                overlap_without_ambiguous: true,
                 ..d
             },
         ),

@@ -152,6 +152,12 @@ pub struct TruthConfig {
     /// differ by a degree or two, which the shared fit passes on to the
     /// shorter ones.
     pub wall_own_line: bool,
+    /// The matching's overlap leaves out a line's ambiguous beams outside
+    /// the piece ([`crate::realtruth::overlap_in`]): they are neutral, so
+    /// they count neither for the match nor against it. Without it a line
+    /// that follows a wall on through a stretch where the map holds two
+    /// parallel walls counts that stretch as off the piece.
+    pub overlap_without_ambiguous: bool,
 }
 
 impl Default for TruthConfig {
@@ -179,6 +185,7 @@ impl Default for TruthConfig {
             ambiguous_within: 0.0,
             neutral_and_unexplained: false,
             wall_own_line: false,
+            overlap_without_ambiguous: false,
         }
     }
 }
@@ -705,6 +712,8 @@ pub struct FrameTruth {
     /// Score with neutral and unexplained lines
     /// ([`TruthConfig::neutral_and_unexplained`]).
     pub neutral_and_unexplained: bool,
+    /// [`TruthConfig::overlap_without_ambiguous`].
+    pub overlap_without_ambiguous: bool,
 }
 
 /// The wall `w`'s line in the sensor frame at `pose`: `(α, r)`, r ≥ 0.
@@ -1139,5 +1148,6 @@ fn truth_at<'a>(
         pieces,
         ambiguous,
         neutral_and_unexplained: cfg.neutral_and_unexplained,
+        overlap_without_ambiguous: cfg.overlap_without_ambiguous,
     }
 }

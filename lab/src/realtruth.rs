@@ -547,9 +547,31 @@ pub fn overlap(first: usize, last: usize, pf: usize, pl: usize) -> f64 {
     }
 }
 
-/// `(Δα, Δr)` of a line against a piece, if they are a candidate pair.
-pub fn candidate(l: &ScoredLine, p: &crate::maptruth::Piece) -> Option<(f64, f64)> {
-    if overlap(l.first, l.last, p.first, p.last) < GATE_OVERLAP {
+/// The share of `l`'s beam range inside piece `p`'s, [`overlap`]; with
+/// the truth's [`crate::maptruth::TruthConfig::overlap_without_ambiguous`],
+/// of its range less its ambiguous beams outside the piece.
+pub fn overlap_in(truth: &FrameTruth, l: &ScoredLine, p: &crate::maptruth::Piece) -> f64 {
+    if !truth.overlap_without_ambiguous || truth.ambiguous.is_empty() {
+        return overlap(l.first, l.last, p.first, p.last);
+    }
+    let (lo, hi) = (l.first.max(p.first), l.last.min(p.last));
+    if hi < lo {
+        return 0.0;
+    }
+    let neutral = (l.first..=l.last)
+        .filter(|&j| (j < p.first || j > p.last) && truth.ambiguous.get(j) == Some(&true))
+        .count();
+    (hi - lo + 1) as f64 / (l.last - l.first + 1 - neutral) as f64
+}
+
+/// `(Δα, Δr)` of a line against a piece of `truth`, if they are a
+/// candidate pair: overlap ([`overlap_in`]) and both gates.
+pub fn candidate(
+    truth: &FrameTruth,
+    l: &ScoredLine,
+    p: &crate::maptruth::Piece,
+) -> Option<(f64, f64)> {
+    if overlap_in(truth, l, p) < GATE_OVERLAP {
         return None;
     }
     let offsets = gate_offsets(l, p.reference(), p.gate_at_middle);
@@ -594,7 +616,7 @@ pub fn match_pieces(truth: &FrameTruth, lines: &[ScoredLine]) -> (PieceMatches, 
     let mut candidates = vec![0usize; truth.pieces.len()];
     for (i, l) in lines.iter().enumerate() {
         for (k, p) in truth.pieces.iter().enumerate() {
-            if let Some((da, dr)) = candidate(l, p) {
+            if let Some((da, dr)) = candidate(truth, l, p) {
                 candidates[k] += 1;
                 let cost = (da / GATE_ALPHA_DEG.to_radians()).powi(2) + (dr / GATE_R).powi(2);
                 pairs.push((cost, i, k, da, dr));

@@ -151,12 +151,13 @@ fn the_range_gate_at_the_middle_keeps_a_line_on_a_far_grazing_wall() {
     };
     let at_foot = piece(10, 39, 0.0, 1.0);
     assert!((r - 1.0) > 0.13, "{r}");
-    assert!(candidate(&line, &at_foot).is_none());
+    assert!(candidate(&FrameTruth::default(), &line, &at_foot).is_none());
     let at_middle = Piece {
         gate_at_middle: true,
         ..at_foot
     };
-    let (da, dr) = candidate(&line, &at_middle).expect("on the wall where the line is");
+    let (da, dr) = candidate(&FrameTruth::default(), &line, &at_middle)
+        .expect("on the wall where the line is");
     assert!((da - tilt).abs() < 1e-12 && dr.abs() < 1e-12, "{da} {dr}");
     // A line parallel to the wall 0.15 m off fails both.
     let off = ScoredLine {
@@ -165,7 +166,10 @@ fn the_range_gate_at_the_middle_keeps_a_line_on_a_far_grazing_wall() {
         middle: [1.15, 8.0],
         ..line
     };
-    assert!(candidate(&off, &at_foot).is_none() && candidate(&off, &at_middle).is_none());
+    assert!(
+        candidate(&FrameTruth::default(), &off, &at_foot).is_none()
+            && candidate(&FrameTruth::default(), &off, &at_middle).is_none()
+    );
 }
 
 #[test]

@@ -78,6 +78,7 @@ fn hand_made(rules: bool) -> FrameTruth {
         pieces,
         ambiguous,
         neutral_and_unexplained: rules,
+        overlap_without_ambiguous: false,
     }
 }
 
@@ -143,6 +144,34 @@ fn a_seven_beam_piece_is_neither_found_nor_missed() {
         assert_eq!((t.lines_true, t.lines_false, t.lines_neutral), (0, 0, 1));
         assert_eq!(t.pieces, 3, "the 7-beam piece is not counted");
     }
+}
+
+#[test]
+fn ambiguous_beams_count_against_the_overlap_unless_the_truth_leaves_them_out() {
+    // A line along C (beams 100–117) from beam 80: 18 of its 38 beams on C
+    // (0.47), 15 of the rest ambiguous (85–99).
+    let along_c = line(80, 117, 1.0, 2.5);
+    let valid = vec![true; 140];
+    let matched = |without: bool| {
+        let truth = FrameTruth {
+            overlap_without_ambiguous: without,
+            ..hand_made(true)
+        };
+        let mut t = RealTally::default();
+        score_frame(&truth, &[along_c], &valid, &mut t);
+        t.matched
+    };
+    assert_eq!(matched(false), 0);
+    // Left out, 18 of 23 beams (0.78): C is found.
+    assert_eq!(matched(true), 1);
+    // A line that is mostly on no wall stays unmatched either way.
+    let mostly_off = FrameTruth {
+        overlap_without_ambiguous: true,
+        ..hand_made(true)
+    };
+    let mut t = RealTally::default();
+    score_frame(&mostly_off, &[line(60, 117, 1.0, 2.5)], &valid, &mut t);
+    assert_eq!(t.matched, 0);
 }
 
 fn wall(x: f64, line: usize) -> MapWall {
