@@ -538,12 +538,17 @@ impl From<&Line> for ScoredLine {
 
 /// Fraction of `first..=last` inside `pf..=pl`.
 pub fn overlap(first: usize, last: usize, pf: usize, pl: usize) -> f64 {
+    beams_inside(first, last, pf, pl) as f64 / (last - first + 1) as f64
+}
+
+/// How many beams of `first..=last` lie inside `pf..=pl`.
+fn beams_inside(first: usize, last: usize, pf: usize, pl: usize) -> usize {
     let lo = first.max(pf);
     let hi = last.min(pl);
     if hi < lo {
-        0.0
+        0
     } else {
-        (hi - lo + 1) as f64 / (last - first + 1) as f64
+        hi - lo + 1
     }
 }
 
@@ -554,14 +559,10 @@ pub fn overlap_in(truth: &FrameTruth, l: &ScoredLine, p: &crate::maptruth::Piece
     if !truth.overlap_without_ambiguous || truth.ambiguous.is_empty() {
         return overlap(l.first, l.last, p.first, p.last);
     }
-    let (lo, hi) = (l.first.max(p.first), l.last.min(p.last));
-    if hi < lo {
-        return 0.0;
-    }
     let neutral = (l.first..=l.last)
         .filter(|&j| (j < p.first || j > p.last) && truth.ambiguous.get(j) == Some(&true))
         .count();
-    (hi - lo + 1) as f64 / (l.last - l.first + 1 - neutral) as f64
+    beams_inside(l.first, l.last, p.first, p.last) as f64 / (l.last - l.first + 1 - neutral) as f64
 }
 
 /// `(Δα, Δr)` of a line against a piece of `truth`, if they are a
