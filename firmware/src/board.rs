@@ -20,9 +20,9 @@
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
+use crate::ring::{Consumer, Producer, Ring};
 use cortex_m_rt::{exception, ExceptionFrame};
 use critical_section::Mutex;
-use heapless::spsc::{Consumer, Producer, Queue};
 use static_cell::ConstStaticCell;
 use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 
@@ -93,8 +93,8 @@ pub type ControlPort = Serial<pac::USART3>;
 /// One USART's queues and counters, and the interrupt's queue ends parked
 /// until the interrupt takes them on first entry.
 struct PortStatics<const RX: usize, const TX: usize> {
-    rx: ConstStaticCell<Queue<u8, RX>>,
-    tx: ConstStaticCell<Queue<u8, TX>>,
+    rx: ConstStaticCell<Ring<RX>>,
+    tx: ConstStaticCell<Ring<TX>>,
     parked: Mutex<RefCell<Ends>>,
     stats: RxStats,
 }
@@ -102,15 +102,15 @@ struct PortStatics<const RX: usize, const TX: usize> {
 impl<const RX: usize, const TX: usize> PortStatics<RX, TX> {
     const fn new() -> Self {
         PortStatics {
-            rx: ConstStaticCell::new(Queue::new()),
-            tx: ConstStaticCell::new(Queue::new()),
+            rx: ConstStaticCell::new(Ring::new()),
+            tx: ConstStaticCell::new(Ring::new()),
             parked: Mutex::new(RefCell::new(None)),
             stats: RxStats::new(),
         }
     }
 
     /// Split the queues: the interrupt's ends parked, the loop's returned.
-    fn split(&'static self) -> (Consumer<'static, u8>, Producer<'static, u8>) {
+    fn split(&'static self) -> (Consumer<'static>, Producer<'static>) {
         let (rx_in, rx_out) = self.rx.take().split();
         let (tx_in, tx_out) = self.tx.take().split();
         critical_section::with(|cs| {
@@ -292,7 +292,7 @@ fn pins(dp: &pac::Peripherals) {
 }
 
 /// The interrupt's queue ends, taken on its first entry.
-type Ends = Option<(Producer<'static, u8>, Consumer<'static, u8>)>;
+type Ends = Option<(Producer<'static>, Consumer<'static>)>;
 
 fn serve<const RX: usize, const TX: usize>(
     usart: &pac::usart1::RegisterBlock,
@@ -307,7 +307,7 @@ fn serve<const RX: usize, const TX: usize>(
         Some((rx, tx)) => (Some(rx), Some(tx)),
         None => (None, None),
     };
-    // A heapless::spsc queue of RX slots holds RX − 1 bytes.
+    // A ring of RX slots holds RX − 1 bytes.
     serial::on_interrupt(usart, rx, RX - 1, tx, &port.stats, irq);
 }
 

@@ -21,6 +21,7 @@ mod control;
 mod fault;
 mod log;
 mod rcc;
+mod ring;
 mod scan_cycles;
 mod serial;
 #[cfg(feature = "standin")]
@@ -292,8 +293,10 @@ struct Pace {
     polled_at: u32,
 }
 
-/// Milliseconds between polls while no sensor byte waits.
-const IDLE_POLL_MS: u32 = 4;
+/// Milliseconds between polls while no sensor byte waits: the
+/// co-processor's time-outs are 50 ms and longer, and the host queue's
+/// 16 ms of 500 kBd output is topped up twice before it can run dry.
+const IDLE_POLL_MS: u32 = 8;
 
 impl Pace {
     fn due(&self, board: &board::Board) -> bool {

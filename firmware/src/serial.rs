@@ -3,7 +3,7 @@
 //!
 //! The interrupt ([`on_interrupt`], called from the handlers in
 //! [`crate::board`]) moves each received byte from the data register into
-//! the producer end of a `heapless::spsc::Queue`, and, while the transmit
+//! the producer end of a [`crate::ring::Ring`], and, while the transmit
 //! queue holds bytes (`TXEIE` on), the next byte to send into the data
 //! register. The main loop reads from the receive queue's consumer end and
 //! writes into the transmit queue's producer end through [`Serial`]'s
@@ -24,16 +24,19 @@
 //! too late. [`RxStats::dropped_full`] counts the bytes read before the
 //! queue was handed over (none after start-up).
 //!
-//! In QEMU `TXE` is always set, so one interrupt sends the whole queue; the
-//! writer pends that interrupt itself ([`Serial`]'s `start_tx`), as QEMU
-//! 7.2 raises a USART's line only for received bytes.
+//! Each entry moves one byte each way, as on silicon, where `TXE` clears
+//! with each write. QEMU 7.2 keeps `TXE` set and raises a USART's line only
+//! for received bytes, so the writer pends the interrupt to start sending
+//! ([`Serial`]'s `start_tx`) and the interrupt pends itself again after
+//! each byte while `TXE` stays set: under QEMU, too, every byte sent is one
+//! interrupt entry, and the cycle estimate counts the board's interrupts.
 
 use core::convert::Infallible;
 use core::ops::Deref;
 use core::sync::atomic::{AtomicU32, Ordering};
 
+use crate::ring::{Consumer, Producer};
 use embedded_io::{ErrorType, Read, ReadReady, Write, WriteReady};
-use heapless::spsc::{Consumer, Producer};
 use lms_core::maths::{div_u64, divisor};
 use stm32f4::stm32f405::usart1::RegisterBlock;
 use stm32f4::stm32f405::Interrupt;
@@ -141,106 +144,114 @@ fn write_brr(usart: &RegisterBlock, div: u32) {
     });
 }
 
-/// The interrupt of one USART: drain the data register into the receive
-/// queue, count what is lost, and feed the transmitter from the transmit
-/// queue (switching `TXEIE` off when it is empty). `producer` is `None`
-/// only if the interrupt fires before the queue has been handed over; the
-/// byte is then counted as dropped (the data register must be read or the
-/// interrupt repeats). `rx_room` is the bytes the receive queue holds: when
-/// it is full, `RXNEIE` goes off (backpressure, see the module docs).
+/// The interrupt of one USART: move the received byte from the data
+/// register into the receive queue, count what is lost, and send the next
+/// byte of the transmit queue (switching `TXEIE` off when it is empty). One
+/// byte each way per entry, from one read of the control and status
+/// registers: at 500 kBd a byte takes 3 360 core cycles and the line stays
+/// raised while another waits, so a second look would only cost register
+/// reads. `producer` is `None` only if the interrupt fires before the queue
+/// has been handed over; the byte is then counted as dropped (the data
+/// register must be read or the interrupt repeats). `rx_room` is the bytes
+/// the receive queue holds: when it is full, `RXNEIE` goes off
+/// (backpressure, see the module docs). Inlined into each handler: it runs
+/// once per byte each way.
+#[inline(always)]
 pub fn on_interrupt(
     usart: &RegisterBlock,
-    producer: Option<&mut Producer<'static, u8>>,
+    producer: Option<&mut Producer<'static>>,
     rx_room: usize,
-    tx: Option<&mut Consumer<'static, u8>>,
+    tx: Option<&mut Consumer<'static>>,
     stats: &RxStats,
     irq: Interrupt,
 ) {
-    on_receive(usart, producer, rx_room, stats);
-    if usart.cr1().read().txeie().bit_is_clear() {
+    let cr1 = usart.cr1().read();
+    // Reading SR then DR clears RXNE and the error flags (ORE, NF, FE, PE).
+    let sr = usart.sr().read();
+    // With `RXNEIE` off the queue was full: the byte waits in DR until the
+    // loop has made room (`resume_rx`); a transmit entry must not take it.
+    if cr1.rxneie().bit_is_set() && (sr.rxne().bit_is_set() || sr.ore().bit_is_set()) {
+        on_receive(usart, sr.rxne().bit_is_set(), producer, rx_room, stats);
+        count_errors(
+            sr.ore().bit_is_set(),
+            sr.fe().bit_is_set() || sr.nf().bit_is_set() || sr.pe().bit_is_set(),
+            stats,
+        );
+    }
+    if cr1.txeie().bit_is_clear() || sr.txe().bit_is_clear() {
         return;
     }
-    let mut tx = tx;
-    // On silicon TXE clears with each write, so one byte goes per entry.
-    // Under QEMU TXE stays set and every write is a blocking socket write:
-    // at most TX_BURST bytes per entry, then the interrupt is pended again,
-    // so that SysTick (a lower exception number) gets in between.
-    for _ in 0..TX_BURST {
-        if usart.sr().read().txe().bit_is_clear() {
+    match tx.and_then(|c| c.dequeue()) {
+        Some(b) => {
+            usart.dr().write(|w| w.dr().set(u16::from(b)));
+        }
+        None => {
+            usart.cr1().modify(|_, w| w.txeie().clear_bit());
             return;
         }
-        match tx.as_deref_mut().and_then(|c| c.dequeue()) {
-            Some(b) => {
-                usart.dr().write(|w| w.dr().set(u16::from(b)));
-            }
-            None => {
-                usart.cr1().modify(|_, w| w.txeie().clear_bit());
-                return;
-            }
-        }
     }
-    cortex_m::peripheral::NVIC::pend(irq);
+    // On silicon `TXE` clears with the write and the level interrupt
+    // (`TXE` & `TXEIE`) brings the next entry when the shifter takes the
+    // byte. QEMU keeps `TXE` set and raises the line only for received
+    // bytes, so while `TXE` is still set the interrupt is pended again:
+    // under QEMU, as on a board, every byte sent costs one entry, and the
+    // cycle estimate (tools/qemu-icount) sees the board's interrupts.
+    if usart.sr().read().txe().bit_is_set() {
+        cortex_m::peripheral::NVIC::pend(irq);
+    }
 }
 
-/// Bytes sent per interrupt entry at most (see [`on_interrupt`]).
-const TX_BURST: usize = 16;
+/// Add one to a counter only this interrupt writes (a load and a store: no
+/// exclusive-access loop).
+fn bump(counter: &AtomicU32) {
+    counter.store(
+        counter.load(Ordering::Relaxed).wrapping_add(1),
+        Ordering::Relaxed,
+    );
+}
 
+/// Count an overrun (`ORE`) and a framing, noise or parity error.
+fn count_errors(overrun: bool, line_error: bool, stats: &RxStats) {
+    if overrun {
+        bump(&stats.overrun);
+    }
+    if line_error {
+        bump(&stats.line_errors);
+    }
+}
+
+/// Read the data register (clearing `RXNE` or `ORE`) and queue the byte if
+/// one was received (`rxne`).
 fn on_receive(
     usart: &RegisterBlock,
-    producer: Option<&mut Producer<'static, u8>>,
+    rxne: bool,
+    producer: Option<&mut Producer<'static>>,
     room: usize,
     stats: &RxStats,
 ) {
-    let mut producer = producer;
-    // Held (the queue was full): the byte waits in DR until the loop has
-    // made room (`resume_rx`); a transmit interrupt must not take it.
-    if usart.cr1().read().rxneie().bit_is_clear() {
+    let queued = producer.as_deref().map(|p| p.len());
+    // The byte that fills the queue: `RXNEIE` off *before* DR is read, so
+    // that the next byte, held in DR, never raises the line (QEMU 7.2
+    // lowers it only on a DR read: a raised line with the byte left in DR
+    // would re-enter this interrupt for ever).
+    let fills = rxne && queued.is_some_and(|len| len.saturating_add(1) >= room);
+    if fills {
+        usart.cr1().modify(|_, w| w.rxneie().clear_bit());
+    }
+    let byte = usart.dr().read().dr().bits() as u8;
+    if !rxne {
+        // ORE without a new byte: the DR read above only cleared the flag.
         return;
     }
-    loop {
-        // Reading SR then DR clears RXNE and the error flags (ORE, NF, FE, PE).
-        let sr = usart.sr().read();
-        if !(sr.rxne().bit_is_set() || sr.ore().bit_is_set()) {
-            return;
-        }
-        // The byte that fills the queue: `RXNEIE` off *before* DR is read,
-        // so that the next byte, held in DR, never raises the line (QEMU
-        // 7.2 lowers it only on a DR read: a raised line with the byte
-        // left in DR would re-enter this interrupt for ever).
-        let fills = sr.rxne().bit_is_set()
-            && producer
-                .as_deref()
-                .is_some_and(|p| p.len().saturating_add(1) >= room);
-        if fills {
-            usart.cr1().modify(|_, w| w.rxneie().clear_bit());
-        }
-        let byte = usart.dr().read().dr().bits() as u8;
-        if sr.ore().bit_is_set() {
-            stats.overrun.fetch_add(1, Ordering::Relaxed);
-        }
-        if sr.fe().bit_is_set() || sr.nf().bit_is_set() || sr.pe().bit_is_set() {
-            stats.line_errors.fetch_add(1, Ordering::Relaxed);
-        }
-        if !sr.rxne().bit_is_set() {
-            // ORE without a new byte: the DR read above only cleared the flag.
-            continue;
-        }
-        let queued = producer
-            .as_deref_mut()
-            .and_then(|p| p.enqueue(byte).ok().map(|()| p.len()));
-        match queued {
-            Some(len) => {
-                stats.received.fetch_add(1, Ordering::Relaxed);
-                stats.peak_queued.fetch_max(len as u32, Ordering::Relaxed);
-                if fills {
-                    // Full now: the line is held (the next byte stays in DR).
-                    return;
-                }
-            }
-            None => {
-                stats.dropped_full.fetch_add(1, Ordering::Relaxed);
+    match (producer.and_then(|p| p.enqueue(byte).ok()), queued) {
+        (Some(()), Some(before)) => {
+            bump(&stats.received);
+            let len = before.saturating_add(1) as u32;
+            if len > stats.peak_queued.load(Ordering::Relaxed) {
+                stats.peak_queued.store(len, Ordering::Relaxed);
             }
         }
+        _ => bump(&stats.dropped_full),
     }
 }
 
@@ -262,7 +273,7 @@ fn resume_rx(usart: &RegisterBlock, irq: Interrupt) {
 #[inline(never)]
 fn read_into(
     usart: &RegisterBlock,
-    rx: &mut Consumer<'static, u8>,
+    rx: &mut Consumer<'static>,
     irq: Interrupt,
     buf: &mut [u8],
 ) -> usize {
@@ -291,8 +302,8 @@ fn read_into(
 /// the registers.
 pub struct Serial<U> {
     usart: U,
-    rx: Consumer<'static, u8>,
-    tx: Producer<'static, u8>,
+    rx: Consumer<'static>,
+    tx: Producer<'static>,
     stats: &'static RxStats,
     line: Line,
 }
@@ -314,7 +325,7 @@ impl<U: Deref<Target = RegisterBlock>> Serial<U> {
     /// Wrap a USART configured at `baud` and its queue ends.
     pub fn new(
         usart: U,
-        (rx, tx): (Consumer<'static, u8>, Producer<'static, u8>),
+        (rx, tx): (Consumer<'static>, Producer<'static>),
         stats: &'static RxStats,
         line: Line,
     ) -> Self {
@@ -408,7 +419,7 @@ fn start_tx(usart: &RegisterBlock, irq: Interrupt) {
 
 /// Sleep until the transmit queue has room; feeds the watchdog while bytes
 /// are still leaving (a line stuck for good ends in its reset).
-fn wait_for_room(tx: &Producer<'static, u8>) {
+fn wait_for_room(tx: &Producer<'static>) {
     let mut queued = tx.len();
     while !tx.ready() {
         critical_section::with(|_| {
@@ -425,12 +436,10 @@ fn wait_for_room(tx: &Producer<'static, u8>) {
 }
 
 /// Queue every byte of `buf`, waiting for room (asleep) whenever the queue
-/// is full. One function for every port (not generic): the firmware's one
-/// copy. Not inlined, so that the one panic path left, heapless's
-/// `% capacity` (unreachable: the capacity is a non-zero constant), is
-/// listed by `panic-sites.sh` as the firmware's, not inside the core's `poll`.
+/// is full. One function for every port (not generic, not inlined): the
+/// firmware's one copy.
 #[inline(never)]
-fn queue_all(usart: &RegisterBlock, tx: &mut Producer<'static, u8>, irq: Interrupt, buf: &[u8]) {
+fn queue_all(usart: &RegisterBlock, tx: &mut Producer<'static>, irq: Interrupt, buf: &[u8]) {
     for chunk in buf.chunks(64) {
         for &b in chunk {
             if tx.enqueue(b).is_err() {
@@ -512,11 +521,9 @@ impl<U: Deref<Target = RegisterBlock>> lms_core::device::coprocessor::WriteRoom 
     }
 }
 
-/// Free slots of a transmit queue. Not inlined, so that heapless's
-/// `% capacity` in `len` (unreachable: the capacity is a non-zero
-/// constant) is listed by `panic-sites.sh` as the firmware's.
+/// Free slots of a transmit queue (one copy for every port).
 #[inline(never)]
-fn tx_room(tx: &Producer<'static, u8>) -> usize {
+fn tx_room(tx: &Producer<'static>) -> usize {
     tx.capacity().saturating_sub(tx.len())
 }
 

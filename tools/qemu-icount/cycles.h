@@ -19,7 +19,12 @@
  *   VDIV, VSQRT                                         14
  *   DMB/DSB/ISB                                         4 (not in the table: a guess)
  *   a taken branch (or a write of PC)                   + 3 (pipeline refill P = 1-3)
- *   an exception, entry and return                      + 12 + 10 (no tail-chaining credit)
+ *   an exception, entry and return                      + 12 + 10 (no tail-chaining credit):
+ *     charged when a block starts at an exception handler's address
+ *     (handler=, from the vector table's symbols) or follows a block
+ *     that did not end in a branch; a handler entered right after a branch
+ *     or straight from another handler's return (tail-chained, as the
+ *     firmware's transmit interrupt pends itself under QEMU) is an entry too
  * Memory (STM32F405/407 reference manual RM0090, section 3.5 "Embedded
  * flash memory": 5 wait states at 168 MHz and 2.7-3.6 V; the ART
  * accelerator's instruction cache of 64 lines and data cache of 8 lines of
@@ -94,6 +99,21 @@ struct m4_tb {
 
 static const struct m4_tb *m4_prev;
 static uint64_t *m4_cycles;
+
+/* Exception handlers' first instructions (thumb bit clear). */
+#define M4_MAX_HANDLERS 16
+static uint64_t m4_handlers[M4_MAX_HANDLERS];
+static size_t m4_n_handlers;
+
+static int m4_is_handler(uint64_t a)
+{
+    for (size_t i = 0; i < m4_n_handlers; i++) {
+        if (m4_handlers[i] == a) {
+            return 1;
+        }
+    }
+    return 0;
+}
 
 /* Registers (words) in the first {...} list of an operand string. */
 static uint64_t m4_list_words(const char *ops)
@@ -208,7 +228,17 @@ static void m4_on_tb(unsigned int vcpu, void *udata)
 {
     (void)vcpu;
     const struct m4_tb *tb = udata;
-    if (m4_prev && m4_prev->end != tb->start) {
+    /* In order: the block starts where the one before ended, or, after a
+     * block that did not end in a branch, inside that block's last
+     * instruction: QEMU ends a block before a Thumb-2 instruction that
+     * crosses a 1 KiB page and translates it again at the start of the next
+     * block, and the plugin lists it in both. */
+    int in_order = m4_prev && (m4_prev->end == tb->start ||
+                               (!m4_prev->ends_in_branch && tb->start < m4_prev->end && tb->start + 4 >= m4_prev->end));
+    if (m4_is_handler(tb->start)) {
+        *m4_cycles += M4_EXCEPTION;
+        m4_exceptions++;
+    } else if (m4_prev && !in_order) {
         if (m4_prev->ends_in_branch) {
             *m4_cycles += M4_REFILL;
             m4_taken++;
@@ -219,7 +249,7 @@ static void m4_on_tb(unsigned int vcpu, void *udata)
     }
     *m4_cycles += tb->base;
     /* Prefetch credit: the cycles of the line before, when reached in order. */
-    int in_order = m4_prev && m4_prev->end == tb->start && m4_prev->n_lines > 0;
+    in_order = in_order && m4_prev->n_lines > 0;
     uint64_t credit = in_order ? m4_prev->line_cost[m4_prev->n_lines - 1] : 0;
     uint64_t before = in_order ? m4_prev->lines[m4_prev->n_lines - 1] : UINT64_MAX;
     for (size_t i = 0; i < tb->n_lines; i++) {

@@ -17,7 +17,9 @@
  *   icount: scans=N min=.. max=.. mean=.. (after skipping the first `skip`)
  *
  * With model=m4 it also estimates Cortex-M4F cycles at 168 MHz from the flash
- * (cycles.h: the model, its sources and its assumptions) and prints, after
+ * (cycles.h: the model, its sources and its assumptions; handler=0xADDR,
+ * repeated, names the exception handlers whose entries it charges) and
+ * prints, after
  * the instruction lines,
  *   icount: cycles scans=N min=.. max=.. mean=..      (inside the intervals)
  *   icount: window cycles=.. insns=.. intervals=.. in_intervals=..
@@ -252,10 +254,16 @@ QEMU_PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_
                 return -1;
             }
             model = 1;
+        } else if (strncmp(argv[i], "handler=", 8) == 0) {
+            if (m4_n_handlers == M4_MAX_HANDLERS) {
+                fprintf(stderr, "icount: at most %d handler= addresses\n", M4_MAX_HANDLERS);
+                return -1;
+            }
+            m4_handlers[m4_n_handlers++] = strtoull(argv[i] + 8, NULL, 0) & ~(uint64_t)1;
         } else if (strncmp(argv[i], "skip=", 5) == 0) {
             skip = (size_t)strtoull(argv[i] + 5, NULL, 0);
         } else {
-            fprintf(stderr, "icount: unknown argument %s (begin=, end=, skip=, profile=, model=)\n", argv[i]);
+            fprintf(stderr, "icount: unknown argument %s (begin=, end=, skip=, profile=, model=, handler=)\n", argv[i]);
             return -1;
         }
     }

@@ -36,7 +36,15 @@ sites=$(grep "bl[[:space:]]*${begin}" "$dis" | awk '{ sub(":", "", $1); print $1
 [ -n "$sites" ] || { echo "no call of Extractor::run in $elf" >&2; exit 1; }
 ends=""
 for site in $sites; do ends="$ends,end=$(printf '0x%x' $((0x$site + 4)))"; done
-QEMU_EXTRA="-plugin $root/$so,begin=$begin$ends${ICOUNT_PROFILE:+,profile=${ICOUNT_PROFILE_KIND:-1}}${ICOUNT_MODEL:+,model=$ICOUNT_MODEL} -d plugin -D $log" \
+# The exception handlers (the vector table's entries the firmware defines):
+# the cycle model charges an exception at each entry.
+handlers=""
+syms=$(llvm-nm "$elf")
+for h in SysTick USART1 USART2 USART3 HardFault DefaultHandler; do
+  a=$(awk -v n="$h" '$3 == n && !seen { print $1; seen = 1 }' <<< "$syms")
+  [ -z "$a" ] || handlers="$handlers,handler=$(printf '0x%x' $((0x$a & ~1)))"
+done
+QEMU_EXTRA="-plugin $root/$so,begin=$begin$ends${ICOUNT_PROFILE:+,profile=${ICOUNT_PROFILE_KIND:-1}}${ICOUNT_MODEL:+,model=$ICOUNT_MODEL$handlers} -d plugin -D $log" \
   target/release/host-bridge verify --qemu "$elf" "$@" >&2
 [ -z "${ICOUNT_INTERVALS:-}" ] || grep "icount: interval" "$log" > "$ICOUNT_INTERVALS"
 grep '^icount: scans=' "$log" | sed 's/icount: //'
