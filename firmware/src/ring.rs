@@ -4,9 +4,9 @@
 //!
 //! It stands in for `heapless::spsc` for one measured reason: heapless
 //! erases the capacity and wraps its indices with `%`, a division (`UDIV`,
-//! up to 12 cycles on the M4) on every byte queued, taken or counted, about
-//! five a byte through the co-processor and some 60 k cycles a 361-beam scan
-//! by the cycle bound (docs/DESIGN.md, Firmware). Here an index wraps by a
+//! up to 12 cycles on the M4) on every byte queued, taken or counted, two
+//! or three a byte through the co-processor and 0.03 M cycles a 361-beam
+//! scan by the cycle bound (docs/DESIGN.md, Firmware). Here an index wraps by a
 //! comparison. Each slot is an `AtomicU8`, so nothing here is `unsafe`: the
 //! producer stores the byte, then publishes the new tail (`Release`); the
 //! consumer loads the tail (`Acquire`), then the byte; the head the other
