@@ -45,6 +45,7 @@ Needs: python3 -m pip install unicorn (or Debian's python3-unicorn), nm and
 llvm-objdump. Ends with "N passed, N failed"; exit status 1 on failure.
 """
 
+import functools
 import os
 import struct
 import subprocess
@@ -104,46 +105,44 @@ def symbols(path):
     return out
 
 
-def instruction_sites(path):
-    """Addresses of `wfi`, of `bkpt #0xab` (semihosting) and of the
-    instructions right after a `cpsie i` / `msr primask` (where a pending
-    interrupt is taken) in the code."""
-    objdump = "llvm-objdump"
-    dis = subprocess.run([objdump, "-d", "--no-show-raw-insn", path], capture_output=True, text=True,
-                         check=True).stdout
-    wfi, bkpt, unmask = [], [], []
-    after_unmask = False
-    for line in dis.splitlines():
-        parts = line.split()
-        if len(parts) >= 2 and parts[0].endswith(":"):
-            try:
-                addr = int(parts[0][:-1], 16)
-            except ValueError:
-                continue
-            if after_unmask:
-                unmask.append(addr)
-            after_unmask = parts[1] == "cpsie" or (parts[1] == "msr" and parts[2:3] == ["primask,"])
-            if parts[1] == "wfi":
-                wfi.append(addr)
-            elif parts[1] == "bkpt" and parts[2:3] in (["#171"], ["#0xab"]):
-                bkpt.append(addr)
-    return wfi, bkpt, unmask
-
-
-def call_returns(path, target):
-    """Return addresses of every `bl` to `target` (a 4-byte `bl`)."""
+@functools.lru_cache(maxsize=None)
+def instructions(path):
+    """The code's instructions, disassembled once: (address, mnemonic,
+    operands) in address order."""
     dis = subprocess.run(["llvm-objdump", "-d", "--no-show-raw-insn", path], capture_output=True, text=True,
                          check=True).stdout
     out = []
     for line in dis.splitlines():
         parts = line.split()
-        if len(parts) >= 3 and parts[0].endswith(":") and parts[1] == "bl":
+        if len(parts) >= 2 and parts[0].endswith(":"):
             try:
-                if int(parts[2], 16) == target:
-                    out.append(int(parts[0][:-1], 16) + 4)
+                out.append((int(parts[0][:-1], 16), parts[1], parts[2:]))
             except ValueError:
                 continue
-    return out
+    return tuple(out)
+
+
+def instruction_sites(path):
+    """Addresses of `wfi`, of `bkpt #0xab` (semihosting) and of the
+    instructions right after a `cpsie i` / `msr primask` (where a pending
+    interrupt is taken) in the code."""
+    wfi, bkpt, unmask = [], [], []
+    after_unmask = False
+    for addr, mnemonic, operands in instructions(path):
+        if after_unmask:
+            unmask.append(addr)
+        after_unmask = mnemonic == "cpsie" or (mnemonic == "msr" and operands[:1] == ["primask,"])
+        if mnemonic == "wfi":
+            wfi.append(addr)
+        elif mnemonic == "bkpt" and operands[:1] in (["#171"], ["#0xab"]):
+            bkpt.append(addr)
+    return wfi, bkpt, unmask
+
+
+def call_returns(path, target):
+    """Return addresses of every `bl` to `target` (a 4-byte `bl`)."""
+    return [addr + 4 for addr, mnemonic, operands in instructions(path)
+            if mnemonic == "bl" and operands[:1] == [f"0x{target:x}"]]
 
 
 # ---- LMS framing (PROTOCOL.md section 1) ----
@@ -865,26 +864,29 @@ def stream(m, chip, lms, host, syms, n_scans=3):
     why = m.run(progress, max_cycles=chip.cycles + 20 * period)
     check(f"{n_scans} scans streamed at 500 kBd: every B0 passed through byte for byte", why is None and got == scans,
           f"{len(got)} of {n_scans} B0" + (f"; {why}" if why else ""))
-    def per_scan(table, n=None):
-        if n is not None:
-            return (table.get(n, 0) - window[table is m.handler_entries and "entries" or "insns"].get(n, 0)) / n_scans
-        return sum(per_scan(table, k) for k in table)
+    def entries(n):
+        """Entries of exception `n` a scan in the window."""
+        return (m.handler_entries.get(n, 0) - window["entries"].get(n, 0)) / n_scans
+
+    def insns(n):
+        """Instructions of exception `n`'s handler a scan in the window."""
+        return (m.handler_instructions.get(n, 0) - window["insns"].get(n, 0)) / n_scans
     pipeline = (pipe["total"] - window["pipe"]) / n_scans
     other = (chip.cycles - window["cycles"] - (m.slept - window["slept"])) / n_scans - pipeline
     print(f"     per scan on the board's schedule: pipeline {pipeline / 1e6:.3f} M instructions, other work "
-          f"{other / 1e6:.3f} M instructions and {per_scan(m.handler_entries):.0f} exceptions")
+          f"{other / 1e6:.3f} M instructions and {sum(entries(n) for n in m.handler_entries):.0f} exceptions")
     groups = " ".join(f"{c:02X}" for c in seq)
     check("features after every scan (D4 D3 D1 D2 D0)", seq.count(0xD0) == n_scans, groups[:80])
     # Whole handlers, everything they call included (one entry per byte).
-    rx = per_scan(m.handler_instructions, 54) / max(1, per_scan(m.handler_entries, 54))
-    tx = per_scan(m.handler_instructions, 53) / max(1, per_scan(m.handler_entries, 53))
+    rx = insns(54) / max(1, entries(54))
+    tx = insns(53) / max(1, entries(53))
     check("receive interrupt cost per byte (USART2, 500 kBd)", 0 < rx < 150,
-          f"{rx:.1f} instructions per byte ({per_scan(m.handler_entries, 54):.0f} entries a scan, one per byte) = "
+          f"{rx:.1f} instructions per byte ({entries(54):.0f} entries a scan, one per byte) = "
           f"{rx * 50_000 / 168e6 * 100:.2f} % of 168 MHz at 50 000 bytes/s, + 12 cycles entry and 12 exit each")
     sent = window.get("sent", 0) / n_scans
     check("transmit interrupt: one entry per byte sent, as on silicon (USART1, 500 kBd)",
-          0 < tx < 150 and abs(per_scan(m.handler_entries, 53) - sent) <= 0.02 * sent,
-          f"{per_scan(m.handler_entries, 53):.0f} entries for {sent:.0f} bytes a scan, {tx:.1f} instructions each")
+          0 < tx < 150 and abs(entries(53) - sent) <= 0.02 * sent,
+          f"{entries(53):.0f} entries for {sent:.0f} bytes a scan, {tx:.1f} instructions each")
     overlap = [(lb - e) / 168e3 for e, lb in zip(ends[-n_scans:], last_byte)]
     check("the loop finishes each scan while the host line is still sending", overlap and min(overlap) > 5,
           "host line busy " + ", ".join(f"{o:.1f}" for o in overlap) + " ms after scan_end")
