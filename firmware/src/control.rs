@@ -22,7 +22,10 @@
 //!   2 HardFault, 3 unexpected interrupt; its PC and LR), `fault_detail`;
 //! - the scans' cycles by the core's cycle counter ([`crate::scan_cycles`]):
 //!   `cycle_counter` (1 on the board, 0 under QEMU, which models none),
-//!   `scan_poll_cycles_max`, `scan_poll_cycles_last`.
+//!   `scan_poll_cycles_max`, `scan_poll_cycles_last`;
+//! - `params_fingerprint`: [`lms_core::Params::fingerprint`] of the
+//!   parameters this build runs (`LMS_PRESET`, `LMS_ITERATIONS`), so that
+//!   `host-bridge verify --qemu` can tell whether it recomputes with them.
 //!
 //! `emulator_us` is the emulator's own clock read at the same moment
 //! (semihosting `SYS_ELAPSED` / `SYS_TICKFREQ`; QEMU: the host's monotonic
@@ -132,6 +135,7 @@ impl Report {
         w.field("cycle_counter", u64::from(l.counting));
         w.field("scan_poll_cycles_max", l.scan_poll_max.into());
         w.field("scan_poll_cycles_last", l.scan_poll_last.into());
+        w.field("params_fingerprint", crate::app::PARAMS_FINGERPRINT.into());
         w.put(b"\n");
     }
 }

@@ -61,18 +61,22 @@ mod app {
     pub const INITIAL: App = CoProcessor::unconfigured();
 
     /// The parameters of this build: the defaults (docs/ALGORITHM.md) or
-    /// the preset `LMS_PRESET`, with the passes `LMS_ITERATIONS` if given,
-    /// validated at compile time (an invalid setting fails the build).
-    const PARAMS: ValidParams = {
-        let p: Params = match crate::ITERATIONS {
-            Some(n) => crate::PRESET.with_iterations(n),
-            None => crate::PRESET,
-        };
-        match p.validate() {
-            Ok(valid) => valid,
-            Err(_) => panic!("the build's parameters are invalid (LMS_ITERATIONS?)"),
-        }
+    /// the preset `LMS_PRESET`, with the passes `LMS_ITERATIONS` if given.
+    const RUN: Params = match crate::ITERATIONS {
+        Some(n) => crate::PRESET.with_iterations(n),
+        None => crate::PRESET,
     };
+
+    /// [`RUN`], validated at compile time (an invalid setting fails the
+    /// build).
+    const PARAMS: ValidParams = match RUN.validate() {
+        Ok(valid) => valid,
+        Err(_) => panic!("the build's parameters are invalid (LMS_ITERATIONS?)"),
+    };
+
+    /// [`Params::fingerprint`] of this build's parameters, for the
+    /// console's report.
+    pub const PARAMS_FINGERPRINT: u32 = RUN.fingerprint();
 
     /// The sensor set-up: the build's variant (`LMS_VARIANT`, default
     /// 180°/0.5°), mm, 500 kBd.
@@ -103,6 +107,9 @@ mod app {
     pub type App = crate::standin::Forwarder;
 
     pub const INITIAL: App = App::new();
+
+    /// No pipeline, no parameters.
+    pub const PARAMS_FINGERPRINT: u32 = 0;
 
     pub fn start(_app: &mut App, _now_us: u64) {}
 

@@ -13,7 +13,8 @@
 # Usage (after `cargo build --release -p host-bridge`):
 #   tools/qemu-icount/realtime.sh [MODE ...]    (default: 180/0.5 180/1 100/0.25)
 # Other firmware settings pass through the environment (`LMS_PRESET`,
-# `LMS_ITERATIONS`, see firmware/README.md).
+# `LMS_ITERATIONS`, see firmware/README.md); with `LMS_PRESET` the host
+# recomputes with the same `--preset`.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 cd "$root"
@@ -33,8 +34,9 @@ for mode in "$@"; do
     *) echo "realtime.sh: unknown mode $mode (180/1, 180/0.5, 100/1, 100/0.5, 100/0.25)" >&2; exit 2 ;;
   esac
   (cd firmware && LMS_VARIANT="$mode" cargo build -q --release)
+  # A preset build is checked against the same preset on the host.
   out=$(ICOUNT_MODEL=m4 tools/qemu-icount/pipeline.sh --scene random --seed 7 --count 50 \
-    --noise-sigma 0.01 --scans 50 2> /dev/null) || {
+    --noise-sigma 0.01 --scans 50 ${LMS_PRESET:+--preset "$LMS_PRESET"} 2> /dev/null) || {
     echo "realtime.sh: $mode: the QEMU run failed or mismatched the host" >&2
     exit 1
   }
@@ -52,5 +54,5 @@ for mode in "$@"; do
       exit share <= goal ? 0 : 3
     }' || status=1
 done
-(cd firmware && cargo build -q --release)
+(cd firmware && env -u LMS_PRESET -u LMS_ITERATIONS -u LMS_VARIANT cargo build -q --release)
 exit "$status"

@@ -263,6 +263,33 @@ macro_rules! take {
     };
 }
 
+/// The value of a field of type `$ty` as the 32 bits and the byte count
+/// [`Params::fingerprint`] hashes: an `f32` by its bits (±0 as +0, as `==`
+/// sees them), a whole number by its 16 bits, a switch as one byte.
+macro_rules! fingerprint_bits {
+    (f32, $v:expr) => {
+        (if $v == 0.0 { 0 } else { $v.to_bits() }, 4)
+    };
+    (bool, $v:expr) => {
+        ($v as u32, 1)
+    };
+    ($count:ident, $v:expr) => {
+        ($v as u32, 2)
+    };
+}
+
+/// FNV-1a (32 bits) of `hash` extended by the low `bytes` bytes of `bits`,
+/// least significant first.
+const fn fnv1a(mut hash: u32, bits: u32, bytes: u32) -> u32 {
+    let mut k = 0;
+    while k < bytes {
+        hash ^= (bits >> (8 * k)) & 0xff;
+        hash = hash.wrapping_mul(0x0100_0193);
+        k += 1;
+    }
+    hash
+}
+
 /// The one declaration of the parameters: per field its name, the name of
 /// its `const` setter, its type, unit, range, whether only a build with
 /// feature `section10` runs it, and its meaning. Gives [`FIELDS`], the
@@ -340,6 +367,22 @@ macro_rules! fields {
                 let mut p = Params::DEFAULT;
                 $(p.$name = take!($ty, real, count, flag);)+
                 p
+            }
+
+            /// A 32-bit fingerprint of every field, in [`FIELDS`] order
+            /// (FNV-1a over each value's bits; equal parameters give equal
+            /// fingerprints). The firmware's console reports its build's
+            /// (`params_fingerprint`), so that a host can tell whether it
+            /// recomputes the firmware's features with the parameters the
+            /// firmware runs (`host-bridge verify --qemu`).
+            #[must_use]
+            pub const fn fingerprint(&self) -> u32 {
+                let mut hash = 0x811c_9dc5;
+                $(
+                    let (bits, bytes) = fingerprint_bits!($ty, self.$name);
+                    hash = fnv1a(hash, bits, bytes);
+                )+
+                hash
             }
 
             /// The first field outside its own range (in [`FIELDS`] order),
@@ -588,6 +631,33 @@ mod tests {
             );
             assert_eq!(p, preset.params, "{}", preset.name);
             assert!(preset.params.validate().is_ok(), "{}", preset.name);
+        }
+    }
+
+    #[test]
+    fn the_fingerprint_tells_every_field_apart() {
+        let base = Params::DEFAULT;
+        assert_eq!(base.fingerprint(), Params::DEFAULT.fingerprint());
+        assert_eq!(
+            base.with_q(-0.0).fingerprint(),
+            base.with_q(0.0).fingerprint()
+        );
+        let mut seen = std::vec![base.fingerprint()];
+        for f in FIELDS {
+            let mut p = base;
+            let changed = match (f.get)(&base) {
+                Value::Real(x) => std::format!("{}", if x == 1.0 { 2.0 } else { 1.0 }),
+                Value::Count(n) => std::format!("{}", if n == 1 { 2 } else { 1 }),
+                Value::Flag(b) => std::format!("{}", !b),
+            };
+            p.set(f.name, &changed).unwrap();
+            assert_ne!(p, base, "{}", f.name);
+            assert!(!seen.contains(&p.fingerprint()), "{}", f.name);
+            seen.push(p.fingerprint());
+        }
+        let presets: std::vec::Vec<u32> = PRESETS.iter().map(|p| p.params.fingerprint()).collect();
+        for (k, fp) in presets.iter().enumerate() {
+            assert!(!presets[..k].contains(fp), "{}", PRESETS[k].name);
         }
     }
 

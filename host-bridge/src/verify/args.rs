@@ -92,7 +92,8 @@ pub struct VerifyArgs {
     #[arg(long, value_name = "N", requires = "qemu")]
     pub reset_mcu_after: Option<usize>,
     /// Pipeline parameters: the co-processor's in --host mode; in every mode
-    /// those the D0 summary does not echo (min points, max chi2, merging)
+    /// those the D0 summary does not echo (min points, max chi2, merging);
+    /// with --qemu or --ports only the firmware's --preset (its LMS_PRESET)
     #[command(flatten)]
     pub params: ParamArgs,
     /// Log the phases of the run and the sensor-side requests on stderr

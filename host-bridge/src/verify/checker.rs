@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use lms_core::params::FIELDS;
+use lms_core::params::{FIELDS, PRESETS};
 use lms_core::telegram::features::{EchoedParams, Summary};
 use lms_core::telegram::{Direction, MeasuredView, RangeBits, Telegram};
 use lms_core::{Extractor, Features, Params};
@@ -40,6 +40,12 @@ pub(super) struct Checker {
     pub(super) tally: Tally,
     /// The parameters echoed by the first summary.
     echoed: Option<EchoedParams>,
+    /// The firmware's [`Params::fingerprint`] from its console
+    /// (`params_fingerprint`; `--qemu` only), checked at the first summary.
+    pub(super) firmware_fingerprint: Option<u32>,
+    /// Why the run cannot go on: the firmware runs other parameters than
+    /// the check recomputes with, so every scan would differ.
+    pub(super) fatal: Option<String>,
 }
 
 impl Checker {
@@ -51,6 +57,8 @@ impl Checker {
             cursor: 0,
             tally: Tally::default(),
             echoed: None,
+            firmware_fingerprint: None,
+            fatal: None,
         }
     }
 
@@ -96,6 +104,12 @@ impl Checker {
                      command line's; recomputing with those",
                     differing.join(" ")
                 );
+            }
+            if let Some(firmware) = self.firmware_fingerprint {
+                if ran.fingerprint() != firmware {
+                    self.fatal = Some(other_parameters(firmware, &summary.params, &ran));
+                    return;
+                }
             }
         }
         let Some(b0) = b0 else {
@@ -204,5 +218,62 @@ impl Checker {
                 false
             }
         }
+    }
+}
+
+/// Why the firmware's features cannot be recomputed: its parameters
+/// (fingerprint `firmware`) are not `ran`, the ones the check would use
+/// with the `echoed` passes, σ, q and τ. Names the preset the firmware was
+/// built with where one gives that fingerprint.
+fn other_parameters(firmware: u32, echoed: &EchoedParams, ran: &Params) -> String {
+    let check = PRESETS
+        .iter()
+        .find(|p| echoed.over(p.params) == *ran)
+        .map_or_else(
+            || "other parameters".to_string(),
+            |p| format!("preset {}", p.name),
+        );
+    match PRESETS
+        .iter()
+        .find(|p| echoed.over(p.params).fingerprint() == firmware)
+    {
+        Some(p) => format!(
+            "the firmware runs preset {0} (built with LMS_PRESET={0}) and this check {check}: \
+             every scan would differ; run verify with --preset {0}",
+            p.name
+        ),
+        None => format!(
+            "the firmware runs parameters that no preset gives with the passes, sigma, q and \
+             tau of its D0 (params_fingerprint {firmware:#010x} on its console, the check's \
+             {:#010x}): its features cannot be recomputed here",
+            ran.fingerprint()
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn another_preset_in_the_firmware_is_named() {
+        // The firmware built with LMS_PRESET=v3.2 and 8 passes; the check
+        // recomputes with the defaults and the passes its D0 echoes.
+        let firmware = Params::V3_2.with_iterations(8);
+        let echoed = EchoedParams::from(&firmware);
+        let ran = echoed.over(Params::DEFAULT);
+        assert_ne!(ran.fingerprint(), firmware.fingerprint());
+        let why = other_parameters(firmware.fingerprint(), &echoed, &ran);
+        assert!(why.contains("runs preset v3.2"), "{why}");
+        assert!(why.contains("this check preset default"), "{why}");
+        assert!(why.contains("--preset v3.2"), "{why}");
+        // Parameters no preset gives: said so, with both fingerprints.
+        let odd = firmware.with_merge(!firmware.merge);
+        let why = other_parameters(odd.fingerprint(), &echoed, &ran);
+        assert!(why.contains("no preset gives"), "{why}");
+        assert!(
+            why.contains(&format!("{:#010x}", odd.fingerprint())),
+            "{why}"
+        );
     }
 }

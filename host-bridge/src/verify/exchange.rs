@@ -106,6 +106,16 @@ impl Session {
 
     /// The firmware's console report (`s`), then `q`.
     pub(super) fn firmware_report(&mut self) -> Option<String> {
+        let text = self.console_report();
+        if let Some(c) = self.console.as_mut() {
+            let _ = c.send(b"q");
+        }
+        text
+    }
+
+    /// The firmware's console report (`s`): its one line, if it has a
+    /// console and answers within 2 s.
+    pub(super) fn console_report(&mut self) -> Option<String> {
         self.console.as_ref()?;
         self.console_text.clear();
         let until = Instant::now() + Duration::from_secs(2);
@@ -120,9 +130,6 @@ impl Session {
         let text = String::from_utf8_lossy(&self.console_text)
             .trim()
             .to_string();
-        if let Some(c) = self.console.as_mut() {
-            let _ = c.send(b"q");
-        }
         (!text.is_empty()).then_some(text)
     }
 }

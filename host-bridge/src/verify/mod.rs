@@ -62,7 +62,11 @@
 //! 2. the std build recomputes the features: [`MeasuredView::to_frame`](lms_core::telegram::MeasuredView::to_frame)
 //!    with 13 range bits, [`Extractor::run`](lms_core::Extractor::run) with the parameters echoed in
 //!    the `D0` summary (`iterations`, `sigma`, `q`, `tau`; the others from
-//!    the command line, default ALGORITHM.md);
+//!    the command line, default ALGORITHM.md). Under QEMU these are first
+//!    compared with the ones the firmware runs, by their fingerprint on its
+//!    console ([`Params::fingerprint`], `params_fingerprint`): a firmware
+//!    built with another preset (`LMS_PRESET`) ends the run with a message
+//!    that names it, instead of a mismatch on every scan;
 //! 3. segments, edge points, every field of every line and corner (floats
 //!    by their bits; all NaNs count as equal) and the statistics must be
 //!    identical.
@@ -100,8 +104,8 @@
 //!   with its three serial ports on TCP sockets on 127.0.0.1 (free ports
 //!   chosen at start), as `firmware/run-qemu.sh` does: USART1 = host line,
 //!   USART2 = sensor line, USART3 = console (read all the time, since QEMU
-//!   stalls on a full socket; `s` at the end for the firmware's report, then
-//!   `q`). QEMU runs in its own process group under `timeout` (when
+//!   stalls on a full socket; `s` before the stream for the firmware's
+//!   parameters, `s` at the end for its report, then `q`). QEMU runs in its own process group under `timeout` (when
 //!   installed), so it is bounded even if verify is killed; a guard kills
 //!   the group on every exit, errors and panics included. Its `defmt` log
 //!   is kept in a temporary directory and its tail decoded with
@@ -154,6 +158,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, ensure, Context, Result};
+use lms_core::params::PRESETS;
 use lms_core::telegram::features::EchoedParams;
 use lms_core::telegram::Baud;
 use lms_core::Params;
@@ -199,27 +204,31 @@ fn checked_options(args: &VerifyArgs) -> Result<(Baud, Params)> {
 }
 
 /// With `--qemu` or `--ports` the co-processor is the firmware, which runs
-/// [`Params::DEFAULT`] and echoes only iterations, σ, q and τ in its `D0`
-/// summary: a different value of any other parameter on the command line
-/// would make the check recompute with parameters the firmware does not
-/// run, and report every scan that differs as a mismatch. Refuse it, naming
-/// the parameters.
+/// a preset ([`PRESETS`]: the defaults unless built with `LMS_PRESET`) and
+/// echoes only iterations, σ, q and τ in its `D0` summary: parameters on
+/// the command line that are no preset with those four changed would make
+/// the check recompute with parameters no firmware runs, and report every
+/// scan as a mismatch. Refuse them, naming the parameters that differ from
+/// the defaults (or the `--preset` given). Which preset the firmware runs
+/// is checked at the first summary under QEMU (its console's
+/// `params_fingerprint`), and by the bits on a board.
 fn ensure_firmware_runs(params: &Params) -> Result<()> {
-    let echoed_only = EchoedParams::from(params).over(Params::DEFAULT);
-    if *params == echoed_only {
+    let echoed = EchoedParams::from(params);
+    if PRESETS.iter().any(|p| echoed.over(p.params) == *params) {
         return Ok(());
     }
+    let nearest = echoed.over(Params::DEFAULT);
     // The fields that differ, by name, with the value asked for.
     let differing: Vec<String> = lms_core::params::FIELDS
         .iter()
-        .filter(|f| (f.get)(params) != (f.get)(&echoed_only))
+        .filter(|f| (f.get)(params) != (f.get)(&nearest))
         .map(|f| format!("{}={}", f.name, (f.get)(params)))
         .collect();
     anyhow::bail!(
-        "with --qemu or --ports the co-processor is the firmware, which runs the default \
-         parameters and reports only iterations, sigma, q and tau: {} would be checked against \
-         results the firmware never computes; leave those flags out (or use --host, which runs \
-         the co-processor with them)",
+        "with --qemu or --ports the co-processor is the firmware, which runs a preset (the \
+         defaults unless built with LMS_PRESET) and reports only iterations, sigma, q and tau: \
+         {} would be checked against results the firmware never computes; leave those flags \
+         out, give the firmware's --preset, or use --host, which runs the co-processor with them",
         differing.join(", ")
     )
 }
@@ -295,5 +304,8 @@ mod tests {
         assert!(message.contains("split_depth=3"), "{message}");
         assert!(message.contains(&merge), "{message}");
         assert!(!message.contains("sigma="), "{message}");
+        // A preset build, passes changed (`LMS_PRESET`, `LMS_ITERATIONS`).
+        assert!(ensure_firmware_runs(&Params::V3_2.with_iterations(8)).is_ok());
+        assert!(ensure_firmware_runs(&Params::V3_1).is_ok());
     }
 }

@@ -27,6 +27,7 @@ impl Session {
     /// The whole run (see the module docs).
     pub(super) fn run(&mut self, host_baud: Baud, deadline: Instant) -> Result<Outcome> {
         self.await_sensor_stream(deadline)?;
+        self.note_firmware_params();
         // The first exchange on the host line, retried: the board may
         // still be starting.
         let before = self.counters(deadline)?;
@@ -61,6 +62,23 @@ impl Session {
             self.pump(TICK)?;
         }
         Ok(())
+    }
+
+    /// The firmware's parameters, by their fingerprint on its console
+    /// (`--qemu`; a board's console is not connected): the checker
+    /// compares them with its own at the first summary.
+    fn note_firmware_params(&mut self) {
+        let Some(report) = self.console_report() else {
+            return;
+        };
+        self.checker.firmware_fingerprint = report
+            .split_whitespace()
+            .find_map(|field| field.strip_prefix("params_fingerprint="))
+            .and_then(|v| v.parse().ok());
+        self.log(format_args!(
+            "firmware params_fingerprint: {:?}",
+            self.checker.firmware_fingerprint
+        ));
     }
 
     /// 3. The host line's rate, then its stream.

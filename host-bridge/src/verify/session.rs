@@ -90,7 +90,11 @@ impl Session {
         }
         self.sensor.clock.pass();
         self.dut.check()?;
-        self.pump_lines(wait).map_err(|e| self.dut.explain(e))
+        self.pump_lines(wait).map_err(|e| self.dut.explain(e))?;
+        match self.checker.fatal.take() {
+            Some(why) => bail!(why),
+            None => Ok(()),
+        }
     }
 
     fn pump_lines(&mut self, wait: Duration) -> Result<()> {
