@@ -121,12 +121,14 @@ pub fn parameters_text(preset: &Preset) -> String {
         "Preset {}: {}.\n\n{}\n\
          Set one with --set NAME=VALUE or in a --params FILE; {} have flags of their own.\n\
          With a log, sigma and max_range come from its data unless set. Presets: {}\n\
-         (--preset NAME).\n",
+         (--preset NAME). A firmware built with this preset reports params_fingerprint={}\n\
+         on its console (with LMS_ITERATIONS another).\n",
         preset.name,
         preset.summary,
         aligned(&rows),
         and_list(&flagged),
-        names.join(", ")
+        names.join(", "),
+        preset.params.fingerprint()
     )
 }
 
