@@ -263,27 +263,43 @@ macro_rules! take {
     };
 }
 
-/// The value of a field of type `$ty` as the 32 bits and the byte count
-/// [`Params::fingerprint`] hashes: an `f32` by its bits (±0 as +0, as `==`
-/// sees them), a whole number by its 16 bits, a switch as one byte.
-macro_rules! fingerprint_bits {
+/// A field's value as [`Params::fingerprint`] hashes it: its low `bytes`
+/// bytes of `bits`, least significant first.
+#[derive(Clone, Copy)]
+struct FieldBits {
+    bits: u32,
+    bytes: u32,
+}
+
+/// The [`FieldBits`] of a value `$v` of the field type `$ty`: an `f32` by
+/// its bits (±0 as +0, as `==` sees them), a whole number by its 16 bits, a
+/// switch as one byte.
+macro_rules! field_bits {
     (f32, $v:expr) => {
-        (if $v == 0.0 { 0 } else { $v.to_bits() }, 4)
+        FieldBits {
+            bits: if $v == 0.0 { 0 } else { $v.to_bits() },
+            bytes: 4,
+        }
     };
     (bool, $v:expr) => {
-        ($v as u32, 1)
+        FieldBits {
+            bits: $v as u32,
+            bytes: 1,
+        }
     };
     ($count:ident, $v:expr) => {
-        ($v as u32, 2)
+        FieldBits {
+            bits: $v as u32,
+            bytes: 2,
+        }
     };
 }
 
-/// FNV-1a (32 bits) of `hash` extended by the low `bytes` bytes of `bits`,
-/// least significant first.
-const fn fnv1a(mut hash: u32, bits: u32, bytes: u32) -> u32 {
+/// FNV-1a (32 bits) of `hash` extended by `value`'s bytes.
+const fn fnv1a(mut hash: u32, value: FieldBits) -> u32 {
     let mut k = 0;
-    while k < bytes {
-        hash ^= (bits >> (8 * k)) & 0xff;
+    while k < value.bytes {
+        hash ^= (value.bits >> (8 * k)) & 0xff;
         hash = hash.wrapping_mul(0x0100_0193);
         k += 1;
     }
@@ -379,8 +395,7 @@ macro_rules! fields {
             pub const fn fingerprint(&self) -> u32 {
                 let mut hash = 0x811c_9dc5;
                 $(
-                    let (bits, bytes) = fingerprint_bits!($ty, self.$name);
-                    hash = fnv1a(hash, bits, bytes);
+                    hash = fnv1a(hash, field_bits!($ty, self.$name));
                 )+
                 hash
             }
