@@ -43,9 +43,6 @@ pub(super) struct Checker {
     /// The firmware's [`Params::fingerprint`] from its console
     /// (`params_fingerprint`; `--qemu` only), checked at the first summary.
     pub(super) firmware_fingerprint: Option<u32>,
-    /// Why the run cannot go on: the firmware runs other parameters than
-    /// the check recomputes with, so every scan would differ.
-    pub(super) fatal: Option<String>,
 }
 
 impl Checker {
@@ -58,7 +55,6 @@ impl Checker {
             tally: Tally::default(),
             echoed: None,
             firmware_fingerprint: None,
-            fatal: None,
         }
     }
 
@@ -80,8 +76,50 @@ impl Checker {
     }
 
     /// Check one scan: its `B0` as the host received it (if one came), its
-    /// summary and features as reassembled.
+    /// summary and features as reassembled. An error ends the run: the
+    /// firmware runs other parameters than the check recomputes with.
     pub(super) fn check(
+        &mut self,
+        b0: Option<&[u8]>,
+        summary: &Summary,
+        got: &Features,
+        source: &PlaySource,
+    ) -> anyhow::Result<()> {
+        if self.echoed.is_none() {
+            self.first_summary(summary)?;
+        }
+        self.check_scan(b0, summary, got, source);
+        Ok(())
+    }
+
+    /// The parameters the first summary echoes: noted where they change
+    /// the command line's, and compared with the firmware's fingerprint.
+    fn first_summary(&mut self, summary: &Summary) -> anyhow::Result<()> {
+        self.echoed = Some(summary.params);
+        let ran = summary.params.over(self.base);
+        // The parameters the echo changes, by name ([`FIELDS`]).
+        let differing: Vec<String> = FIELDS
+            .iter()
+            .filter(|f| (f.get)(&ran) != (f.get)(&self.base))
+            .map(|f| format!("{}={}", f.name, (f.get)(&ran)))
+            .collect();
+        if !differing.is_empty() {
+            eprintln!(
+                "host-bridge verify: note: the co-processor runs {} (echoed in D0), not the \
+                 command line's; recomputing with those",
+                differing.join(" ")
+            );
+        }
+        match self.firmware_fingerprint {
+            Some(firmware) if ran.fingerprint() != firmware => {
+                anyhow::bail!(other_parameters(firmware, &summary.params, &ran))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// [`Checker::check`] of one scan, the parameters settled.
+    fn check_scan(
         &mut self,
         b0: Option<&[u8]>,
         summary: &Summary,
@@ -89,29 +127,6 @@ impl Checker {
         source: &PlaySource,
     ) {
         let counter = summary.scan_counter;
-        if self.echoed.is_none() {
-            self.echoed = Some(summary.params);
-            let ran = summary.params.over(self.base);
-            // The parameters the echo changes, by name ([`FIELDS`]).
-            let differing: Vec<String> = FIELDS
-                .iter()
-                .filter(|f| (f.get)(&ran) != (f.get)(&self.base))
-                .map(|f| format!("{}={}", f.name, (f.get)(&ran)))
-                .collect();
-            if !differing.is_empty() {
-                eprintln!(
-                    "host-bridge verify: note: the co-processor runs {} (echoed in D0), not the \
-                     command line's; recomputing with those",
-                    differing.join(" ")
-                );
-            }
-            if let Some(firmware) = self.firmware_fingerprint {
-                if ran.fingerprint() != firmware {
-                    self.fatal = Some(other_parameters(firmware, &summary.params, &ran));
-                    return;
-                }
-            }
-        }
         let Some(b0) = b0 else {
             self.problem(format_args!(
                 "scan {counter}: features without a B0 before them"

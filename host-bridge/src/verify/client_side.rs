@@ -87,13 +87,14 @@ impl ClientSide {
             self.last_rx = Instant::now();
             let start = self.line_free.max(self.last_rx);
             self.line_free = start + crate::serial::line_time(n, self.rate);
-            self.feed(&buf[..n], checker, source);
+            self.feed(&buf[..n], checker, source)?;
             wait = Duration::ZERO;
         }
     }
 
-    /// Bytes from the co-processor's host line.
-    fn feed(&mut self, bytes: &[u8], checker: &mut Checker, source: &PlaySource) {
+    /// Bytes from the co-processor's host line; an error from the checker
+    /// ends the run.
+    fn feed(&mut self, bytes: &[u8], checker: &mut Checker, source: &PlaySource) -> Result<()> {
         let mut input = bytes;
         loop {
             let fed = self.framer.feed(input);
@@ -113,7 +114,7 @@ impl ClientSide {
                         match self.assembler.push(&t) {
                             Ok(Assembled::Complete(summary, features)) => {
                                 let b0 = self.pending_b0.take();
-                                checker.check(b0.as_deref(), &summary, features, source);
+                                checker.check(b0.as_deref(), &summary, features, source)?;
                             }
                             Ok(_) => {}
                             Err(e) => checker.problem(e),
@@ -124,7 +125,7 @@ impl ClientSide {
                         data: t.data().to_vec(),
                     }),
                 },
-                None if input.is_empty() => break,
+                None if input.is_empty() => return Ok(()),
                 None => {}
             }
         }

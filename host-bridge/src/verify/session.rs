@@ -90,11 +90,7 @@ impl Session {
         }
         self.sensor.clock.pass();
         self.dut.check()?;
-        self.pump_lines(wait).map_err(|e| self.dut.explain(e))?;
-        match self.checker.fatal.take() {
-            Some(why) => bail!(why),
-            None => Ok(()),
-        }
+        self.pump_lines(wait).map_err(|e| self.dut.explain(e))
     }
 
     fn pump_lines(&mut self, wait: Duration) -> Result<()> {
